@@ -1,0 +1,237 @@
+r"""One multiresolution step: L2 projection, wavelet details and exact reconstruction.
+
+For a source space :math:`S` (any degree, any clamped knots; the seeds' :math:`V_m`)
+and a target space :math:`V_n` on the same domain (Ji et al. 2014, eq. 4-14):
+
+.. math::
+
+    C_n &= A\,C_S, \qquad A = \langle\Phi_n|\Phi_n\rangle^{-1}\langle\Phi_n|\Phi_S\rangle
+          = G_{nn}^{-1} E                                            && (5\text{-}7)\\
+    D_n &= B\,C_S, \qquad B = \langle\Psi_n|\Psi_n\rangle^{-1}\langle\Psi_n|\Phi_S\rangle
+          = (Q^T G_{SS} Q)^{-1} Q^T G_{SS}                            && (8\text{-}10)\\
+    C_S &= [P\,|\,Q_r] \begin{bmatrix} C_n \\ D_n\end{bmatrix},
+          \qquad [P\,|\,Q_r] = \begin{bmatrix} A \\ B\end{bmatrix}^{-1}  && (11\text{-}14)
+
+where :math:`\Psi_n = \Phi_S Q` are the compact wavelets of
+:mod:`cq_fairing.core.wavelets`.  :math:`C_n` is the coefficient vector of the
+L2-best approximation of the source curve in :math:`V_n`.
+
+Nothing dense of size ``k x k`` is formed: :math:`G_{nn}` and :math:`Q^T G_{SS} Q` are
+banded SPD (banded Cholesky), and reconstruction solves the sparse square system
+:math:`[E;\ Q^T G_{SS}]\, C_S = [G_{nn} C_n;\ Q^T G_{SS} Q\, D_n]` with one sparse LU,
+so it is exact to rounding whether or not :math:`E Q` vanishes to the last digit.
+
+When :math:`V_n \subset S` (nested spaces, e.g. dyadic DWFA steps), :math:`P` is the
+knot-insertion refinement matrix (:func:`refinement_matrix`), sparse and exact.
+"""
+
+from functools import cached_property, lru_cache
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .banded import BandedSPD
+from .gram import gram_matrix
+from .wavelets import wavelet_matrix
+
+__all__ = ["Decomposition", "decomposition", "refinement_matrix", "is_subspace"]
+
+
+class Decomposition:
+    """The analysis and synthesis operators between a source and a target space.
+
+    Parameters
+    ----------
+    source, target : SplineSpace
+        ``target.dimension < source.dimension``, same domain.
+
+    Notes
+    -----
+    Operators are built lazily: a coarse projection (all accuracy control needs)
+    never builds wavelets.  Obtain instances through :func:`decomposition`, which
+    caches them per pair of spaces.
+    """
+
+    def __init__(self, source, target):
+        self.source = source
+        self.target = target
+
+    # -- matrices -------------------------------------------------------------------
+    @cached_property
+    def E(self):
+        r""":math:`\langle\Phi_n|\Phi_S\rangle`, sparse, shape (r, k)."""
+        return gram_matrix(self.target, self.source).tocsr()
+
+    @cached_property
+    def target_gram(self):
+        r"""Banded Cholesky of :math:`G_{nn} = \langle\Phi_n|\Phi_n\rangle`."""
+        return BandedSPD(gram_matrix(self.target))
+
+    @cached_property
+    def source_gram(self):
+        r""":math:`G_{SS} = \langle\Phi_S|\Phi_S\rangle`, sparse, shape (k, k)."""
+        return gram_matrix(self.source).tocsr()
+
+    @cached_property
+    def Q(self):
+        """Compact wavelets in the source basis, sparse, shape (k, k - r)."""
+        return wavelet_matrix(self.E).tocsc()
+
+    @cached_property
+    def _wavelet_moments(self):
+        r""":math:`Q^T G_{SS}`, sparse, shape (k - r, k)."""
+        return (self.Q.T @ self.source_gram).tocsr()
+
+    @cached_property
+    def wavelet_gram(self):
+        r"""Banded Cholesky of :math:`\langle\Psi_n|\Psi_n\rangle = Q^T G_{SS} Q`."""
+        return BandedSPD(self._wavelet_moments @ self.Q)
+
+    @cached_property
+    def _synthesis_lu(self):
+        """Sparse LU of the stacked analysis matrix ``[E; Q^T G_SS]`` (k x k)."""
+        stacked = sp.vstack([self.E, self._wavelet_moments]).tocsc()
+        return spla.splu(stacked)
+
+    @cached_property
+    def nested(self):
+        """True when the target space is a subspace of the source space."""
+        return is_subspace(self.target, self.source)
+
+    @cached_property
+    def refinement(self):
+        """Knot-insertion matrix ``R`` with ``Phi_n = Phi_S R`` (nested spaces only)."""
+        return refinement_matrix(self.target, self.source)
+
+    # -- operations on coefficient arrays (first axis = basis index) --------------------
+    def coarse(self, coefficients):
+        """``C_n = G_nn^{-1} E C_S``: the L2-best approximation in the target space."""
+        c = np.asarray(coefficients, dtype=float)
+        flat = _flat(c)
+        return self.target_gram.solve(self.E @ flat).reshape((self.target.dimension,) + c.shape[1:])
+
+    def detail(self, coefficients):
+        """``D_n = (Q^T G Q)^{-1} Q^T G C_S``: the wavelet coefficients."""
+        c = np.asarray(coefficients, dtype=float)
+        flat = _flat(c)
+        return self.wavelet_gram.solve(self._wavelet_moments @ flat).reshape(
+            (self.Q.shape[1],) + c.shape[1:]
+        )
+
+    def reconstruct(self, coarse, detail):
+        """Exact inverse of (:meth:`coarse`, :meth:`detail`): ``C_S = P C_n + Q_r D_n``."""
+        cn = np.asarray(coarse, dtype=float)
+        dn = np.asarray(detail, dtype=float)
+        rhs_top = self.target_gram_matrix @ _flat(cn)
+        rhs_bottom = (self._wavelet_moments @ self.Q) @ _flat(dn)
+        rhs = np.vstack([rhs_top, rhs_bottom])
+        if rhs.shape[1] == 0:
+            return np.zeros((self.source.dimension,) + cn.shape[1:])
+        return self._synthesis_lu.solve(rhs).reshape((self.source.dimension,) + cn.shape[1:])
+
+    def upsample(self, coarse):
+        """``P C_n``: the source-space coefficients of the coarse part alone.
+
+        For nested spaces this is exact knot insertion (the same curve); otherwise
+        the minimum-norm source function whose projection is the coarse curve.
+        """
+        cn = np.asarray(coarse, dtype=float)
+        if self.nested:
+            flat = _flat(cn)
+            return (self.refinement @ flat).reshape((self.source.dimension,) + cn.shape[1:])
+        zero = np.zeros((self.source.dimension - self.target.dimension,) + cn.shape[1:])
+        return self.reconstruct(cn, zero)
+
+    @cached_property
+    def target_gram_matrix(self):
+        """:math:`G_{nn}` as a sparse matrix."""
+        return gram_matrix(self.target).tocsr()
+
+
+def _flat(array):
+    """View (k, ...) as (k, prod(...)), also when a trailing axis is empty."""
+    return array.reshape(array.shape[0], int(np.prod(array.shape[1:], dtype=int)))
+
+
+@lru_cache(maxsize=64)
+def _cached_decomposition(source_key, target_key):
+    source, target = _SPACE_REGISTRY[source_key], _SPACE_REGISTRY[target_key]
+    return Decomposition(source, target)
+
+
+_SPACE_REGISTRY = {}
+
+
+def decomposition(source, target):
+    """Cached :class:`Decomposition` for a pair of spaces (keyed by degree and knots)."""
+    _SPACE_REGISTRY.setdefault(source.key, source)
+    _SPACE_REGISTRY.setdefault(target.key, target)
+    if len(_SPACE_REGISTRY) > 512:
+        _SPACE_REGISTRY.clear()
+        _cached_decomposition.cache_clear()
+        _SPACE_REGISTRY[source.key] = source
+        _SPACE_REGISTRY[target.key] = target
+    return _cached_decomposition(source.key, target.key)
+
+
+def is_subspace(coarse, fine, rtol=1e-12):
+    """True when every spline of ``coarse`` is also a spline of ``fine``.
+
+    Holds for equal degrees when each interior knot of ``coarse`` appears in ``fine``
+    with at least the same multiplicity (knots compared to ``rtol`` of the domain).
+    """
+    if coarse.degree != fine.degree or coarse.domain != fine.domain:
+        return False
+    lo, hi = coarse.domain
+    tol = rtol * (hi - lo)
+    p = coarse.degree
+    fine_inner = fine.knots[p + 1: -p - 1]
+    for value, count in zip(*np.unique(coarse.knots[p + 1: -p - 1], return_counts=True)):
+        if np.count_nonzero(np.abs(fine_inner - value) <= tol) < count:
+            return False
+    return True
+
+
+def refinement_matrix(coarse, fine):
+    r"""Knot-insertion matrix ``R`` (fine x coarse) with :math:`\Phi_c = \Phi_f R`.
+
+    Oslo algorithm (Cohen, Lyche, Riesenfeld 1980) in the matrix-product form of
+    Lyche and Mørken: row ``j`` holds the discrete B-splines
+    :math:`\alpha_{\mu-p..\mu}(j) = R_1(t_{j+1}) \cdots R_p(t_{j+p})`, where
+    ``tau_mu <= t_j < tau_{mu+1}``.  This is the seeds' dyadic ``P_j`` when the
+    fine knots are the coarse ones with every span halved.
+
+    Parameters
+    ----------
+    coarse, fine : SplineSpace
+        ``coarse`` must be a subspace of ``fine`` (:func:`is_subspace`).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (k_fine, k_coarse)
+    """
+    tau, t, p = coarse.knots, fine.knots, coarse.degree
+    k_fine, k_coarse = fine.dimension, coarse.dimension
+    rows, cols, vals = [], [], []
+    for j in range(k_fine):
+        mu = int(np.searchsorted(tau, t[j], side="right") - 1)
+        mu = min(max(mu, p), k_coarse - 1)
+        b = np.ones(1)
+        for k in range(1, p + 1):
+            x = t[j + k]
+            left = tau[mu - k + 1: mu + 1]
+            right = tau[mu + 1: mu + k + 1]
+            denom = right - left
+            w = np.divide(x - left, denom, out=np.zeros(k), where=denom > 0)
+            nb = np.zeros(k + 1)
+            nb[:-1] += (1.0 - w) * b
+            nb[1:] += w * b
+            b = nb
+        rows.append(np.full(p + 1, j))
+        cols.append(np.arange(mu - p, mu + 1))
+        vals.append(b)
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(k_fine, k_coarse),
+    )

@@ -1,0 +1,445 @@
+r"""Public fairing of curves and tensor-product surfaces: :func:`fair_curve`, :func:`fair_surface`.
+
+Fairing from the source space :math:`S` to the target :math:`V_n` keeps the L2-best
+approximation :math:`C_n = G_{nn}^{-1}\langle\Phi_n|\Phi_S\rangle C_S` and returns the
+wavelet details, so the source is recovered exactly (Ji et al. 2014, eq. 5-14).
+Surfaces apply the curve operators along u and then v (tensor product), which yields
+the coarse net and the three detail nets u, v and uv (Ji et al., null-space paper,
+Fig. 10).  Rational input is faired in homogeneous coordinates :math:`(w x, w)`.
+"""
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import InvalidInputError, InvalidTargetError, NumericalError
+from .decomposition import decomposition
+from .geometry import BSplineCurve, BSplineSurface, make_curve, make_surface
+from .schedule import plan_spaces
+from .spaces import SplineSpace
+
+__all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult",
+           "SurfaceDetails", "target_space", "project_curve", "project_surface"]
+
+
+class SurfaceDetails(NamedTuple):
+    """The three detail nets of one surface level (any may have a zero-length axis).
+
+    Attributes
+    ----------
+    u : ndarray, shape (k_u - r_u, r_v, d')   wavelets in u, scaling functions in v
+    v : ndarray, shape (r_u, k_v - r_v, d')   scaling functions in u, wavelets in v
+    uv : ndarray, shape (k_u - r_u, k_v - r_v, d')
+    """
+
+    u: np.ndarray
+    v: np.ndarray
+    uv: np.ndarray
+
+
+class _Identity:
+    """A decomposition step that keeps a direction unchanged."""
+
+    def __init__(self, space):
+        self.source = self.target = space
+
+    def coarse(self, c):
+        return np.asarray(c, dtype=float)
+
+    def detail(self, c):
+        c = np.asarray(c)
+        return np.zeros((0,) + c.shape[1:])
+
+    def reconstruct(self, coarse, detail):
+        return np.asarray(coarse, dtype=float)
+
+
+def _step(source, target):
+    return _Identity(source) if source.same_as(target) else decomposition(source, target)
+
+
+@dataclass(frozen=True, eq=False)
+class FairResult:
+    """Outcome of :func:`fair_curve`.
+
+    Attributes
+    ----------
+    source : BSplineCurve
+        The input curve.
+    curve : BSplineCurve
+        The faired curve in :math:`V_n`.
+    details : tuple of ndarray
+        Detail coefficients per level, finest first; level ``i`` has shape
+        ``(k_i - k_{i+1}, d')`` with ``d' = d + 1`` for rational input (homogeneous).
+    scales : tuple of int
+        Knot spans of every space visited, source first, ``n`` last.
+    n : int
+        The target scale (spans); ``curve`` has ``n + degree`` poles.
+    schedule : str
+    max_deviation, evaluations, table, fairness
+        Filled by accuracy control and the measures (``None`` when not computed).
+    """
+
+    source: BSplineCurve
+    curve: BSplineCurve
+    details: tuple
+    scales: tuple
+    n: int
+    schedule: str
+    steps: tuple = field(repr=False, default=())
+    max_deviation: float = None
+    evaluations: int = None
+    table: tuple = None
+    fairness: dict = None
+
+    @property
+    def poles(self):
+        """Faired control points, shape (n + degree, d)."""
+        return self.curve.poles
+
+    @property
+    def knots(self):
+        return self.curve.knots
+
+    @property
+    def degree(self):
+        return self.curve.degree
+
+    @property
+    def weights(self):
+        return self.curve.weights
+
+    def reconstruct(self, detail_weight=1.0):
+        """Source poles from the faired poles and the details.
+
+        Parameters
+        ----------
+        detail_weight : float, optional
+            1 restores the source exactly; 0 gives the coarse curve expressed in the
+            source space; values between restore part of the detail.
+
+        Returns
+        -------
+        ndarray, shape (k, d)
+        """
+        coefficients = _coefficients(self.curve)
+        for step, detail in zip(reversed(self.steps), reversed(self.details)):
+            coefficients = step.reconstruct(coefficients, detail_weight * detail)
+        return _cartesian(coefficients, self.source.is_rational)[0]
+
+    def replace(self, **changes):
+        """A copy with some fields changed (used by accuracy control)."""
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceFairResult:
+    """Outcome of :func:`fair_surface`.
+
+    Attributes
+    ----------
+    source, surface : BSplineSurface
+        Input and faired surface (``surface.poles`` has shape (n_u + p_u, n_v + p_v, d)).
+    details : tuple of SurfaceDetails
+        One per level, finest first.
+    scales : tuple of (int, int)
+        Spans (u, v) of every level visited, source first.
+    n : (int, int)
+    """
+
+    source: BSplineSurface
+    surface: BSplineSurface
+    details: tuple
+    scales: tuple
+    n: tuple
+    schedule: str
+    steps: tuple = field(repr=False, default=())
+    max_deviation: float = None
+    evaluations: int = None
+    table: tuple = None
+    fairness: dict = None
+
+    @property
+    def poles(self):
+        return self.surface.poles
+
+    @property
+    def u_knots(self):
+        return self.surface.u_knots
+
+    @property
+    def v_knots(self):
+        return self.surface.v_knots
+
+    @property
+    def degree(self):
+        """``(u_degree, v_degree)`` of the faired surface."""
+        return self.surface.u_degree, self.surface.v_degree
+
+    @property
+    def weights(self):
+        return self.surface.weights
+
+    def reconstruct(self, detail_weight=1.0):
+        """Source net from the faired net and the three detail nets per level.
+
+        Returns
+        -------
+        ndarray, shape (k_u, k_v, d)
+        """
+        net = _coefficients(self.surface)
+        for (step_u, step_v), det in zip(reversed(self.steps), reversed(self.details)):
+            w = detail_weight
+            upper = _along_v(step_v.reconstruct, net, w * det.v)
+            lower = _along_v(step_v.reconstruct, w * det.u, w * det.uv)
+            net = step_u.reconstruct(upper, lower)
+        return _cartesian(net, self.source.is_rational)[0]
+
+    def replace(self, **changes):
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+
+# -- helpers ----------------------------------------------------------------------------
+def _coefficients(geometry):
+    return geometry.homogeneous() if geometry.is_rational else geometry.poles
+
+
+def _cartesian(coefficients, rational):
+    """Split homogeneous coefficients into (poles, weights); weights None if polynomial."""
+    if not rational:
+        return coefficients, None
+    w = coefficients[..., -1]
+    if np.any(w <= 0):
+        raise NumericalError(
+            f"fairing a rational geometry gave non-positive weights (min {w.min():.3g}); "
+            "fair a non-rational approximation instead (convert the face first)."
+        )
+    return coefficients[..., :-1] / w[..., None], w
+
+
+def _along_v(func, *arrays):
+    """Apply a first-axis operator along axis 1 of (a, b, d) arrays."""
+    moved = [np.swapaxes(a, 0, 1) for a in arrays]
+    return np.swapaxes(func(*moved), 0, 1)
+
+
+def _default_target_degree(source_degree):
+    return min(3, source_degree)
+
+
+def target_space(source, n, degree=None):
+    """The quasi-uniform target ``V_n`` on the source's domain, validated.
+
+    Raises
+    ------
+    InvalidTargetError
+        If ``n`` is not an integer, below 1, or gives at least as many poles as the
+        source has.
+    """
+    degree = _default_target_degree(source.degree) if degree is None else degree
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise InvalidTargetError(f"target scale n must be an integer, got {n!r}.")
+    k = source.dimension
+    if n < 1 or n + degree > k:
+        raise InvalidTargetError(
+            f"target scale n must be between 1 and {k - degree} (n + {degree} poles, at "
+            f"most the source's {k}), got n={n}."
+        )
+    return SplineSpace.quasi_uniform(int(n), degree, source.domain)
+
+
+def project_curve(curve, target, schedule="auto"):
+    """Fair ``curve`` into ``target`` space (trusted inputs). Returns :class:`FairResult`."""
+    spaces = plan_spaces(curve.space, target, schedule)
+    coefficients = _coefficients(curve)
+    steps, details = [], []
+    for source, dest in zip(spaces[:-1], spaces[1:]):
+        step = _step(source, dest)
+        details.append(step.detail(coefficients))
+        coefficients = step.coarse(coefficients)
+        steps.append(step)
+    poles, weights = _cartesian(coefficients, curve.is_rational)
+    faired = BSplineCurve(poles, target.knots, target.degree, weights)
+    return FairResult(curve, faired, tuple(details), tuple(s.n_spans for s in spaces),
+                      target.n_spans, schedule, tuple(steps))
+
+
+def project_surface(surface, target_u, target_v, schedule="auto"):
+    """Fair ``surface`` into ``target_u x target_v`` (trusted). Returns :class:`SurfaceFairResult`."""
+    plan_u = plan_spaces(surface.u_space, target_u, schedule)
+    plan_v = plan_spaces(surface.v_space, target_v, schedule)
+    levels = max(len(plan_u), len(plan_v)) - 1
+    plan_u += [plan_u[-1]] * (levels + 1 - len(plan_u))
+    plan_v += [plan_v[-1]] * (levels + 1 - len(plan_v))
+    net = _coefficients(surface)
+    steps, details = [], []
+    for i in range(levels):
+        step_u, step_v = _step(plan_u[i], plan_u[i + 1]), _step(plan_v[i], plan_v[i + 1])
+        upper, lower = step_u.coarse(net), step_u.detail(net)
+        net = _along_v(step_v.coarse, upper)
+        details.append(SurfaceDetails(
+            u=_along_v(step_v.coarse, lower),
+            v=_along_v(step_v.detail, upper),
+            uv=_along_v(step_v.detail, lower),
+        ))
+        steps.append((step_u, step_v))
+    poles, weights = _cartesian(net, surface.is_rational)
+    faired = BSplineSurface(poles, target_u.knots, target_v.knots, target_u.degree,
+                            target_v.degree, weights)
+    scales = tuple((a.n_spans, b.n_spans) for a, b in zip(plan_u, plan_v))
+    return SurfaceFairResult(surface, faired, tuple(details), scales,
+                             (target_u.n_spans, target_v.n_spans), schedule, tuple(steps))
+
+
+# -- public entry points -------------------------------------------------------------------
+def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None,
+               target_degree=None, schedule="auto", strategy="guaranteed", order=6,
+               deviation="geometric"):
+    r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
+
+    The faired curve is the L2-best approximation of the source in the quasi-uniform
+    space :math:`V_n` (``n`` spans, ``n + target_degree`` poles):
+
+    .. math:: C_n = \langle\Phi_n|\Phi_n\rangle^{-1} \langle\Phi_n|\Phi_S\rangle\, C_S
+
+    (Ji et al. 2014, eq. 5-7); the wavelet details (eq. 8-10) are kept so that
+    :meth:`FairResult.reconstruct` returns the source exactly (eq. 14).
+
+    Parameters
+    ----------
+    poles : array_like, shape (k, d)
+        Source control points (``d`` = 2 or 3; any 1..4 accepted).
+    n : int, optional
+        Target scale (knot spans).  Give ``n`` or ``tol``.
+    tol : float, optional
+        Largest allowed deviation (model units, e.g. mm) between source and faired
+        curve; the fewest poles within it are searched (see
+        :mod:`cq_fairing.core.accuracy`).
+    knots : array_like, shape (k + degree + 1,), optional
+        Clamped source knots; default quasi-uniform on [0, 1].
+    degree : int, optional
+        Source degree, default 3.
+    weights : array_like, shape (k,), optional
+        Positive weights of a rational source; fairing works on :math:`(w P, w)`.
+    target_degree : int, optional
+        Degree of the faired curve; default ``min(degree, 3)``.
+    schedule : {"auto", "direct", "hybrid"}
+        Spaces visited, see :mod:`cq_fairing.core.schedule`.
+    strategy, order, deviation
+        Accuracy-control settings used with ``tol``.
+
+    Returns
+    -------
+    FairResult
+
+    Raises
+    ------
+    InvalidInputError
+        Bad poles, knots, weights or arguments.
+    InvalidTargetError
+        ``n`` out of range.
+    InvalidToleranceError, ToleranceNotMetError
+        With ``tol``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 2 * np.pi, 120)
+    >>> poles = np.c_[np.cos(t), np.sin(t), 0.01 * np.sin(40 * t)]
+    >>> result = fair_curve(poles, 27)
+    >>> result.poles.shape
+    (30, 3)
+    >>> bool(np.allclose(result.reconstruct(), poles, atol=1e-10))
+    True
+    """
+    curve = make_curve(poles, knots, degree, weights)
+    if (n is None) == (tol is None):
+        raise InvalidInputError(
+            "give exactly one of n (target scale) and tol (tolerance); "
+            f"got n={n!r}, tol={tol!r}."
+        )
+    if tol is not None:
+        from .accuracy import fair_curve_to_tolerance
+
+        return fair_curve_to_tolerance(curve, tol, target_degree=target_degree,
+                                       schedule=schedule, strategy=strategy,
+                                       order=order, deviation=deviation)
+    return project_curve(curve, target_space(curve.space, n, target_degree), schedule)
+
+
+def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=None,
+                 weights=None, target_degree=None, schedule="auto",
+                 strategy="guaranteed", deviation="geometric"):
+    r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
+
+    .. math:: C_n = A_u\, C\, A_v^T, \qquad
+              A = \langle\Phi_n|\Phi_n\rangle^{-1}\langle\Phi_n|\Phi_S\rangle
+
+    with the detail nets :math:`B_u C A_v^T` (u), :math:`A_u C B_v^T` (v) and
+    :math:`B_u C B_v^T` (uv).
+
+    Parameters
+    ----------
+    poles : array_like, shape (k_u, k_v, d)
+    n : (int or None, int or None), optional
+        Target scales (spans) in u and v; ``None`` in a direction keeps it unchanged
+        (fairing in one direction only).  Give ``n`` or ``tol``.
+    tol : float, optional
+        Largest allowed deviation; the (n_u, n_v) with the fewest poles in total is
+        searched.
+    u_knots, v_knots : array_like, optional
+        Clamped knot vectors; default quasi-uniform.
+    degree : int or (int, int), optional
+        Source degrees, default 3.
+    weights : array_like, shape (k_u, k_v), optional
+    target_degree : int or (int, int), optional
+        Default ``min(source degree, 3)`` per direction.
+    schedule : {"auto", "direct", "hybrid"}
+
+    Returns
+    -------
+    SurfaceFairResult
+
+    Raises
+    ------
+    InvalidInputError, InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
+    """
+    surface = make_surface(poles, u_knots, v_knots, degree, weights)
+    if (n is None) == (tol is None):
+        raise InvalidInputError(
+            "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
+            f"got n={n!r}, tol={tol!r}."
+        )
+    tdu, tdv = _split_pair(target_degree, "target_degree")
+    if tol is not None:
+        from .accuracy import fair_surface_to_tolerance
+
+        return fair_surface_to_tolerance(surface, tol, target_degree=(tdu, tdv),
+                                         schedule=schedule, strategy=strategy,
+                                         deviation=deviation)
+    nu, nv = _split_pair(n, "n")
+    target_u = _direction_target(surface.u_space, nu, tdu)
+    target_v = _direction_target(surface.v_space, nv, tdv)
+    return project_surface(surface, target_u, target_v, schedule)
+
+
+def _split_pair(value, name):
+    if value is None:
+        return None, None
+    if np.ndim(value) == 0:
+        return value, value
+    if len(value) != 2:
+        raise InvalidInputError(f"{name} must be one value or a pair (u, v), got {value!r}.")
+    return tuple(value)
+
+
+def _direction_target(space, n, degree):
+    """Target space of one direction; ``None`` keeps the source space."""
+    if n is None:
+        return space
+    return target_space(space, n, degree)

@@ -1,0 +1,278 @@
+"""Immutable B-spline curves and tensor-product surfaces with documented shapes.
+
+The default constructors trust their arguments (internal fast path, like scipy's
+``BSpline.construct_fast``); :func:`make_curve` and :func:`make_surface` validate
+user input once and raise :class:`~cq_fairing.errors.InvalidInputError` with a message
+that says what to do.
+"""
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from .spaces import SplineSpace
+
+__all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles"]
+
+
+@dataclass(frozen=True, eq=False)
+class BSplineCurve:
+    """A clamped (optionally rational) B-spline curve.
+
+    Attributes
+    ----------
+    poles : ndarray, shape (k, d)
+        Control points (Cartesian, not weighted), ``d`` = 2 or 3 (any ``d >= 1``).
+    knots : ndarray, shape (k + degree + 1,)
+        Full clamped knot vector.
+    degree : int
+    weights : ndarray, shape (k,), or None
+        Positive weights of a rational curve; ``None`` for a polynomial one.
+    """
+
+    poles: np.ndarray
+    knots: np.ndarray
+    degree: int
+    weights: np.ndarray = None
+
+    @cached_property
+    def space(self):
+        """The :class:`SplineSpace` of the curve."""
+        return SplineSpace(self.degree, self.knots)
+
+    @property
+    def is_rational(self):
+        return self.weights is not None
+
+    @property
+    def n_poles(self):
+        return self.poles.shape[0]
+
+    def homogeneous(self):
+        """Poles ``(w x, w)`` of shape (k, d + 1); weights 1 when polynomial."""
+        w = np.ones(self.n_poles) if self.weights is None else self.weights
+        return np.hstack([self.poles * w[:, None], w[:, None]])
+
+    def evaluate(self, u, nu=0):
+        """Points (``nu = 0``) or derivatives up to order 2 at parameters ``u``.
+
+        Returns
+        -------
+        ndarray, shape (len(u), d)
+        """
+        u = np.asarray(u, dtype=float).ravel()
+        if self.weights is None:
+            return self.space.evaluate(self.poles, u, nu)
+        return _rational_derivative(self.space.evaluate, self.homogeneous(), u, nu)
+
+    @property
+    def domain(self):
+        return self.space.domain
+
+
+@dataclass(frozen=True, eq=False)
+class BSplineSurface:
+    """A clamped (optionally rational) tensor-product B-spline surface.
+
+    Attributes
+    ----------
+    poles : ndarray, shape (k_u, k_v, d)
+    u_knots : ndarray, shape (k_u + u_degree + 1,)
+    v_knots : ndarray, shape (k_v + v_degree + 1,)
+    u_degree, v_degree : int
+    weights : ndarray, shape (k_u, k_v), or None
+    """
+
+    poles: np.ndarray
+    u_knots: np.ndarray
+    v_knots: np.ndarray
+    u_degree: int
+    v_degree: int
+    weights: np.ndarray = None
+
+    @cached_property
+    def u_space(self):
+        return SplineSpace(self.u_degree, self.u_knots)
+
+    @cached_property
+    def v_space(self):
+        return SplineSpace(self.v_degree, self.v_knots)
+
+    @property
+    def is_rational(self):
+        return self.weights is not None
+
+    @property
+    def shape(self):
+        """``(k_u, k_v)``: poles per direction."""
+        return self.poles.shape[:2]
+
+    def homogeneous(self):
+        """Poles ``(w x, w)`` of shape (k_u, k_v, d + 1)."""
+        w = np.ones(self.shape) if self.weights is None else self.weights
+        return np.concatenate([self.poles * w[..., None], w[..., None]], axis=2)
+
+    def evaluate_grid(self, u, v, nu=0, nv=0):
+        """Points or partial derivatives on the grid ``u x v``.
+
+        Returns
+        -------
+        ndarray, shape (len(u), len(v), d)
+        """
+        u = np.asarray(u, dtype=float).ravel()
+        v = np.asarray(v, dtype=float).ravel()
+        if self.weights is None:
+            return _grid(self.u_space, self.v_space, self.poles, u, v, nu, nv)
+        if nu + nv > 2:
+            raise InvalidInputError("rational surfaces evaluate derivatives up to order 2.")
+        return _rational_grid(self, u, v, nu, nv)
+
+    @property
+    def domain(self):
+        """``((u0, u1), (v0, v1))``."""
+        return self.u_space.domain, self.v_space.domain
+
+
+def _grid(u_space, v_space, net, u, v, nu, nv):
+    mu = u_space.collocation(u, nu)
+    mv = v_space.collocation(v, nv)
+    tmp = np.tensordot(mu.toarray(), net, axes=(1, 0)) if mu.shape[0] * net.shape[0] < 4e7 \
+        else np.asarray([mu @ net[:, j] for j in range(net.shape[1])]).transpose(1, 0, 2)
+    return np.einsum("vj,ujd->uvd", mv.toarray(), tmp)
+
+
+def _rational_derivative(evaluate, homogeneous, u, nu):
+    """Derivatives of ``x = X / w`` from those of the homogeneous curve (order <= 2)."""
+    if nu > 2:
+        raise InvalidInputError("rational curves evaluate derivatives up to order 2.")
+    h = [evaluate(homogeneous, u, k) for k in range(nu + 1)]
+    w = [hk[:, -1:] for hk in h]
+    x = h[0][:, :-1] / w[0]
+    if nu == 0:
+        return x
+    d1 = (h[1][:, :-1] - w[1] * x) / w[0]
+    if nu == 1:
+        return d1
+    return (h[2][:, :-1] - 2 * w[1] * d1 - w[2] * x) / w[0]
+
+
+def _rational_grid(surface, u, v, nu, nv):
+    """Partial derivatives of a rational surface (total order <= 2), quotient rule."""
+    hom = surface.homogeneous()
+    H = {(a, b): _grid(surface.u_space, surface.v_space, hom, u, v, a, b)
+         for a in range(nu + 1) for b in range(nv + 1)}
+    W = {key: val[..., -1:] for key, val in H.items()}
+    S = {}
+    for a in range(nu + 1):
+        for b in range(nv + 1):
+            val = H[(a, b)][..., :-1].copy()
+            for i in range(a + 1):
+                for j in range(b + 1):
+                    if i == 0 and j == 0:
+                        continue
+                    coef = _binom(a, i) * _binom(b, j)
+                    val -= coef * W[(i, j)] * S[(a - i, b - j)]
+            S[(a, b)] = val / W[(0, 0)]
+    return S[(nu, nv)]
+
+
+def _binom(n, k):
+    from math import comb
+
+    return comb(n, k)
+
+
+def as_poles(poles, name="poles", ndim=2):
+    """Validate a pole array: float, finite, of ``ndim`` axes, last axis 1..4 coordinates."""
+    try:
+        arr = np.asarray(poles, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be a numeric array, got {type(poles).__name__}.") from exc
+    if arr.ndim != ndim:
+        expected = "(k, d)" if ndim == 2 else "(k_u, k_v, d)"
+        raise InvalidInputError(
+            f"{name} must have shape {expected}, got an array of shape {arr.shape}."
+        )
+    if arr.shape[-1] < 1 or arr.shape[-1] > 4:
+        raise InvalidInputError(
+            f"{name} must have 1 to 4 coordinates per point (last axis), got {arr.shape[-1]}."
+        )
+    if not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise InvalidInputError(
+            f"{name} contain NaN or inf (first at index {tuple(int(i) for i in bad)}); "
+            "repair or drop those points before fairing."
+        )
+    return arr
+
+
+def _as_weights(weights, shape):
+    if weights is None:
+        return None
+    w = np.asarray(weights, dtype=float)
+    if w.shape != tuple(shape):
+        raise InvalidInputError(f"weights must have shape {tuple(shape)}, got {w.shape}.")
+    if not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise InvalidInputError(
+            "weights must be finite and positive; got "
+            f"min {np.nanmin(w)!r}. Zero or negative weights do not define a valid NURBS."
+        )
+    return None if np.all(w == 1.0) else w
+
+
+def _default_knots(k, degree):
+    if k < degree + 1:
+        raise InvalidInputError(
+            f"a degree-{degree} curve needs at least {degree + 1} poles, got {k}; "
+            "pass more points or a lower degree."
+        )
+    return SplineSpace.quasi_uniform(k - degree, degree).knots
+
+
+def make_curve(poles, knots=None, degree=None, weights=None):
+    """Validated :class:`BSplineCurve`; without knots, quasi-uniform of degree 3.
+
+    Raises
+    ------
+    InvalidInputError
+        On a wrong shape, NaN/inf, too few poles, bad knots or bad weights.
+    """
+    P = as_poles(poles, "poles", 2)
+    degree = 3 if degree is None else degree
+    if knots is None:
+        space = SplineSpace.from_knots(_default_knots(P.shape[0], degree), degree)
+    else:
+        space = SplineSpace.from_knots(knots, degree)
+    if space.dimension != P.shape[0]:
+        raise InvalidInputError(
+            f"{P.shape[0]} poles need {P.shape[0] + degree + 1} knots for degree {degree}, "
+            f"got {space.knots.size}."
+        )
+    return BSplineCurve(P, space.knots, space.degree, _as_weights(weights, P.shape[:1]))
+
+
+def make_surface(poles, u_knots=None, v_knots=None, degree=None, weights=None):
+    """Validated :class:`BSplineSurface`; ``degree`` is an int or ``(u_degree, v_degree)``.
+
+    Raises
+    ------
+    InvalidInputError
+        On a wrong shape, NaN/inf, too few poles, bad knots or bad weights.
+    """
+    P = as_poles(poles, "poles", 3)
+    du, dv = (3, 3) if degree is None else (
+        (degree, degree) if np.ndim(degree) == 0 else tuple(degree))
+    spaces = []
+    for knots, k, d, name in ((u_knots, P.shape[0], du, "u"), (v_knots, P.shape[1], dv, "v")):
+        t = _default_knots(k, d) if knots is None else knots
+        space = SplineSpace.from_knots(t, d)
+        if space.dimension != k:
+            raise InvalidInputError(
+                f"{k} poles in {name} need {k + d + 1} {name}_knots for degree {d}, "
+                f"got {space.knots.size}."
+            )
+        spaces.append(space)
+    return BSplineSurface(P, spaces[0].knots, spaces[1].knots, spaces[0].degree,
+                          spaces[1].degree, _as_weights(weights, P.shape[:2]))

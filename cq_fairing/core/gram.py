@@ -1,0 +1,87 @@
+r"""Exact Gram (inner-product) matrices between spline spaces.
+
+For two spaces :math:`A` (degree :math:`p_a`) and :math:`B` (degree :math:`p_b`)
+on the same domain, the Gram matrix is
+
+.. math::  G^{(\nu)}_{ij} = \int N^{A\,(\nu)}_i(t)\, N^{B\,(\nu)}_j(t)\, dt .
+
+On every interval between consecutive breakpoints of the *merged* knot sets the
+integrand is one polynomial of degree :math:`p_a + p_b - 2\nu`, so Gauss-Legendre
+quadrature with :math:`\lceil (p_a + p_b - 2\nu + 1)/2 \rceil` nodes per interval
+is exact (up to rounding).  Each row has at most
+:math:`(p_a + 1)(\text{spans of } B \text{ it meets})` non-zeros, so the matrices are
+kept sparse (banded): building and applying them costs :math:`O(k_a + k_b)`.
+
+References
+----------
+Ji, Xue, Yang, He (2014), eq. (5)-(6): :math:`\langle\Phi_n|\Phi_n\rangle`,
+:math:`\langle\Phi_n|\Phi_m\rangle`.
+"""
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import InvalidInputError
+
+__all__ = ["gram_matrix", "quadrature_rule"]
+
+
+def quadrature_rule(breakpoints, points_per_interval):
+    """Composite Gauss-Legendre nodes and weights over consecutive breakpoints.
+
+    Parameters
+    ----------
+    breakpoints : ndarray, shape (s + 1,)
+        Increasing interval ends.
+    points_per_interval : int
+
+    Returns
+    -------
+    nodes, weights : ndarray, shape (s * points_per_interval,)
+    """
+    ref_x, ref_w = np.polynomial.legendre.leggauss(points_per_interval)
+    a, b = breakpoints[:-1, None], breakpoints[1:, None]
+    half = 0.5 * (b - a)
+    nodes = (a + b) * 0.5 + half * ref_x[None, :]
+    weights = half * ref_w[None, :]
+    return nodes.ravel(), weights.ravel()
+
+
+def gram_matrix(space_a, space_b=None, nu=0):
+    r"""Exact sparse Gram matrix :math:`\langle \Phi_a^{(\nu)} | \Phi_b^{(\nu)} \rangle`.
+
+    Parameters
+    ----------
+    space_a, space_b : SplineSpace
+        Spaces on the same parameter domain; ``space_b`` defaults to ``space_a``.
+    nu : int, optional
+        Derivative order of both factors (0 for the L2 inner product, 2 for the
+        bending-energy matrix).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (k_a, k_b)
+
+    Raises
+    ------
+    InvalidInputError
+        If the domains differ.
+    """
+    if space_b is None:
+        space_b = space_a
+    dom_a, dom_b = np.array(space_a.domain), np.array(space_b.domain)
+    scale = max(1.0, float(np.abs(dom_a).max()))
+    if np.abs(dom_a - dom_b).max() > 1e-12 * scale:
+        raise InvalidInputError(
+            f"Gram matrices need spaces on one domain, got {tuple(dom_a)} and {tuple(dom_b)}; "
+            "reparameterise one of them."
+        )
+    merged = np.union1d(space_a.breakpoints, space_b.breakpoints)
+    merged = merged[(merged >= dom_a[0]) & (merged <= dom_a[1])]
+    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-13 * (dom_a[1] - dom_a[0])])]
+    merged[-1] = dom_a[1]
+    degree = max(space_a.degree + space_b.degree - 2 * nu, 0)
+    nodes, weights = quadrature_rule(merged, degree // 2 + 1)
+    ma = space_a.collocation(nodes, nu)
+    mb = ma if space_b is space_a else space_b.collocation(nodes, nu)
+    return (ma.T @ sp.diags(weights) @ mb).tocsr()
