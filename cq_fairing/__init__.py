@@ -10,9 +10,9 @@ from .core.fairing import (FairResult, SurfaceDetails, SurfaceFairResult, fair_c
 from .core.geometry import BSplineCurve, BSplineSurface, make_curve, make_surface
 from .core.interpolation import interpolate_grid, interpolate_points, read_xyz
 from .core.spaces import SplineSpace
-from .errors import (FairingError, InvalidInputError, InvalidTargetError,
-                     InvalidToleranceError, NumericalError, ToleranceNotMetError,
-                     UnsupportedGeometryError)
+from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidTargetError,
+                     InvalidToleranceError, NumericalError, OutputPathError,
+                     ToleranceNotMetError, UnsupportedGeometryError)
 
 __version__ = "0.1.0"
 
@@ -22,4 +22,5 @@ __all__ = [
     "interpolate_points", "interpolate_grid", "read_xyz",
     "FairingError", "InvalidInputError", "InvalidTargetError", "InvalidToleranceError",
     "ToleranceNotMetError", "UnsupportedGeometryError", "NumericalError",
+    "FileFormatError", "OutputPathError",
 ]

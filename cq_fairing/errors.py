@@ -16,6 +16,8 @@ __all__ = [
     "ToleranceNotMetError",
     "UnsupportedGeometryError",
     "NumericalError",
+    "FileFormatError",
+    "OutputPathError",
 ]
 
 
@@ -58,3 +60,11 @@ class UnsupportedGeometryError(FairingError):
 
 class NumericalError(FairingError):
     """An internal consistency check failed (ill-conditioned or degenerate data)."""
+
+
+class FileFormatError(FairingError):
+    """A model file is missing, empty, corrupt, truncated or of an unknown format."""
+
+
+class OutputPathError(FairingError):
+    """An output path exists (without ``force``), is the input, or cannot be written."""
