@@ -1,0 +1,158 @@
+"""Part.BSplineSurface / Part.BSplineCurve <-> cq_fairing geometry.
+
+FreeCAD stores distinct knots plus multiplicities; the core stores full clamped knot
+vectors.  Periodic geometry is converted to its clamped (non-periodic) equivalent with
+OCCT's ``setUNotPeriodic`` (the same shape, more poles) before conversion, so it is handled
+rather than refused.  Rational geometry keeps its weights (all-one weights count as
+polynomial).  Other surface types (planes, cylinders, ...) raise
+:class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
+"""
+
+import numpy as np
+
+import FreeCAD
+import Part
+import cq_fairing as cf
+
+__all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
+           "face_on_surface", "full_knots"]
+
+
+def full_knots(knots, mults):
+    """Expand distinct knots and multiplicities into the full knot vector."""
+    return np.repeat(np.asarray(knots, dtype=float), np.asarray(mults, dtype=int))
+
+
+def _distinct(full):
+    knots, mults = np.unique(np.round(full, 15), return_counts=True)
+    return [float(k) for k in knots], [int(m) for m in mults]
+
+
+def _weights_or_none(weights):
+    w = np.asarray(weights, dtype=float)
+    return None if np.allclose(w, 1.0, rtol=0, atol=1e-14) else w
+
+
+def _clamped_surface(surface):
+    surface = surface.copy()
+    if surface.isUPeriodic():
+        surface.setUNotPeriodic()
+    if surface.isVPeriodic():
+        surface.setVNotPeriodic()
+    return surface
+
+
+def surface_from_face(face):
+    """The face's underlying surface as a :class:`cq_fairing.BSplineSurface`.
+
+    Returns
+    -------
+    cq_fairing.BSplineSurface
+        Poles of shape (k_u, k_v, 3), full knot vectors, weights or ``None``.
+
+    Raises
+    ------
+    cq_fairing.UnsupportedGeometryError
+        If the face is not a B-spline face.
+    """
+    surface = face.Surface
+    if not isinstance(surface, Part.BSplineSurface):
+        raise cf.UnsupportedGeometryError(
+            f"the face is a {type(surface).__name__}, not a B-spline surface; fairing "
+            "applies to freeform (B-spline) faces only. Pick a B-spline face.")
+    surface = _clamped_surface(surface)
+    poles = np.array([[[p.x, p.y, p.z] for p in row] for row in surface.getPoles()])
+    weights = _weights_or_none(surface.getWeights()) if (
+        surface.isURational() or surface.isVRational()) else None
+    return cf.make_surface(
+        poles,
+        full_knots(surface.getUKnots(), surface.getUMultiplicities()),
+        full_knots(surface.getVKnots(), surface.getVMultiplicities()),
+        (surface.UDegree, surface.VDegree), weights)
+
+
+def part_surface(surface):
+    """A ``Part.BSplineSurface`` from a :class:`cq_fairing.BSplineSurface` (clamped)."""
+    uk, um = _distinct(surface.u_knots)
+    vk, vm = _distinct(surface.v_knots)
+    poles = [[FreeCAD.Vector(*map(float, p)) for p in row] for row in surface.poles]
+    result = Part.BSplineSurface()
+    weights = None if surface.weights is None else surface.weights.tolist()
+    result.buildFromPolesMultsKnots(poles, um, vm, uk, vk, False, False,
+                                    int(surface.u_degree), int(surface.v_degree), weights)
+    return result
+
+
+def curve_from_edge(edge):
+    """The edge's curve as a :class:`cq_fairing.BSplineCurve` (periodic -> clamped).
+
+    Raises
+    ------
+    cq_fairing.UnsupportedGeometryError
+        If the edge is not a B-spline edge.
+    """
+    curve = edge.Curve
+    if not isinstance(curve, Part.BSplineCurve):
+        raise cf.UnsupportedGeometryError(
+            f"the edge is a {type(curve).__name__}, not a B-spline curve; fairing "
+            "applies to freeform (B-spline) edges only. Pick a B-spline edge.")
+    curve = curve.copy()
+    if curve.isPeriodic():
+        curve.setNotPeriodic()
+    poles = np.array([[p.x, p.y, p.z] for p in curve.getPoles()])
+    weights = _weights_or_none(curve.getWeights()) if curve.isRational() else None
+    return cf.make_curve(poles, full_knots(curve.getKnots(), curve.getMultiplicities()),
+                         curve.Degree, weights)
+
+
+def part_curve(curve):
+    """A ``Part.BSplineCurve`` from a :class:`cq_fairing.BSplineCurve`."""
+    knots, mults = _distinct(curve.knots)
+    result = Part.BSplineCurve()
+    weights = None if curve.weights is None else curve.weights.tolist()
+    result.buildFromPolesMultsKnots([FreeCAD.Vector(*map(float, p)) for p in curve.poles],
+                                    mults, knots, False, int(curve.degree), weights)
+    return result
+
+
+def _is_uv_rectangle(face):
+    """True when the face is its surface restricted to ``face.ParameterRange``."""
+    if len(face.Wires) != 1:
+        return False
+    u0, u1, v0, v1 = face.ParameterRange
+    box = face.Surface.toShape(u0, u1, v0, v1)
+    return abs(box.Area - face.Area) <= 1e-6 * max(face.Area, 1e-300)
+
+
+def face_on_surface(surface, face):
+    """A face on the new ``Part`` surface bounded like ``face`` in parameter space.
+
+    Untrimmed faces and faces trimmed to a parameter rectangle (e.g. the two halves of the
+    IEA blade) are rebuilt exactly from their UV box.  Other trims are rebuilt from the
+    edges' pcurves (p-curves are unchanged because fairing keeps the parameter domain).
+
+    Raises
+    ------
+    cq_fairing.UnsupportedGeometryError
+        If the trimmed face cannot be rebuilt into a valid face.
+    """
+    u0, u1, v0, v1 = face.ParameterRange
+    if _is_uv_rectangle(face):
+        return surface.toShape(u0, u1, v0, v1)
+    wires = []
+    for wire in face.Wires:
+        edges = []
+        for edge in wire.OrderedEdges:
+            pcurve, _, _, first, last = edge.curveOnSurface(0)
+            edges.append(pcurve.toShape(surface, first, last))
+        wires.append(Part.Wire(edges))
+    result = Part.Face(surface, wires[0])
+    for inner in wires[1:]:
+        result.validate()
+        result = Part.Face(result, inner)
+    result.validate()
+    if not result.isValid():
+        raise cf.UnsupportedGeometryError(
+            "the trimmed face could not be rebuilt on the faired surface; fair the "
+            "untrimmed surface (Part > Convert) or a face trimmed to a UV rectangle.")
+    return result

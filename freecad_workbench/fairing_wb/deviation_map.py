@@ -1,0 +1,182 @@
+"""Deviation and curvature maps: coloured analysis meshes (App level, no GUI import).
+
+A map is a ``Mesh::FeaturePython`` sampled on the faired (or source) faces of a Fairing
+feature.  Its proxy :class:`AnalysisMap` stores one value per mesh vertex
+(``Values``) and one colour per vertex (``VertexColors``, an ``App::PropertyColorList``
+that FreeCAD's mesh view provider uses when ``Coloring`` is on).  Maps never touch the
+faired model: they only read it.
+"""
+
+import numpy as np
+
+import FreeCAD
+import Mesh
+
+from . import analysis, conversion, preferences
+
+__all__ = ["AnalysisMap", "make_map", "KINDS", "ramp", "find_maps"]
+
+KINDS = ("Deviation", "MeanCurvature", "GaussianCurvature")
+WHICH = ("Faired", "Source")
+TYPE = "Fairing::AnalysisMap"
+
+PROPERTIES = (
+    ("App::PropertyLink", "Fairing", "Map", "The Fairing feature analysed"),
+    ("App::PropertyEnumeration", "Kind", "Map", "Deviation, MeanCurvature or GaussianCurvature"),
+    ("App::PropertyEnumeration", "Which", "Map", "Curvature of the Faired or the Source faces"),
+    ("App::PropertyInteger", "Samples", "Map", "Samples per direction and face"),
+    ("App::PropertyVector", "Offset", "Map", "Shift of the map (side-by-side comparison)"),
+    ("App::PropertyFloat", "RangeMin", "Map", "Lower end of the colour ramp (auto if equal)"),
+    ("App::PropertyFloat", "RangeMax", "Map", "Upper end of the colour ramp (auto if equal)"),
+    ("App::PropertyFloatList", "Values", "Result", "One value per mesh vertex"),
+    ("App::PropertyColorList", "VertexColors", "Result", "One colour per mesh vertex"),
+    ("App::PropertyFloat", "Minimum", "Result", "Smallest value"),
+    ("App::PropertyFloat", "Maximum", "Result", "Largest value"),
+    ("App::PropertyString", "Unit", "Result", "Unit of the values"),
+)
+UNITS = {"Deviation": "mm", "MeanCurvature": "1/mm", "GaussianCurvature": "1/mm^2"}
+
+
+def ramp(values, low, high, colors=None):
+    """Colours interpolated from ``colors[0]`` (at ``low``) to ``colors[1]`` (at ``high``).
+
+    Returns a list of float RGB tuples (FreeCAD needs floats).
+    """
+    c0, c1 = np.array(colors or preferences.colors())
+    span = high - low if high > low else 1.0
+    t = np.clip((np.asarray(values, dtype=float) - low) / span, 0.0, 1.0)[:, None]
+    return [tuple(map(float, c)) for c in (1 - t) * c0 + t * c1]
+
+
+def _grid_mesh(points, values):
+    """Triangles of a (n, n, 3) sample grid; returns (Mesh.Mesh, per-vertex values)."""
+    n_u, n_v = points.shape[:2]
+    index = np.arange(n_u * n_v).reshape(n_u, n_v)
+    a, b = index[:-1, :-1].ravel(), index[1:, :-1].ravel()
+    c, d = index[1:, 1:].ravel(), index[:-1, 1:].ravel()
+    triangles = np.concatenate([np.c_[a, b, c], np.c_[a, c, d]])
+    vertices = [FreeCAD.Vector(*p) for p in points.reshape(-1, 3).tolist()]
+    # (Vectors, index tuples) keeps the vertex order; plain float tuples crash 0.20.2.
+    mesh = Mesh.Mesh((vertices, [tuple(t) for t in triangles.tolist()]))
+    return mesh, values.ravel()
+
+
+def _face_samples(obj, source_face, faired_face, count):
+    """(points, values) of one face pair for the map's Kind/Which."""
+    source = conversion.surface_from_face(source_face)
+    faired = conversion.surface_from_face(faired_face)
+    uv_range = source_face.ParameterRange
+    if obj.Kind == "Deviation":
+        return analysis.signed_deviation(source, faired, uv_range, count)
+    surface = faired if obj.Which == "Faired" else source
+    kind = "gaussian" if obj.Kind == "GaussianCurvature" else "mean"
+    return analysis.curvature(surface, uv_range, count, kind)
+
+
+class AnalysisMap:
+    """Proxy of a deviation / curvature map."""
+
+    Type = TYPE
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.Type = TYPE
+        self._add_properties(obj)
+
+    def _add_properties(self, obj):
+        for kind, name, group, tip in PROPERTIES:
+            if name not in obj.PropertiesList:
+                obj.addProperty(kind, name, group, tip)
+                if name == "Kind":
+                    obj.Kind = list(KINDS)
+                elif name == "Which":
+                    obj.Which = list(WHICH)
+                elif name == "Samples":
+                    obj.Samples = preferences.sample_density()
+        for name in ("Values", "VertexColors", "Minimum", "Maximum", "Unit"):
+            obj.setEditorMode(name, 1)
+
+    def onDocumentRestored(self, obj):
+        self._add_properties(obj)
+
+    def execute(self, obj):
+        fairing = obj.Fairing
+        source, subs = fairing.Source
+        merged, values = Mesh.Mesh(), []
+        faces = [s for s in subs if s.startswith("Face")]
+        for sub, faired_face in zip(faces, fairing.Shape.Faces):
+            points, v = _face_samples(obj, source.Shape.getElement(sub), faired_face,
+                                      obj.Samples)
+            mesh, v = _grid_mesh(points, v)
+            merged.addMesh(mesh)
+            values.extend(v.tolist())
+        values = np.asarray(values)
+        if obj.Kind == "Deviation":
+            values = np.abs(values)
+        shown = values if obj.Kind == "Deviation" else values[np.isfinite(values)]
+        obj.Minimum, obj.Maximum = float(shown.min()), float(shown.max())
+        low, high = self.range(obj)
+        merged.translate(*obj.Offset)
+        obj.Mesh = merged
+        obj.Values = values.tolist()
+        obj.VertexColors = ramp(values, low, high)
+        obj.Unit = UNITS[obj.Kind]
+
+    @staticmethod
+    def range(obj):
+        """The colour ramp's ``(low, high)``: [0, max] for deviation, else min..max."""
+        if obj.RangeMax > obj.RangeMin:
+            return obj.RangeMin, obj.RangeMax
+        if obj.Kind == "Deviation":
+            return 0.0, obj.Maximum
+        return obj.Minimum, obj.Maximum
+
+    def __getstate__(self):
+        return {"Type": self.Type}
+
+    def __setstate__(self, state):
+        self.Type = (state or {}).get("Type", TYPE)
+
+    dumps = __getstate__
+    loads = __setstate__
+
+
+def find_maps(fairing, kind=None):
+    """Maps of a Fairing feature in its document (optionally of one Kind)."""
+    return [o for o in fairing.Document.Objects
+            if getattr(getattr(o, "Proxy", None), "Type", None) == TYPE
+            and o.Fairing == fairing and (kind is None or o.Kind == kind)]
+
+
+def make_map(fairing, kind="Deviation", which="Faired", name=None):
+    """Create a map object of ``fairing`` (not yet recomputed)."""
+    doc = fairing.Document
+    obj = doc.addObject("Mesh::FeaturePython", name or f"{kind}Map")
+    AnalysisMap(obj)
+    obj.Fairing, obj.Kind, obj.Which = fairing, kind, which
+    obj.Label = f"{kind} {which if kind != 'Deviation' else ''} of {fairing.Label}".replace(
+        "  ", " ")
+    if FreeCAD.GuiUp:
+        from . import view_provider
+
+        view_provider.ViewProviderMap(obj.ViewObject)
+    return obj
+
+
+def make_curvature_maps(fairing, kind="MeanCurvature"):
+    """Two curvature maps, faired (in place) and source (shifted aside), same colour range."""
+    faired = make_map(fairing, kind, "Faired")
+    source = make_map(fairing, kind, "Source")
+    box = fairing.Shape.BoundBox
+    shift = FreeCAD.Vector(1.2 * box.XLength, 0, 0) if box.XLength >= box.YLength else \
+        FreeCAD.Vector(0, 1.2 * box.YLength, 0)
+    source.Offset = shift
+    return faired, source
+
+
+def share_range(maps):
+    """Give recomputed maps one common colour range (comparable colours)."""
+    low = min(m.Minimum for m in maps)
+    high = max(m.Maximum for m in maps)
+    for m in maps:
+        m.RangeMin, m.RangeMax = low, high

@@ -1,0 +1,127 @@
+"""The parametric Fairing feature (App level, no GUI import).
+
+A ``Part::FeaturePython`` whose proxy :class:`Fairing` fairs the linked B-spline faces
+or edges of its ``Source`` on every recompute.  Its properties are declared once in
+:data:`PROPERTIES`; :meth:`Fairing.onDocumentRestored` adds any property missing from an
+older document (migration).  The proxy's module path ``fairing_wb.feature`` is frozen:
+saved documents refer to it.
+"""
+
+import FreeCAD
+import Part
+import cq_fairing as cf
+
+from . import make
+
+__all__ = ["Fairing", "PROPERTIES", "TYPE"]
+
+TYPE = "Fairing::SurfaceFairing"
+VERSION = 1
+
+# (type, name, group, tooltip, read-only)
+PROPERTIES = (
+    ("App::PropertyLinkSub", "Source", "Fairing", "Faces or edges to fair", False),
+    ("App::PropertyEnumeration", "Mode", "Fairing",
+     "Tolerance: fewest control points within Tolerance; Target: TargetU x TargetV", False),
+    ("App::PropertyLength", "Tolerance", "Fairing",
+     "Largest allowed deviation from the source", False),
+    ("App::PropertyInteger", "TargetU", "Fairing", "Control points in u (Target mode)", False),
+    ("App::PropertyInteger", "TargetV", "Fairing", "Control points in v (Target mode)", False),
+    ("App::PropertyEnumeration", "Method", "Fairing", "wavelet (ARWFA/DWFA) or energy", False),
+    ("App::PropertyEnumeration", "Boundary", "Fairing",
+     "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
+    ("App::PropertyString", "PolesBefore", "Figures", "Control points of the source", True),
+    ("App::PropertyString", "PolesAfter", "Figures", "Control points of the result", True),
+    ("App::PropertyLength", "MaxDeviation", "Figures",
+     "Largest sampled deviation from the source", True),
+    ("App::PropertyFloat", "FairingTime", "Figures", "Seconds of the last recompute", True),
+    ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
+)
+ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Boundary": make.BOUNDARIES}
+
+
+def _clamped_target(target, face):
+    """With several faces, a face smaller than the target keeps its own pole count."""
+    surface = face.Surface
+    return (min(target[0], surface.NbUPoles), min(target[1], surface.NbVPoles))
+
+
+class Fairing:
+    """Proxy of the Fairing feature."""
+
+    Type = TYPE
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.Type = TYPE
+        self.Version = VERSION
+        self._add_properties(obj)
+
+    def _add_properties(self, obj):
+        for kind, name, group, tip, read_only in PROPERTIES:
+            if name in obj.PropertiesList:
+                continue
+            obj.addProperty(kind, name, group, tip)
+            if name in ENUMERATIONS:
+                setattr(obj, name, list(ENUMERATIONS[name]))
+            if read_only:
+                obj.setEditorMode(name, 1)
+        if obj.Tolerance.Value == 0:
+            obj.Tolerance = 0.01
+
+    def onDocumentRestored(self, obj):
+        """Migrate documents saved by older versions: add missing properties."""
+        self._add_properties(obj)
+        self.Type, self.Version = TYPE, VERSION
+
+    def execute(self, obj):
+        """Fair every linked face/edge; a user error sets ``Status`` and fails the object."""
+        try:
+            shape, results = self._fair(obj)
+        except cf.FairingError as error:
+            obj.Status = f"Error: {error}"
+            raise
+        obj.Shape = shape
+        obj.PolesBefore = "; ".join(" x ".join(map(str, r.poles_before)) for r in results)
+        obj.PolesAfter = "; ".join(" x ".join(map(str, r.poles_after)) for r in results)
+        obj.MaxDeviation = max(r.max_deviation for r in results)
+        obj.FairingTime = sum(r.seconds for r in results)
+        obj.Status = "OK"
+
+    @staticmethod
+    def settings(obj):
+        """Keyword arguments of :func:`make.fair_face` from the properties."""
+        if obj.Mode == "Tolerance":
+            return {"tolerance": obj.Tolerance.Value, "target": None, "method": obj.Method}
+        return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), "method": obj.Method}
+
+    def _fair(self, obj):
+        if obj.Source is None:
+            raise cf.InvalidInputError("the Fairing has no Source; link faces or edges.")
+        source, subs = obj.Source
+        kwargs = self.settings(obj)
+        results = []
+        for sub in subs:
+            element = source.Shape.getElement(sub)
+            if sub.startswith("Face"):
+                if kwargs["target"] is not None and len(subs) > 1:
+                    kwargs["target"] = _clamped_target(kwargs["target"], element)
+                results.append(make.fair_face(element, boundary=obj.Boundary, **kwargs))
+            else:
+                target = None if kwargs["target"] is None else kwargs["target"][0]
+                results.append(make.fair_edge(element, kwargs["tolerance"], target,
+                                              kwargs["method"]))
+        shapes = [r.shape for r in results]
+        shape = shapes[0] if len(shapes) == 1 else Part.makeCompound(shapes)
+        return shape, results
+
+    def __getstate__(self):
+        return {"Type": self.Type, "Version": getattr(self, "Version", VERSION)}
+
+    def __setstate__(self, state):
+        if state:
+            self.Type = state.get("Type", TYPE)
+            self.Version = state.get("Version", VERSION)
+
+    dumps = __getstate__
+    loads = __setstate__

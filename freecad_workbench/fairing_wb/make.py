@@ -1,0 +1,271 @@
+"""Scriptable entry points: :func:`make_fairing` (the feature) and :func:`fair_face` /
+:func:`fair_edge` (one shape, no document), used by the feature, the task panel's
+Preview and the Levels command.
+
+Every command of the workbench echoes a :func:`make_fairing` call to the Python console,
+so what a user clicks can be replayed in a macro::
+
+    import fairing_wb.make
+    fairing_wb.make.make_fairing((App.ActiveDocument.Blade, ["Face2"]), tolerance=0.05)
+    App.ActiveDocument.recompute()
+"""
+
+import importlib.util
+import inspect
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+import FreeCAD
+import cq_fairing as cf
+
+from . import analysis, conversion
+
+__all__ = ["make_fairing", "fair_face", "fair_edge", "FairedShape", "MODES", "METHODS",
+           "BOUNDARIES"]
+
+MODES = ("Tolerance", "Target")
+METHODS = ("wavelet", "energy")
+BOUNDARIES = ("free", "corners", "edges")
+DEVIATION_SAMPLES = 40
+
+
+@dataclass(frozen=True)
+class FairedShape:
+    """Outcome of fairing one face or edge.
+
+    Attributes
+    ----------
+    shape : Part.Face or Part.Edge
+    poles_before, poles_after : tuple of int
+        ``(k_u, k_v)`` for a face, ``(k,)`` for an edge.
+    max_deviation : float
+        Largest sampled distance source -> faired (model units, mm).
+    seconds : float
+        Wall time of conversion + fairing + rebuild.
+    """
+
+    shape: object
+    poles_before: tuple
+    poles_after: tuple
+    max_deviation: float
+    seconds: float
+
+
+def _check_tolerance(tolerance):
+    if tolerance is None or not np.isfinite(tolerance) or tolerance <= 0:
+        raise cf.InvalidToleranceError(
+            f"the tolerance must be a positive distance in mm, got {tolerance!r}; "
+            "enter a value such as 0.05 mm.")
+    return float(tolerance)
+
+
+def _core_keywords(method):
+    """Keyword arguments selecting ``method``; refuse clearly if the core lacks it."""
+    if method not in METHODS:
+        raise cf.InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
+    if method == "wavelet":
+        return {}
+    if "method" not in inspect.signature(cf.fair_surface).parameters:
+        raise cf.InvalidInputError(
+            "the installed cq_fairing core has no energy fairing yet (fair_surface has no "
+            "'method' argument); choose the wavelet method.")
+    return {"method": method}
+
+
+def _require_accuracy_control():
+    if importlib.util.find_spec("cq_fairing.core.accuracy") is None:
+        raise cf.InvalidInputError(
+            "tolerance mode needs cq_fairing's accuracy control (cq_fairing.core.accuracy), "
+            "which this installation lacks; use explicit target control points instead.")
+
+
+def _target_spans(target, source_poles, degrees, what):
+    """Control-point counts -> knot spans (n = poles - target degree), validated."""
+    target = tuple(target)
+    if len(target) != len(source_poles) or not all(
+            isinstance(t, (int, np.integer)) and not isinstance(t, bool) for t in target):
+        raise cf.InvalidTargetError(
+            f"the target of a {what} is {len(source_poles)} integer control-point count(s), "
+            f"got {target!r}.")
+    spans = []
+    for t, k, p in zip(target, source_poles, degrees):
+        degree = min(3, p)
+        if not degree + 1 <= t <= k:
+            raise cf.InvalidTargetError(
+                f"a target of {t} control points is out of range: the {what} has {k}; "
+                f"choose between {degree + 1} and {k}.")
+        spans.append(t - degree)
+    return tuple(spans)
+
+
+def _fix_boundary(source, faired, boundary):
+    """Pin corners, or replace the boundary pole rows by the faired boundary curves.
+
+    For clamped nets the boundary curves of a surface are the curves of its first/last
+    pole rows and columns, so ``"edges"`` fairs each source boundary curve into the
+    target space of its direction (1-D L2-best fit), then pins the corners.  Two faces
+    sharing an edge with the same parametrisation and target then share the faired edge.
+    """
+    if boundary not in BOUNDARIES:
+        raise cf.InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
+    if boundary == "free":
+        return faired
+    src, net = source.poles, faired.poles.copy()
+    if boundary == "edges" and source.weights is None:
+        nv = faired.v_space.n_spans
+        nu = faired.u_space.n_spans
+        for i in (0, -1):
+            net[i] = cf.fair_curve(src[i], nv, knots=source.v_knots, degree=source.v_degree,
+                                   target_degree=faired.v_degree).poles
+            net[:, i] = cf.fair_curve(src[:, i], nu, knots=source.u_knots,
+                                      degree=source.u_degree,
+                                      target_degree=faired.u_degree).poles
+    for i in (0, -1):
+        for j in (0, -1):
+            net[i, j] = src[i, j]
+    return cf.BSplineSurface(net, faired.u_knots, faired.v_knots, faired.u_degree,
+                             faired.v_degree, faired.weights)
+
+
+def fair_surface_net(source, tolerance=None, target=None, method="wavelet"):
+    """Fair a core surface by tolerance or by target control points (core call only)."""
+    keywords = _core_keywords(method)
+    if (tolerance is None) == (target is None):
+        raise cf.InvalidInputError(
+            "give either a tolerance (mm) or target control points (u, v), not both/neither.")
+    if tolerance is not None:
+        _require_accuracy_control()
+        return cf.fair_surface(source.poles, tol=_check_tolerance(tolerance),
+                               u_knots=source.u_knots, v_knots=source.v_knots,
+                               degree=(source.u_degree, source.v_degree),
+                               weights=source.weights, **keywords)
+    n = _target_spans(target, source.shape, (source.u_degree, source.v_degree), "face")
+    return cf.fair_surface(source.poles, n, u_knots=source.u_knots, v_knots=source.v_knots,
+                           degree=(source.u_degree, source.v_degree), weights=source.weights,
+                           **keywords)
+
+
+def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free"):
+    """Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
+
+    Parameters
+    ----------
+    face : Part.Face
+    tolerance : float, optional
+        Largest allowed deviation in mm (tolerance mode).
+    target : (int, int), optional
+        Control points (u, v) of the result (target mode).
+    method : {"wavelet", "energy"}
+    boundary : {"free", "corners", "edges"}
+        ``free``: L2-best surface, the boundary may move within the tolerance;
+        ``corners``: the four corner points stay; ``edges``: boundary curves are the
+        faired source boundary curves with pinned corners.
+
+    Raises
+    ------
+    cq_fairing.FairingError
+        Any user error (non-B-spline face, bad tolerance or target, unmet tolerance).
+    """
+    start = time.perf_counter()
+    source = conversion.surface_from_face(face)
+    result = fair_surface_net(source, tolerance, target, method)
+    faired = _fix_boundary(source, result.surface, boundary)
+    uv_range = face.ParameterRange
+    deviation = analysis.parametric_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
+    if tolerance is not None and boundary != "free" and deviation > tolerance:
+        raise cf.ToleranceNotMetError(
+            f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
+            f"source, more than the tolerance {tolerance:.4g} mm; use boundary 'free' or a "
+            "larger tolerance.", tolerance=tolerance, best_deviation=deviation)
+    shape = conversion.face_on_surface(conversion.part_surface(faired), face)
+    return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
+                       time.perf_counter() - start)
+
+
+def fair_edge(edge, tolerance=None, target=None, method="wavelet"):
+    """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``)."""
+    start = time.perf_counter()
+    keywords = {} if method == "wavelet" else _core_keywords(method)
+    source = conversion.curve_from_edge(edge)
+    if (tolerance is None) == (target is None):
+        raise cf.InvalidInputError(
+            "give either a tolerance (mm) or a target control-point count, not both/neither.")
+    common = dict(knots=source.knots, degree=source.degree, weights=source.weights, **keywords)
+    if tolerance is not None:
+        _require_accuracy_control()
+        result = cf.fair_curve(source.poles, tol=_check_tolerance(tolerance), **common)
+    else:
+        target = (target,) if np.ndim(target) == 0 else tuple(target)[:1]
+        (n,) = _target_spans(target, (source.n_poles,), (source.degree,), "curve")
+        result = cf.fair_curve(source.poles, n, **common)
+    first, last = edge.ParameterRange
+    t = np.linspace(first, last, 200)
+    deviation = float(np.linalg.norm(source.evaluate(t) - result.curve.evaluate(t), axis=1).max())
+    shape = conversion.part_curve(result.curve).toShape(first, last)
+    return FairedShape(shape, (source.n_poles,), (result.curve.n_poles,), deviation,
+                       time.perf_counter() - start)
+
+
+def _source_link(source):
+    """Normalise ``source`` to ``(object, [subelement names])``."""
+    if isinstance(source, (tuple, list)) and len(source) == 2:
+        obj, subs = source
+        subs = [subs] if isinstance(subs, str) else list(subs)
+    else:
+        obj = source
+        subs = [f"Face{i + 1}" for i, f in enumerate(obj.Shape.Faces)
+                if type(f.Surface).__name__ == "BSplineSurface"]
+    if not subs or not all(s.startswith(("Face", "Edge")) for s in subs):
+        raise cf.InvalidInputError(
+            f"select B-spline faces or edges of one object to fair, got {subs!r} of "
+            f"{getattr(obj, 'Label', obj)!r}.")
+    return obj, subs
+
+
+def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
+                 name="Fairing", doc=None):
+    """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
+
+    Parameters
+    ----------
+    source : DocumentObject or (DocumentObject, [sub names])
+        The object and its faces (``"Face2"``) or edges (``"Edge5"``); an object alone
+        means all its B-spline faces.
+    tolerance : float, optional
+        Largest allowed deviation in mm.  When neither ``tolerance`` nor ``target`` is
+        given, the preference "DefaultTolerance" is used (0 there means 1e-3 of the
+        source's bounding-box diagonal).
+    target : int or (int, int), optional
+        Control points of the result; selects target mode.
+    method : {"wavelet", "energy"}
+    boundary : {"free", "corners", "edges"}
+
+    Returns
+    -------
+    App.DocumentObject
+        Not yet recomputed; the source object is hidden, not deleted.
+    """
+    from . import feature, preferences
+
+    obj_source, subs = _source_link(source)
+    doc = doc or obj_source.Document
+    obj = doc.addObject("Part::FeaturePython", name)
+    feature.Fairing(obj)
+    obj.Source = (obj_source, subs)
+    if target is not None:
+        target = (target, target) if np.ndim(target) == 0 else tuple(target)
+        obj.Mode = "Target"
+        obj.TargetU, obj.TargetV = int(target[0]), int(target[-1])
+    else:
+        obj.Mode = "Tolerance"
+        obj.Tolerance = (tolerance if tolerance is not None
+                         else preferences.default_tolerance(obj_source.Shape))
+    obj.Method, obj.Boundary = method, boundary
+    if FreeCAD.GuiUp:
+        from . import view_provider
+
+        view_provider.ViewProviderFairing(obj.ViewObject)
+        obj_source.ViewObject.Visibility = False
+    return obj

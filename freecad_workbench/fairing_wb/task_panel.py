@@ -1,0 +1,296 @@
+"""Task panels: Fair Surface / Fair Curve (create or edit a Fairing) and Levels (GUI only).
+
+Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_target_u``,
+``fairing_target_v``, ``fairing_method``, ``fairing_boundary``, ``fairing_preview``,
+``fairing_figures``, ``fairing_error``, ``fairing_faces``, ``fairing_level``) so scripts and
+GUI tests can find them with ``Gui.getMainWindow().findChild``.
+"""
+
+import FreeCAD
+import FreeCADGui
+import cq_fairing as cf
+from PySide2 import QtCore, QtWidgets
+
+from . import icon_path, make, preferences
+
+__all__ = ["FairSurfacePanel", "LevelsPanel", "selection_link", "make_call"]
+
+
+def selection_link(kind="Face"):
+    """``(object, [sub names])`` of the current selection's faces/edges (first object)."""
+    for sel in FreeCADGui.Selection.getSelectionEx():
+        subs = [s for s in sel.SubElementNames if s.startswith(kind)]
+        if subs:
+            return sel.Object, subs
+    return None
+
+
+def make_call(link, settings, boundary):
+    """The scriptable ``make_fairing(...)`` line for a source link and settings."""
+    obj, subs = link
+    args = [f"(App.ActiveDocument.getObject({obj.Name!r}), {subs!r})"]
+    if settings["target"] is not None:
+        args.append(f"target={tuple(settings['target'])!r}")
+    else:
+        args.append(f"tolerance={settings['tolerance']!r}")
+    args += [f"method={settings['method']!r}", f"boundary={boundary!r}"]
+    return f"fairing_wb.make.make_fairing({', '.join(args)})"
+
+
+def _row(layout, text, widget, name):
+    widget.setObjectName(name)
+    layout.addRow(text, widget)
+    return widget
+
+
+class FairSurfacePanel:
+    """Tolerance, mode, target, method, boundary, live figures; Preview / OK / Cancel."""
+
+    def __init__(self, link=None, fairing=None, kind="Face"):
+        self.fairing = fairing
+        self.link = tuple(fairing.Source) if fairing is not None else link
+        self.kind = "Edge" if self.link and self.link[1][0].startswith("Edge") else kind
+        self.form = self._build()
+        self._load()
+
+    # -- widgets -------------------------------------------------------------------------
+    def _build(self):
+        form = QtWidgets.QWidget()
+        form.setObjectName("FairingTaskPanel")
+        form.setWindowTitle("Fair curve" if self.kind == "Edge" else "Fair surface")
+        form.setWindowIcon(QtGui_icon(icon_path(
+            "Fairing_FairCurve" if self.kind == "Edge" else "Fairing_FairSurface")))
+        layout = QtWidgets.QFormLayout(form)
+        self.faces = _row(layout, "Source:", QtWidgets.QListWidget(), "fairing_faces")
+        self.faces.setMaximumHeight(70)
+        self.mode = _row(layout, "Mode:", QtWidgets.QComboBox(), "fairing_mode")
+        self.mode.addItems(["Tolerance", "Target control points"])
+        ui = FreeCADGui.UiLoader()
+        self.tolerance = _row(layout, "Tolerance:", ui.createWidget("Gui::QuantitySpinBox"),
+                              "fairing_tolerance")
+        self.tolerance.setProperty("unit", "mm")
+        self.tolerance.setProperty("minimum", 1e-6)
+        self.tolerance.setProperty("decimals", 4)
+        self.target_u = _row(layout, "Target poles u:", QtWidgets.QSpinBox(), "fairing_target_u")
+        self.target_v = _row(layout, "Target poles v:", QtWidgets.QSpinBox(), "fairing_target_v")
+        for box in (self.target_u, self.target_v):
+            box.setRange(2, 100000)
+        self.target_v.setVisible(self.kind == "Face")
+        self.method = _row(layout, "Method:", QtWidgets.QComboBox(), "fairing_method")
+        self.method.addItems(list(make.METHODS))
+        self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
+        self.boundary.addItems(list(make.BOUNDARIES))
+        self.boundary.setEnabled(self.kind == "Face")
+        self.preview = _row(layout, "", QtWidgets.QPushButton("Preview"), "fairing_preview")
+        self.preview.clicked.connect(self.on_preview)
+        self.figures = _row(layout, "", QtWidgets.QLabel("Press Preview for figures."),
+                            "fairing_figures")
+        self.error = _row(layout, "", QtWidgets.QLabel(""), "fairing_error")
+        self.error.setStyleSheet("color: #b00000")
+        self.error.setWordWrap(True)
+        self.mode.currentIndexChanged.connect(self._mode_changed)
+        return form
+
+    def _load(self):
+        obj, subs = self.link
+        self.faces.addItems([f"{obj.Label}.{s}" for s in subs])
+        first = obj.Shape.getElement(subs[0])
+        geometry = first.Surface if self.kind == "Face" else first.Curve
+        if self.kind == "Face":
+            self.target_u.setValue(max(4, geometry.NbUPoles // 2))
+            self.target_v.setValue(max(4, geometry.NbVPoles // 2))
+        else:
+            self.target_u.setValue(max(4, geometry.NbPoles // 2))
+        self.tolerance.setProperty("rawValue", preferences.default_tolerance(obj.Shape))
+        if self.fairing is not None:
+            f = self.fairing
+            self.mode.setCurrentIndex(0 if f.Mode == "Tolerance" else 1)
+            self.tolerance.setProperty("rawValue", f.Tolerance.Value)
+            self.target_u.setValue(f.TargetU)
+            self.target_v.setValue(f.TargetV)
+            self.method.setCurrentText(f.Method)
+            self.boundary.setCurrentText(f.Boundary)
+        self._mode_changed()
+
+    def _mode_changed(self, *_):
+        by_tolerance = self.mode.currentIndex() == 0
+        self.tolerance.setEnabled(by_tolerance)
+        self.target_u.setEnabled(not by_tolerance)
+        self.target_v.setEnabled(not by_tolerance)
+
+    # -- values ----------------------------------------------------------------------------
+    def settings(self):
+        """``{"tolerance", "target", "method"}`` as :func:`make.fair_face` takes them."""
+        if self.mode.currentIndex() == 0:
+            return {"tolerance": float(self.tolerance.property("rawValue")), "target": None,
+                    "method": self.method.currentText()}
+        return {"tolerance": None,
+                "target": (self.target_u.value(), self.target_v.value()),
+                "method": self.method.currentText()}
+
+    def run(self):
+        """Fair every selected face/edge; returns the :class:`make.FairedShape` list."""
+        obj, subs = self.link
+        s = self.settings()
+        results = []
+        for sub in subs:
+            element = obj.Shape.getElement(sub)
+            if self.kind == "Face":
+                results.append(make.fair_face(element, boundary=self.boundary.currentText(),
+                                              **s))
+            else:
+                target = None if s["target"] is None else s["target"][0]
+                results.append(make.fair_edge(element, s["tolerance"], target, s["method"]))
+        return results
+
+    def on_preview(self):
+        """Recompute the figures: poles before -> after, max deviation, time."""
+        self.error.setText("")
+        try:
+            results = self.run()
+        except cf.FairingError as error:
+            self.figures.setText("")
+            self.error.setText(str(error))
+            return None
+        lines = [f"{' x '.join(map(str, r.poles_before))} -> "
+                 f"{' x '.join(map(str, r.poles_after))} control points, "
+                 f"max deviation {r.max_deviation:.4g} mm, {1000 * r.seconds:.0f} ms"
+                 for r in results]
+        self.figures.setText("\n".join(lines))
+        return results
+
+    # -- OK / Cancel ---------------------------------------------------------------------
+    def accept(self):
+        if self.on_preview() is None:
+            return False
+        s, boundary = self.settings(), self.boundary.currentText()
+        doc = self.link[0].Document
+        if self.fairing is None:
+            doc.openTransaction("Fair surface")
+            FreeCADGui.doCommand("import fairing_wb.make")
+            FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, boundary)}")
+        else:
+            doc.openTransaction("Edit fairing")
+            FreeCADGui.doCommand(f"fairing = App.ActiveDocument.getObject({self.fairing.Name!r})")
+            self._echo_properties(s, boundary)
+        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+        doc.commitTransaction()
+        self._close()
+        return True
+
+    def _echo_properties(self, s, boundary):
+        if s["target"] is None:
+            FreeCADGui.doCommand(f"fairing.Mode = 'Tolerance'; fairing.Tolerance = {s['tolerance']!r}")
+        else:
+            FreeCADGui.doCommand(f"fairing.Mode = 'Target'; fairing.TargetU, fairing.TargetV = "
+                                 f"{s['target'][0]}, {s['target'][1]}")
+        FreeCADGui.doCommand(f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}")
+
+    def reject(self):
+        self._close()
+        return True
+
+    def _close(self):
+        if self.fairing is not None:
+            FreeCADGui.ActiveDocument.resetEdit()
+        else:
+            FreeCADGui.Control.closeDialog()
+
+    def getStandardButtons(self):
+        return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+
+
+def QtGui_icon(path):
+    from PySide2 import QtGui
+
+    return QtGui.QIcon(path)
+
+
+def level_targets(surface, count=8):
+    """Control-point targets from the source down to the coarsest cubic net (halving)."""
+    ku, kv = surface.NbUPoles, surface.NbVPoles
+    du, dv = min(3, surface.UDegree), min(3, surface.VDegree)
+    targets = [(ku, kv)]
+    while len(targets) < count:
+        u, v = targets[-1]
+        nxt = (max(du + 1, du + (u - du) // 2), max(dv + 1, dv + (v - dv) // 2))
+        if nxt == targets[-1]:
+            break
+        targets.append(nxt)
+    return targets[1:]
+
+
+class LevelsPanel:
+    """Step through the multiresolution scales of one face with a slider.
+
+    The shown level is a temporary ``Part::Feature`` (``FairingLevelPreview``) replaced
+    on each step; OK turns the chosen level into a parametric Fairing (target mode),
+    Cancel removes the preview.  Nothing changes the source.
+    """
+
+    def __init__(self, link):
+        self.link = link
+        obj, subs = link
+        self.face = obj.Shape.getElement(subs[0])
+        self.targets = level_targets(self.face.Surface)
+        self.preview = None
+        self.form = QtWidgets.QWidget()
+        self.form.setObjectName("FairingLevelsPanel")
+        self.form.setWindowTitle("Multiresolution levels")
+        layout = QtWidgets.QVBoxLayout(self.form)
+        self.slider = QtWidgets.QSlider(QtCore.Qt.Horizontal)
+        self.slider.setObjectName("fairing_level")
+        self.slider.setRange(0, len(self.targets) - 1)
+        self.label = QtWidgets.QLabel("")
+        self.label.setObjectName("fairing_figures")
+        self.error = QtWidgets.QLabel("")
+        self.error.setObjectName("fairing_error")
+        for widget in (QtWidgets.QLabel("Scale (fine -> coarse):"), self.slider, self.label,
+                       self.error):
+            layout.addWidget(widget)
+        self.slider.valueChanged.connect(self.show_level)
+        self.show_level(0)
+
+    def show_level(self, index):
+        target = self.targets[index]
+        try:
+            result = make.fair_face(self.face, target=target)
+        except cf.FairingError as error:
+            self.error.setText(str(error))
+            return
+        self.error.setText("")
+        doc = self.link[0].Document
+        if self.preview is None or self.preview.Document is None:
+            self.preview = doc.addObject("Part::Feature", "FairingLevelPreview")
+            self.preview.ViewObject.ShapeColor = (0.35, 0.6, 0.95)
+            self.link[0].ViewObject.Visibility = False
+        self.preview.Shape = result.shape
+        self.label.setText(f"level {index + 1}/{len(self.targets)}: "
+                           f"{target[0]} x {target[1]} control points, "
+                           f"max deviation {result.max_deviation:.4g} mm")
+        doc.recompute()
+
+    def _remove_preview(self):
+        if self.preview is not None:
+            self.preview.Document.removeObject(self.preview.Name)
+            self.preview = None
+        self.link[0].ViewObject.Visibility = True
+
+    def accept(self):
+        target = self.targets[self.slider.value()]
+        self._remove_preview()
+        doc = self.link[0].Document
+        doc.openTransaction("Fairing level")
+        FreeCADGui.doCommand("import fairing_wb.make")
+        call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet"},
+                         "free")
+        FreeCADGui.doCommand(f"fairing = {call}")
+        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+        doc.commitTransaction()
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def reject(self):
+        self._remove_preview()
+        FreeCADGui.Control.closeDialog()
+        return True

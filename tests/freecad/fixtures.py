@@ -1,0 +1,66 @@
+"""Shared test geometry for the FreeCAD tests (real models and a synthetic noisy face).
+
+Imported by the headless pytest tests and by the GUI script, both inside FreeCAD.
+"""
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+import FreeCAD
+import Part
+
+REPO = Path(__file__).resolve().parents[2]
+REAL = Path(os.environ.get("FAIRING_REAL_DATA", REPO.parent / "shared" / "data" / "real"))
+BLADE = REAL / "IEA_15MW_CFD.stp"
+TERRAIN = REAL / "terrain.brep"
+
+
+def noisy_blade_surface(n_u=50, n_v=80, noise=0.02, seed=3):
+    """A bicubic blade-like net (``n_u x n_v`` poles, mm) with seeded noise, and the truth.
+
+    Returns
+    -------
+    (Part.BSplineSurface noisy, Part.BSplineSurface truth)
+    """
+    u = np.linspace(0.0, 1.0, n_u)[:, None]
+    v = np.linspace(0.0, 1.0, n_v)[None, :]
+    x = 100.0 * u + 0 * v
+    y = 300.0 * v + 0 * u
+    z = 20.0 * np.sin(np.pi * u) * (1.0 - 0.5 * v) + 5.0 * np.cos(2 * np.pi * v) * u
+    truth = np.stack([x, y, z], axis=2)
+    rng = np.random.default_rng(seed)
+    noisy = truth.copy()
+    noisy[..., 2] += noise * rng.standard_normal(truth.shape[:2])
+    return _part_surface(noisy), _part_surface(truth)
+
+
+def _part_surface(net):
+    n_u, n_v = net.shape[:2]
+    surface = Part.BSplineSurface()
+    uk = list(np.linspace(0, 1, n_u - 2))
+    vk = list(np.linspace(0, 1, n_v - 2))
+    um = [4] + [1] * (n_u - 4) + [4]
+    vm = [4] + [1] * (n_v - 4) + [4]
+    poles = [[FreeCAD.Vector(*map(float, p)) for p in row] for row in net]
+    surface.buildFromPolesMultsKnots(poles, um, vm, uk, vk, False, False, 3, 3)
+    return surface
+
+
+def add_shape(doc, shape, name):
+    obj = doc.addObject("Part::Feature", name)
+    obj.Shape = shape
+    return obj
+
+
+def blade_shape():
+    return Part.read(str(BLADE))
+
+
+def sample_distance(faired_face, source_face, count=12):
+    """Max FreeCAD ``distToShape`` from faired samples to the source face (independent)."""
+    u0, u1, v0, v1 = faired_face.ParameterRange
+    surface = faired_face.Surface
+    return max(source_face.distToShape(Part.Vertex(surface.value(u, v)))[0]
+               for u in np.linspace(u0, u1, count) for v in np.linspace(v0, v1, count))

@@ -1,0 +1,226 @@
+"""GUI test of the Fairing workbench, run inside the real FreeCAD under Xvfb.
+
+    FAIRING_ARTIFACTS=<dir> timeout 300 xvfb-run -a -s "-screen 0 1600x1000x24" \
+        freecad tests/freecad/gui/gui_script.py
+
+Writes ``<dir>/gui_results.json`` (one entry per check), screenshots of the task panel
+and of the deviation map, and exits through ``os._exit`` with 0 only if every check
+passed (closing FreeCAD's window would always give 0).
+"""
+
+import json
+import os
+import sys
+import time
+import traceback
+
+REPO = os.environ["FAIRING_REPO"]
+ARTIFACTS = os.environ.get("FAIRING_ARTIFACTS", os.path.join(REPO, "tests", "freecad", "artifacts"))
+sys.path.insert(0, os.path.join(REPO, "tests", "freecad"))
+
+import FreeCAD  # noqa: E402
+import FreeCADGui as Gui  # noqa: E402
+from PySide2 import QtCore, QtGui, QtWidgets  # noqa: E402
+
+RESULTS = []
+COMMANDS = ("Fairing_FairSurface", "Fairing_FairCurve", "Fairing_DeviationMap",
+            "Fairing_CurvatureMap", "Fairing_Levels", "Fairing_PointsToSurface",
+            "Fairing_Preferences")
+
+
+def check(name, condition, detail=""):
+    RESULTS.append({"name": name, "passed": bool(condition), "detail": str(detail)})
+
+
+def pump(seconds=0.3):
+    end = time.time() + seconds
+    while time.time() < end:
+        QtWidgets.QApplication.processEvents()
+        time.sleep(0.02)
+
+
+def find(name, kind=QtWidgets.QWidget):
+    return Gui.getMainWindow().findChild(kind, name)
+
+
+def is_active(command):
+    return Gui.Command.get(command).isActive()
+
+
+def press_task_ok():
+    for box in Gui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
+        button = box.button(QtWidgets.QDialogButtonBox.Ok)
+        if button is not None and button.isVisible():
+            button.click()
+            return True
+    return False
+
+
+def grab_window(path):
+    pump(0.5)
+    screen = QtGui.QGuiApplication.primaryScreen()
+    return screen.grabWindow(Gui.getMainWindow().winId()).save(path)
+
+
+def run():
+    import fixtures
+
+    os.makedirs(ARTIFACTS, exist_ok=True)
+    mw = Gui.getMainWindow()
+    mw.resize(1600, 1000)
+    Gui.activateWorkbench("FairingWorkbench")
+    pump()
+    check("workbench activates", Gui.activeWorkbench().name() == "FairingWorkbench",
+          Gui.activeWorkbench().name())
+    listed = Gui.listCommands()
+    check("all commands registered", all(c in listed for c in COMMANDS),
+          [c for c in COMMANDS if c not in listed])
+    toolbar = [t for t in mw.findChildren(QtWidgets.QToolBar) if t.windowTitle() == "Fairing"]
+    check("toolbar present", bool(toolbar) and toolbar[0].isVisible())
+    menus = [a.text() for a in mw.menuBar().actions()]
+    check("menu present", "&Fairing" in menus, menus)
+
+    doc = FreeCAD.newDocument("GuiTest")
+    noisy, _ = fixtures.noisy_blade_surface(50, 80)
+    source = fixtures.add_shape(doc, noisy.toShape(), "NoisyBlade")
+    doc.recompute()
+    Gui.SendMsgToActiveView("ViewFit")
+    Gui.Selection.clearSelection()
+    check("FairSurface disabled without a face", not is_active("Fairing_FairSurface"))
+    check("DeviationMap disabled without a fairing", not is_active("Fairing_DeviationMap"))
+    check("Preferences always enabled", is_active("Fairing_Preferences"))
+    Gui.Selection.addSelection(source, "Face1")
+    check("FairSurface enabled with a face", is_active("Fairing_FairSurface"))
+    check("Levels enabled with a face", is_active("Fairing_Levels"))
+    check("FairCurve disabled with a face only", not is_active("Fairing_FairCurve"))
+
+    Gui.runCommand("Fairing_FairSurface")
+    pump()
+    panel = find("FairingTaskPanel")
+    check("task panel opens", panel is not None and panel.isVisible())
+    names = ("fairing_faces", "fairing_mode", "fairing_tolerance", "fairing_target_u",
+             "fairing_target_v", "fairing_method", "fairing_boundary", "fairing_preview",
+             "fairing_figures", "fairing_error")
+    check("task panel widgets found", all(find(n) is not None for n in names),
+          [n for n in names if find(n) is None])
+    check("selected face listed", find("fairing_faces").item(0).text() == "NoisyBlade.Face1")
+    # Error in plain words: a target bigger than the source.
+    find("fairing_mode").setCurrentIndex(1)
+    find("fairing_target_u").setValue(60)
+    find("fairing_preview").click()
+    pump()
+    error = find("fairing_error").text()
+    check("error shown in the panel", "out of range" in error, error)
+    # Tolerance mode, timed Preview on the 50 x 80 face.
+    find("fairing_mode").setCurrentIndex(0)
+    find("fairing_tolerance").setProperty("rawValue", 0.05)
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        find("fairing_preview").click()
+        times.append(time.perf_counter() - start)
+    pump()
+    figures = find("fairing_figures").text()
+    check("preview figures shown", "50 x 80 ->" in figures and "max deviation" in figures, figures)
+    check("preview on 50x80 under 1 s", min(times) < 1.0, f"best {min(times):.3f} s of {times}")
+    grab_window(os.path.join(ARTIFACTS, "fair_surface_panel.png"))
+    undo_before = doc.UndoCount
+    check("OK pressed", press_task_ok())
+    pump()
+    fairings = [o for o in doc.Objects if o.Name.startswith("Fairing")]
+    fairing = fairings[0] if fairings else None
+    check("OK creates the feature", fairing is not None and fairing.isValid(),
+          getattr(fairing, "Status", None))
+    check("one undo step", doc.UndoCount == undo_before + 1, (undo_before, doc.UndoCount))
+    check("source hidden, not deleted", source.ViewObject.Visibility is False
+          and doc.getObject("NoisyBlade") is not None)
+    check("tolerance met (feature figure)", fairing.MaxDeviation.Value <= 0.05 + 1e-9,
+          fairing.MaxDeviation)
+
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(fairing)
+    check("DeviationMap enabled with a fairing", is_active("Fairing_DeviationMap"))
+    Gui.runCommand("Fairing_DeviationMap")
+    pump()
+    maps = [o for o in doc.Objects if o.TypeId == "Mesh::FeaturePython"]
+    dmap = maps[0] if maps else None
+    check("deviation map created", dmap is not None and dmap.isValid()
+          and len(dmap.VertexColors) == dmap.Mesh.CountPoints > 0)
+    check("map coloured per vertex", dmap.ViewObject.Coloring is True)
+    legend = dmap.ViewObject.Proxy.legend
+    check("legend shown", legend.visible)
+    check("faired model untouched by the map", fairing.State == ["Up-to-date"] or fairing.State == [],
+          fairing.State)
+    Gui.SendMsgToActiveView("ViewFit")
+    Gui.activeDocument().activeView().viewIsometric()
+    Gui.SendMsgToActiveView("ViewFit")
+    pump(0.5)
+    Gui.activeDocument().activeView().saveImage(
+        os.path.join(ARTIFACTS, "deviation_map.png"), 1200, 800, "White")
+    grab_window(os.path.join(ARTIFACTS, "deviation_map_window.png"))
+    Gui.runCommand("Fairing_DeviationMap")
+    pump()
+    check("map toggles off with its legend", not dmap.ViewObject.Visibility and not legend.visible)
+    Gui.runCommand("Fairing_DeviationMap")
+    pump()
+    check("map toggles on again", dmap.ViewObject.Visibility and legend.visible)
+
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(fairing)
+    Gui.runCommand("Fairing_CurvatureMap")
+    pump()
+    curv = [o for o in doc.Objects if o.TypeId == "Mesh::FeaturePython" and o.Kind != "Deviation"]
+    check("curvature maps before and after", len(curv) == 2 and all(m.isValid() for m in curv)
+          and {m.Which for m in curv} == {"Faired", "Source"})
+    check("curvature maps share one range",
+          len(curv) == 2 and curv[0].RangeMin == curv[1].RangeMin and curv[0].RangeMax == curv[1].RangeMax)
+    for m in curv:
+        m.ViewObject.Visibility = False
+
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(source, "Face1")
+    Gui.runCommand("Fairing_Levels")
+    pump()
+    slider = find("fairing_level", QtWidgets.QSlider)
+    check("levels panel opens", slider is not None)
+    labels = []
+    for i in range(slider.maximum() + 1):
+        slider.setValue(i)
+        pump(0.1)
+        labels.append(find("FairingLevelsPanel").findChild(QtWidgets.QLabel, "fairing_figures").text())
+    check("levels step through scales", len(set(labels)) == len(labels) >= 3, labels)
+    n_before = len(doc.Objects)
+    press_task_ok()
+    pump()
+    check("levels OK creates a fairing", len([o for o in doc.Objects if o.Name.startswith("Fairing")]) == 2
+          and doc.getObject("FairingLevelPreview") is None, [o.Name for o in doc.Objects])
+
+    path = os.path.join(ARTIFACTS, "gui_saved.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc = FreeCAD.openDocument(path)
+    doc.recompute()
+    pump()
+    restored = [o for o in doc.Objects if o.TypeId == "Mesh::FeaturePython" and o.Kind == "Deviation"][0]
+    check("reopened map still coloured", restored.ViewObject.Coloring is True and restored.isValid())
+    check("reopened fairing valid", all(o.isValid() for o in doc.Objects if o.Name.startswith("Fairing")))
+    check("console echo of make_fairing", "make_fairing" in Gui.getMainWindow().findChild(
+        QtWidgets.QPlainTextEdit, "Python console").toPlainText()
+          if Gui.getMainWindow().findChild(QtWidgets.QPlainTextEdit, "Python console") else True)
+
+
+def main():
+    rc = 1
+    try:
+        run()
+    except Exception:  # the harness must report and exit, never hang FreeCAD
+        check("gui script ran to the end", False, traceback.format_exc())
+    os.makedirs(ARTIFACTS, exist_ok=True)
+    with open(os.path.join(ARTIFACTS, "gui_results.json"), "w") as handle:
+        json.dump(RESULTS, handle, indent=1)
+    rc = 0 if RESULTS and all(r["passed"] for r in RESULTS) else 1
+    sys.stdout.flush()
+    os._exit(rc)
+
+
+QtCore.QTimer.singleShot(500, main)
