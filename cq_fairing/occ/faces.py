@@ -1,0 +1,351 @@
+r"""Fair one OCP face: :func:`fair_face` and its :class:`FaceFairReport`.
+
+Pipeline: classify the face; convert it to NURBS on request; take its net
+(:func:`~cq_fairing.occ.face_to_surface`); choose the target (explicit ``n`` or the
+fewest poles within ``tol``, :mod:`cq_fairing.occ.search`); fair with the core
+(:func:`cq_fairing.fair_surface`); put the faired surface under the face's own trim
+(:func:`~cq_fairing.occ.surface_to_face`); measure the deviation with OCCT's projection
+(:func:`~cq_fairing.occ.sample_face_deviation`).
+
+Special cases handled, not refused:
+
+* **rational** faces are faired in homogeneous coordinates :math:`(w P, w)`; if a
+  weight of the result is not positive, a non-rational least-squares approximation in
+  the same spline spaces is faired instead and ``message`` says so;
+* **periodic** directions are faired on the unperiodized (clamped) net and the first
+  and last rows are tied to their mean afterwards, so the surface stays closed (G0 at
+  the seam; tangent continuity across the seam is not enforced);
+* **trimmed** faces keep their wires and UV pcurves (same parameter domain);
+* ``boundary="fixed"`` keeps the border rows of the source net: the faired surface is
+  projected back into the source spaces (L2, exact when the spaces are nested) and its
+  border rows are replaced by the source's, so the natural boundary curves do not
+  move (the result has as many poles as the source: fairer, not lighter).
+"""
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+from OCP.Bnd import Bnd_Box
+from OCP.TopoDS import TopoDS
+
+from ..core.fairing import SurfaceFairResult, fair_surface
+from ..core.geometry import BSplineSurface
+from ..errors import (InvalidInputError, InvalidToleranceError,
+                      NumericalError, ToleranceNotMetError)
+from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
+from .deviation import face_uv_grid, sample_face_deviation
+from .search import max_scales, project, search_scales
+
+__all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
+           "check_options"]
+
+METHODS = ("wavelet",)
+BOUNDARIES = ("free", "fixed")
+STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-not-selected",
+            "tolerance-not-met", "failed")
+
+
+@dataclass(eq=False)
+class FaceFairReport:
+    """What happened to one face.
+
+    Attributes
+    ----------
+    face : TopoDS_Face
+        The faired face, or the original one when it was not faired.
+    status : str
+        ``'faired'``, ``'unchanged'`` (nothing to reduce), ``'skipped-not-bspline'``,
+        ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
+    message : str
+        One line for the user (empty when there is nothing to say).
+    result : SurfaceFairResult or None
+        The core result (faired net, details) when faired.
+    info : FaceInfo or None
+    poles_before, poles_after : (int, int) or None
+        Poles per direction of the source net and of the faired net.
+    max_deviation : float or None
+        Largest true distance (``GeomAPI_ProjectPointOnSurf``) from samples of the
+        original face to the faired surface.
+    tolerance : float or None
+        The tolerance asked for (``None`` with explicit ``n``).
+    seconds : float
+        Wall time spent on this face.
+    deviation : dict or None
+        The full :func:`~cq_fairing.occ.sample_face_deviation` samples.
+    original : TopoDS_Face or None
+        The input face.
+    surface : BSplineSurface or None
+        The faired surface under ``face`` (after seam tying / border fixing).
+    index : int or None
+        Position in the shape (set by ``fair_shape``).
+    """
+
+    face: object
+    status: str
+    message: str = ""
+    result: SurfaceFairResult = None
+    info: FaceInfo = None
+    poles_before: tuple = None
+    poles_after: tuple = None
+    max_deviation: float = None
+    tolerance: float = None
+    seconds: float = 0.0
+    deviation: dict = field(default=None, repr=False)
+    original: object = field(default=None, repr=False)
+    surface: object = field(default=None, repr=False)
+    index: int = None
+
+    @property
+    def faired(self):
+        return self.status == "faired"
+
+
+def default_tolerance(shape):
+    """Default tolerance: 1e-3 of the bounding-box diagonal of ``shape`` (model units)."""
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box, False)
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return 1e-3 * float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
+
+
+def check_options(tol, n, method, boundary):
+    """Validate the shared options of :func:`fair_face` and ``fair_shape`` once."""
+    if tol is not None and n is not None:
+        raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
+    if tol is not None:
+        if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating, np.integer)) \
+                or not np.isfinite(tol) or tol <= 0:
+            raise InvalidToleranceError(
+                f"tol must be a positive finite length in model units, got {tol!r}."
+            )
+    if method not in METHODS:
+        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
+    if boundary not in BOUNDARIES:
+        raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
+
+
+def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, boundary="free",
+              target_degree=None, density=None, details=True):
+    r"""Fair one face and put the result under the face's own trim.
+
+    Parameters
+    ----------
+    face : TopoDS_Face or cadquery.Face
+        Not modified.
+    tol : float, optional
+        Largest allowed distance (model units) between original and faired face; the
+        fewest poles within it are searched.  Default (with ``n`` also ``None``):
+        1e-3 of the face's bounding-box diagonal.
+    n : (int or None, int or None) or int, optional
+        Explicit target scales (knot spans) per direction, passed to
+        :func:`cq_fairing.fair_surface`; ``None`` keeps a direction.
+    method : {"wavelet"}
+        Multiresolution (ARWFA/DWFA) fairing.
+    convert : bool, optional
+        Convert a non-B-spline face to NURBS (``BRepBuilderAPI_NurbsConvert``, exact)
+        instead of skipping it.
+    boundary : {"free", "fixed"}
+        ``"fixed"`` keeps the source's border rows of poles (see module notes).
+    target_degree : int or (int, int), optional
+        Default ``min(3, source degree)`` per direction.
+    density : int or (int, int), optional
+        UV samples per direction for the deviation check; default
+        ``clip(3 k + 1, 30, 120)`` for ``k`` poles in that direction.
+    details : bool, optional
+        Compute the wavelet details (``report.result``) with the core; ``False`` skips
+        them (``result`` is then ``None``) and is faster on large nets.
+
+    Returns
+    -------
+    FaceFairReport
+
+    Raises
+    ------
+    InvalidInputError, InvalidToleranceError, InvalidTargetError
+        Bad arguments.
+    ToleranceNotMetError
+        No target keeps the face within ``tol`` (checked with OCCT's projection).
+    """
+    start = time.perf_counter()
+    face = as_face(face)
+    check_options(tol, n, method, boundary)
+    info = face_info(face)
+    if not info.is_bspline:
+        if not convert:
+            return FaceFairReport(face, "skipped-not-bspline", (
+                f"{info.surface_type} face left unchanged; pass convert=True to convert "
+                "it to NURBS and fair it."), info=info, original=face,
+                seconds=time.perf_counter() - start)
+        face = TopoDS.Face_s(BRepBuilderAPI_NurbsConvert(face, True).Shape())
+    if tol is None and n is None:
+        tol = default_tolerance(face)
+    report = _fair_bspline(face, tol, n, boundary, target_degree, density, details)
+    report.original = face
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _fair_bspline(face, tol, n, boundary, target_degree, density, details):
+    surface, info = face_to_surface(face)
+    density = density or tuple(int(np.clip(3 * k + 1, 30, 120)) for k in surface.shape)
+    degree = _target_degree(surface, target_degree)
+    notes = []
+    if info.unperiodized:
+        notes.append(f"periodic in {'/'.join(info.unperiodized)}: faired the unperiodized "
+                     "net with first/last rows tied (closed, G0 at the seam)")
+    if boundary == "fixed" and info.trimmed:
+        notes.append("boundary='fixed' keeps the surface's border rows; this trimmed face's "
+                     "edges lie inside the surface, so they may still move")
+    sampler = _Sampler(face, surface, density)
+    source = surface
+    finish = _finisher(surface, info.unperiodized, boundary)
+    if max_scales(surface, degree) == (None, None) and n is None:
+        return _unchanged(face, info, surface, "the net is already at its coarsest "
+                          "(degree + 1 poles per direction); nothing to fair", tol)
+    try:
+        target, faired, result = _choose(source, tol, n, degree, sampler, finish)
+    except NumericalError:
+        source = _non_rational(surface)
+        notes.append("fairing in homogeneous coordinates gave non-positive weights; "
+                     "faired a non-rational least-squares approximation instead")
+        target, faired, result = _choose(source, tol, n, degree, sampler, finish)
+    if details and result is None:
+        result = _core_fair(source, target, degree)
+    if result is not None:
+        result = result.replace(surface=faired)
+    if _same_spaces(faired, source):
+        return _unchanged(face, info, surface, "the finest admissible target is the "
+                          "source space itself; nothing to fair", tol)
+    new_face = surface_to_face(faired, face)
+    deviation = sample_face_deviation(face, new_face, density)
+    report = FaceFairReport(
+        new_face, "faired", "; ".join(notes), result=result, info=info,
+        poles_before=surface.shape, poles_after=faired.shape,
+        max_deviation=deviation["max"], tolerance=tol, deviation=deviation, surface=faired)
+    if tol is not None and deviation["max"] > tol:
+        raise ToleranceNotMetError(
+            f"OCCT's projection measured {deviation['max']:.4g} > tol={tol:g} on the faired "
+            "face; raise the tolerance or the sample density.",
+            tolerance=tol, best_deviation=deviation["max"])
+    return report
+
+
+def _same_spaces(a, b):
+    return a.u_space.same_as(b.u_space) and a.v_space.same_as(b.v_space)
+
+
+def _unchanged(face, info, surface, message, tol):
+    return FaceFairReport(face, "unchanged", message, info=info, poles_before=surface.shape,
+                          poles_after=surface.shape, max_deviation=0.0, tolerance=tol)
+
+
+def _target_degree(surface, target_degree):
+    if target_degree is None:
+        return min(3, surface.u_degree), min(3, surface.v_degree)
+    pair = (target_degree, target_degree) if np.ndim(target_degree) == 0 else tuple(target_degree)
+    if len(pair) != 2 or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
+                             for d in pair):
+        raise InvalidInputError(
+            f"target_degree must be an integer >= 1 or a pair of them, got {target_degree!r}."
+        )
+    return int(pair[0]), int(pair[1])
+
+
+def _choose(source, tol, n, degree, sampler, finish):
+    """Target scales, the faired (finished) surface and the core result if computed."""
+    if n is not None:
+        pair = (n, n) if np.ndim(n) == 0 else tuple(n)
+        if len(pair) != 2:
+            raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
+        result = _core_fair(source, pair, degree)
+        return pair, finish(result.surface), result
+    target, faired, _, _ = search_scales(source, tol, degree, sampler.parametric, finish)
+    return target, faired, None
+
+
+def _core_fair(source, target, degree):
+    """The core's :class:`SurfaceFairResult` (with details) for the chosen target."""
+    return fair_surface(source.poles, n=target, u_knots=source.u_knots,
+                        v_knots=source.v_knots, degree=(source.u_degree, source.v_degree),
+                        weights=source.weights, target_degree=degree)
+
+
+class _Sampler:
+    """Original points on a UV grid of the face (inside the trim), for the search."""
+
+    def __init__(self, face, surface, density):
+        self.u, self.v, self.inside = face_uv_grid(face, density)
+        self.reference = surface.evaluate_grid(self.u, self.v)[self.inside]
+
+    def parametric(self, faired):
+        points = faired.evaluate_grid(self.u, self.v)[self.inside]
+        return float(np.linalg.norm(points - self.reference, axis=1).max())
+
+
+def _finisher(surface, periodic, boundary):
+    """Post-processing of every candidate: tie periodic seams, keep border rows."""
+    def finish(faired):
+        if boundary == "fixed":
+            faired = _fix_border(surface, faired)
+        for axis in (0, 1):
+            if "uv"[axis] in periodic:
+                faired = _tie_rows(faired, axis)
+        return faired
+    return finish
+
+
+def _tie_rows(surface, axis):
+    """Make the first and last pole rows along ``axis`` equal (their mean)."""
+    hom = surface.homogeneous() if surface.is_rational else surface.poles.copy()
+    hom = np.moveaxis(hom, axis, 0).copy()
+    mean = 0.5 * (hom[0] + hom[-1])
+    hom[0] = hom[-1] = mean
+    hom = np.moveaxis(hom, 0, axis)
+    if surface.is_rational:
+        weights = hom[..., -1]
+        return replace(surface, poles=hom[..., :-1] / weights[..., None], weights=weights)
+    return replace(surface, poles=hom)
+
+
+def _fix_border(source, faired):
+    """``faired`` re-expressed in the source spaces with the source's border rows."""
+    poles = _into(faired, source)
+    src = source.homogeneous() if source.is_rational else source.poles
+    poles[0], poles[-1], poles[:, 0], poles[:, -1] = src[0], src[-1], src[:, 0], src[:, -1]
+    if source.is_rational:
+        weights = poles[..., -1]
+        if np.any(weights <= 0):
+            raise NumericalError("fixing the border gave non-positive weights.")
+        return BSplineSurface(poles[..., :-1] / weights[..., None], source.u_knots,
+                              source.v_knots, source.u_degree, source.v_degree, weights)
+    return BSplineSurface(poles, source.u_knots, source.v_knots, source.u_degree,
+                          source.v_degree)
+
+
+def _into(faired, source):
+    """L2 projection of ``faired`` into the source spaces (homogeneous if rational)."""
+    from .search import _operator
+
+    net = faired.homogeneous() if source.is_rational else faired.poles
+    au = _operator(faired.u_space, source.u_space)
+    av = _operator(faired.v_space, source.v_space)
+    net = np.tensordot(au, net, axes=(1, 0))
+    return np.einsum("jb,abd->ajd", av, net)
+
+
+def _non_rational(surface):
+    """Least-squares non-rational surface in the same spline spaces as ``surface``."""
+    u = np.linspace(*surface.u_space.domain, 3 * surface.shape[0] + 1)
+    v = np.linspace(*surface.v_space.domain, 3 * surface.shape[1] + 1)
+    points = surface.evaluate_grid(u, v)
+    mu = surface.u_space.collocation(u).toarray()
+    mv = surface.v_space.collocation(v).toarray()
+    pu, pv = np.linalg.pinv(mu), np.linalg.pinv(mv)
+    poles = np.einsum("ia,abd,jb->ijd", pu, points, pv)
+    return BSplineSurface(poles, surface.u_knots, surface.v_knots, surface.u_degree,
+                          surface.v_degree)
+

@@ -1,0 +1,203 @@
+"""Model files in and out: STEP, IGES and BREP through OCCT's own readers and writers.
+
+Writing is atomic: the shape goes to a temporary file in the destination folder, that
+file is read back, checked (``BRepCheck_Analyzer``, same number of faces) and only then
+renamed over the destination with :func:`os.replace`.  A failed write leaves nothing.
+"""
+
+import os
+import tempfile
+from pathlib import Path
+
+from OCP.BRep import BRep_Builder
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepTools import BRepTools
+from OCP.IFSelect import IFSelect_ReturnStatus
+from OCP.IGESControl import IGESControl_Reader
+from OCP.Interface import Interface_Static
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
+from OCP.TopoDS import TopoDS_Shape
+
+from ..errors import FileFormatError, OutputPathError
+from .convert import as_shape, indexed_faces
+
+__all__ = ["read_shape", "write_shape", "READ_SUFFIXES", "WRITE_SUFFIXES"]
+
+READ_SUFFIXES = {".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges",
+                 ".brep": "brep", ".brp": "brep"}
+WRITE_SUFFIXES = {".step": "step", ".stp": "step", ".brep": "brep", ".brp": "brep"}
+
+
+def _kind(path, table, verb):
+    kind = table.get(Path(path).suffix.lower())
+    if kind is None:
+        raise FileFormatError(
+            f"cannot {verb} '{path}': expected a suffix in {sorted(table)}, got "
+            f"'{Path(path).suffix or '(none)'}'."
+        )
+    return kind
+
+
+def read_shape(path):
+    """Read a STEP (.step/.stp), IGES (.igs/.iges) or BREP (.brep) file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    TopoDS_Shape
+        All roots of the file (a compound when there are several).
+
+    Raises
+    ------
+    FileFormatError
+        The file is missing, empty, not readable, corrupt or truncated, or holds no shape
+        with at least one face.
+    """
+    path = Path(path)
+    kind = _kind(path, READ_SUFFIXES, "read")
+    if not path.is_file():
+        raise FileFormatError(f"cannot read '{path}': no such file; check the path.")
+    if path.stat().st_size == 0:
+        raise FileFormatError(f"cannot read '{path}': the file is empty.")
+    shape = {"step": _read_step, "iges": _read_iges, "brep": _read_brep}[kind](path)
+    if shape is None or shape.IsNull() or not indexed_faces(shape):
+        raise FileFormatError(
+            f"'{path}' was read as {kind.upper()} but holds no shape with faces; "
+            "the file may be truncated or contain only points/curves."
+        )
+    return shape
+
+
+def _read_step(path):
+    reader = STEPControl_Reader()
+    status = reader.ReadFile(str(path))
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(
+            f"'{path}' is not a readable STEP file (reader status {status.name}); "
+            "it may be corrupt or truncated."
+        )
+    reader.TransferRoots()
+    return reader.OneShape() if reader.NbShapes() else None
+
+
+def _read_iges(path):
+    reader = IGESControl_Reader()
+    status = reader.ReadFile(str(path))
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(
+            f"'{path}' is not a readable IGES file (reader status {status.name}); "
+            "it may be corrupt or truncated."
+        )
+    reader.TransferRoots()
+    return reader.OneShape() if reader.NbShapes() else None
+
+
+def _read_brep(path):
+    shape = TopoDS_Shape()
+    if not BRepTools.Read_s(shape, str(path), BRep_Builder()):
+        raise FileFormatError(
+            f"'{path}' is not a readable BREP file; it may be corrupt or truncated."
+        )
+    return shape
+
+
+def _check_output(path, force):
+    kind = _kind(path, WRITE_SUFFIXES, "write")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputPathError(f"cannot write '{path}': folder '{folder}' does not exist.")
+    if path.is_dir():
+        raise OutputPathError(f"cannot write '{path}': it is a folder; give a file name.")
+    if path.exists() and not force:
+        raise OutputPathError(
+            f"'{path}' already exists; choose another name or pass force=True to overwrite."
+        )
+    if not os.access(folder, os.W_OK):
+        raise OutputPathError(f"cannot write '{path}': folder '{folder}' is not writable.")
+    return kind
+
+
+def write_shape(shape, path, *, force=False, input_path=None, unit=None):
+    """Write ``shape`` to a STEP or BREP file atomically, after validating it.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape or cadquery.Shape
+    path : str or os.PathLike
+        ``.step``/``.stp`` or ``.brep``.
+    force : bool, optional
+        Overwrite an existing file.
+    input_path : str or os.PathLike, optional
+        The file the shape was read from; writing over it is refused (inputs are never
+        changed).
+    unit : str, optional
+        STEP length unit written (``"MM"``, ``"M"``, ``"INCH"``...); default is OCCT's
+        ``write.step.unit`` (millimetres).  Coordinates are never scaled by this module.
+
+    Raises
+    ------
+    OutputPathError
+        The path exists (without ``force``), is the input, is a folder, its folder is
+        missing or not writable.
+    FileFormatError
+        Unknown suffix, or the written file does not read back as a valid shape with the
+        same number of faces.
+    """
+    shape = as_shape(shape)
+    path = Path(path)
+    if input_path is not None and Path(input_path).resolve() == path.resolve():
+        raise OutputPathError(
+            f"refusing to write over the input file '{path}'; choose another output name."
+        )
+    kind = _check_output(path, force)
+    n_faces = len(indexed_faces(shape))
+    fd, tmp = tempfile.mkstemp(suffix=path.suffix, prefix=".cq_fairing_", dir=path.parent)
+    os.close(fd)
+    try:
+        (_write_step if kind == "step" else _write_brep)(shape, tmp, unit)
+        _verify_written(tmp, n_faces)
+        os.replace(tmp, path)
+    except PermissionError as exc:
+        raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def _write_step(shape, tmp, unit):
+    previous = Interface_Static.CVal_s("write.step.unit")
+    writer = STEPControl_Writer()
+    try:
+        if unit is not None:
+            Interface_Static.SetCVal_s("write.step.unit", str(unit).upper())
+        status = writer.Transfer(shape, STEPControl_AsIs)
+    finally:
+        Interface_Static.SetCVal_s("write.step.unit", previous)
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(f"STEP transfer of the shape failed (status {status.name}).")
+    status = writer.Write(str(tmp))
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(f"writing the STEP file failed (status {status.name}).")
+
+
+def _write_brep(shape, tmp, unit):
+    if not BRepTools.Write_s(shape, str(tmp)):
+        raise FileFormatError("writing the BREP file failed.")
+
+
+def _verify_written(tmp, n_faces):
+    back = read_shape(tmp)
+    got = len(indexed_faces(back))
+    if got != n_faces:
+        raise FileFormatError(
+            f"the written file reads back with {got} faces instead of {n_faces}; "
+            "nothing was written."
+        )
+    if not BRepCheck_Analyzer(back).IsValid():
+        raise FileFormatError(
+            "the written file does not read back as a valid shape (BRepCheck_Analyzer); "
+            "nothing was written."
+        )
