@@ -2,7 +2,7 @@
 
 FreeCAD stores distinct knots plus multiplicities; the core stores full clamped knot
 vectors.  Periodic geometry is converted to its clamped (non-periodic) equivalent with
-OCCT's ``setUNotPeriodic`` (the same shape, more poles) before conversion, so it is handled
+OCCT's ``setUNotPeriodic`` and ``segment`` (the same shape, more poles) before conversion, so it is handled
 rather than refused.  Rational geometry keeps its weights (all-one weights count as
 polynomial).  Other surface types (planes, cylinders, ...) raise
 :class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
@@ -34,11 +34,15 @@ def _weights_or_none(weights):
 
 
 def _clamped_surface(surface):
+    """Non-periodic, clamped copy: ``setUNotPeriodic`` may leave unclamped end knots, and
+    ``segment`` over the whole domain clamps them (same geometry)."""
     surface = surface.copy()
-    if surface.isUPeriodic():
-        surface.setUNotPeriodic()
-    if surface.isVPeriodic():
-        surface.setVNotPeriodic()
+    if surface.isUPeriodic() or surface.isVPeriodic():
+        if surface.isUPeriodic():
+            surface.setUNotPeriodic()
+        if surface.isVPeriodic():
+            surface.setVNotPeriodic()
+        surface.segment(*surface.bounds())
     return surface
 
 
@@ -99,6 +103,7 @@ def curve_from_edge(edge):
     curve = curve.copy()
     if curve.isPeriodic():
         curve.setNotPeriodic()
+        curve.segment(curve.FirstParameter, curve.LastParameter)
     poles = np.array([[p.x, p.y, p.z] for p in curve.getPoles()])
     weights = _weights_or_none(curve.getWeights()) if curve.isRational() else None
     return cf.make_curve(poles, full_knots(curve.getKnots(), curve.getMultiplicities()),

@@ -30,6 +30,11 @@ PROPERTIES = (
     ("App::PropertyEnumeration", "Method", "Fairing", "wavelet (ARWFA/DWFA) or energy", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
+    ("App::PropertyEnumeration", "Search", "Fairing",
+     "Tolerance search: linear (fast, seed's iteration), guaranteed (fewest poles), polyfit",
+     False),
+    ("App::PropertyEnumeration", "Measure", "Fairing",
+     "Deviation used by the search: parametric (upper bound, fast) or geometric", False),
     ("App::PropertyString", "PolesBefore", "Figures", "Control points of the source", True),
     ("App::PropertyString", "PolesAfter", "Figures", "Control points of the result", True),
     ("App::PropertyLength", "MaxDeviation", "Figures",
@@ -37,7 +42,8 @@ PROPERTIES = (
     ("App::PropertyFloat", "FairingTime", "Figures", "Seconds of the last recompute", True),
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )
-ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Boundary": make.BOUNDARIES}
+ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Boundary": make.BOUNDARIES,
+                "Search": make.SEARCHES, "Measure": make.MEASURES}
 
 
 def _clamped_target(target, face):
@@ -91,9 +97,10 @@ class Fairing:
     @staticmethod
     def settings(obj):
         """Keyword arguments of :func:`make.fair_face` from the properties."""
+        common = {"method": obj.Method, "search": obj.Search, "measure": obj.Measure}
         if obj.Mode == "Tolerance":
-            return {"tolerance": obj.Tolerance.Value, "target": None, "method": obj.Method}
-        return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), "method": obj.Method}
+            return {"tolerance": obj.Tolerance.Value, "target": None, **common}
+        return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), **common}
 
     def _fair(self, obj):
         if obj.Source is None:
@@ -110,7 +117,8 @@ class Fairing:
             else:
                 target = None if kwargs["target"] is None else kwargs["target"][0]
                 results.append(make.fair_edge(element, kwargs["tolerance"], target,
-                                              kwargs["method"]))
+                                              kwargs["method"], kwargs["search"],
+                                              kwargs["measure"]))
         shapes = [r.shape for r in results]
         shape = shapes[0] if len(shapes) == 1 else Part.makeCompound(shapes)
         return shape, results

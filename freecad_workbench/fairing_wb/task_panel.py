@@ -32,7 +32,8 @@ def make_call(link, settings, boundary):
     if settings["target"] is not None:
         args.append(f"target={tuple(settings['target'])!r}")
     else:
-        args.append(f"tolerance={settings['tolerance']!r}")
+        args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
+                 f"measure={settings['measure']!r}"]
     args += [f"method={settings['method']!r}", f"boundary={boundary!r}"]
     return f"fairing_wb.make.make_fairing({', '.join(args)})"
 
@@ -81,6 +82,12 @@ class FairSurfacePanel:
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")
+        self.search = _row(layout, "Search:", QtWidgets.QComboBox(), "fairing_search")
+        self.search.addItems(list(make.SEARCHES))
+        self.search.setToolTip("linear: fast hypothesis iteration (seed); guaranteed: fewest "
+                               "control points, slower")
+        self.measure = _row(layout, "Measure:", QtWidgets.QComboBox(), "fairing_measure")
+        self.measure.addItems(list(make.MEASURES))
         self.preview = _row(layout, "", QtWidgets.QPushButton("Preview"), "fairing_preview")
         self.preview.clicked.connect(self.on_preview)
         self.figures = _row(layout, "", QtWidgets.QLabel("Press Preview for figures."),
@@ -110,23 +117,28 @@ class FairSurfacePanel:
             self.target_v.setValue(f.TargetV)
             self.method.setCurrentText(f.Method)
             self.boundary.setCurrentText(f.Boundary)
+            self.search.setCurrentText(f.Search)
+            self.measure.setCurrentText(f.Measure)
         self._mode_changed()
 
     def _mode_changed(self, *_):
         by_tolerance = self.mode.currentIndex() == 0
         self.tolerance.setEnabled(by_tolerance)
+        self.search.setEnabled(by_tolerance)
+        self.measure.setEnabled(by_tolerance)
         self.target_u.setEnabled(not by_tolerance)
         self.target_v.setEnabled(not by_tolerance)
 
     # -- values ----------------------------------------------------------------------------
     def settings(self):
-        """``{"tolerance", "target", "method"}`` as :func:`make.fair_face` takes them."""
+        """Keyword arguments of :func:`make.fair_face` (without ``boundary``)."""
+        common = {"method": self.method.currentText(), "search": self.search.currentText(),
+                  "measure": self.measure.currentText()}
         if self.mode.currentIndex() == 0:
             return {"tolerance": float(self.tolerance.property("rawValue")), "target": None,
-                    "method": self.method.currentText()}
-        return {"tolerance": None,
-                "target": (self.target_u.value(), self.target_v.value()),
-                "method": self.method.currentText()}
+                    **common}
+        return {"tolerance": None, "target": (self.target_u.value(), self.target_v.value()),
+                **common}
 
     def run(self):
         """Fair every selected face/edge; returns the :class:`make.FairedShape` list."""
@@ -140,7 +152,8 @@ class FairSurfacePanel:
                                               **s))
             else:
                 target = None if s["target"] is None else s["target"][0]
-                results.append(make.fair_edge(element, s["tolerance"], target, s["method"]))
+                results.append(make.fair_edge(element, s["tolerance"], target, s["method"],
+                                              s["search"], s["measure"]))
         return results
 
     def on_preview(self):
@@ -184,7 +197,8 @@ class FairSurfacePanel:
         else:
             FreeCADGui.doCommand(f"fairing.Mode = 'Target'; fairing.TargetU, fairing.TargetV = "
                                  f"{s['target'][0]}, {s['target'][1]}")
-        FreeCADGui.doCommand(f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}")
+        FreeCADGui.doCommand(f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}; "
+                             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
 
     def reject(self):
         self._close()
@@ -282,8 +296,8 @@ class LevelsPanel:
         doc = self.link[0].Document
         doc.openTransaction("Fairing level")
         FreeCADGui.doCommand("import fairing_wb.make")
-        call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet"},
-                         "free")
+        call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
+                                     "search": "linear", "measure": "parametric"}, "free")
         FreeCADGui.doCommand(f"fairing = {call}")
         FreeCADGui.doCommand("App.ActiveDocument.recompute()")
         doc.commitTransaction()

@@ -1,0 +1,80 @@
+"""Part.BSplineSurface/Curve <-> core conversion, checked against OCCT's own evaluation."""
+
+import numpy as np
+import pytest
+
+import FreeCAD
+import Part
+import cq_fairing as cf
+from fairing_wb import conversion
+
+import fixtures
+
+
+def _occ_grid(surface, u, v):
+    return np.array([[tuple(surface.value(a, b)) for b in v] for a in u])
+
+
+def _check_same_surface(part_surface, core_surface, count=7, rtol=1e-9):
+    (u0, u1), (v0, v1) = core_surface.domain
+    u, v = np.linspace(u0, u1, count), np.linspace(v0, v1, count)
+    ours = core_surface.evaluate_grid(u, v)
+    theirs = _occ_grid(part_surface, u, v)
+    scale = np.abs(theirs).max()
+    assert np.abs(ours - theirs).max() <= rtol * scale
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_blade_faces_evaluate_like_occt(index):
+    face = fixtures.blade_shape().Faces[index]
+    core = conversion.surface_from_face(face)
+    assert core.shape == (face.Surface.NbUPoles, face.Surface.NbVPoles)
+    assert core.u_knots.size == core.shape[0] + core.u_degree + 1
+    _check_same_surface(face.Surface, core)
+
+
+def test_round_trip_keeps_poles_and_knots():
+    face = fixtures.blade_shape().Faces[1]
+    core = conversion.surface_from_face(face)
+    back = conversion.part_surface(core)
+    assert back.getUKnots() == pytest.approx(face.Surface.getUKnots())
+    assert back.getVMultiplicities() == face.Surface.getVMultiplicities()
+    assert (back.UDegree, back.VDegree) == (3, 8)
+    _check_same_surface(back, core)
+
+
+def test_periodic_ring_is_converted_not_refused():
+    shape = Part.Shape()
+    shape.read(str(fixtures.REAL / "ring_nurbs.brep"))
+    face = shape.Faces[0]
+    assert face.Surface.isUPeriodic() and face.Surface.isVPeriodic()
+    core = conversion.surface_from_face(face)
+    _check_same_surface(face.Surface, core)
+    assert core.u_knots[0] == core.u_knots[core.u_degree]  # clamped
+
+
+def test_rational_face_keeps_weights():
+    shape = Part.read(str(fixtures.REAL / "linkrods.step"))
+    face = next(f for f in shape.Faces if isinstance(f.Surface, Part.BSplineSurface)
+                and f.Surface.isURational())
+    core = conversion.surface_from_face(face)
+    assert core.weights is not None and not np.allclose(core.weights, 1.0)
+    _check_same_surface(face.Surface, core)
+
+
+def test_plane_face_is_refused_with_a_clear_message():
+    face = Part.makeBox(1, 1, 1).Faces[0]
+    with pytest.raises(cf.UnsupportedGeometryError, match="not a B-spline surface"):
+        conversion.surface_from_face(face)
+
+
+def test_curve_round_trip_matches_occt():
+    points = [FreeCAD.Vector(x, np.sin(x), 0.1 * np.cos(3 * x)) for x in np.linspace(0, 6, 30)]
+    curve = Part.BSplineCurve()
+    curve.interpolate(points)
+    core = conversion.curve_from_edge(curve.toShape())
+    t = np.linspace(*core.domain, 25)
+    theirs = np.array([tuple(curve.value(x)) for x in t])
+    assert np.abs(core.evaluate(t) - theirs).max() < 1e-10
+    back = conversion.part_curve(core)
+    assert np.abs(np.array([tuple(back.value(x)) for x in t]) - theirs).max() < 1e-10

@@ -1,0 +1,228 @@
+"""The parametric Fairing feature on real models, inside FreeCAD (no mocks)."""
+
+import time
+
+import numpy as np
+import pytest
+
+import FreeCAD
+import Part
+from fairing_wb import make
+
+import fixtures
+
+
+@pytest.fixture
+def doc():
+    document = FreeCAD.newDocument("FairingTest")
+    document.UndoMode = 1
+    name = document.Name
+    yield document
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+@pytest.fixture
+def blade(doc):
+    obj = fixtures.add_shape(doc, fixtures.blade_shape(), "Blade")
+    doc.recompute()
+    return obj
+
+
+@pytest.fixture
+def noisy(doc):
+    surface, _ = fixtures.noisy_blade_surface(50, 80)
+    obj = fixtures.add_shape(doc, surface.toShape(), "Noisy")
+    doc.recompute()
+    return obj
+
+
+def _ok(obj):
+    return obj.isValid() and "Invalid" not in obj.State and obj.Status == "OK"
+
+
+def test_target_mode_on_blade_face(doc, blade):
+    obj = make.make_fairing((blade, ["Face2"]), target=(12, 40))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.Shape.isValid() and len(obj.Shape.Faces) == 1
+    assert (obj.PolesBefore, obj.PolesAfter) == ("17 x 204", "12 x 40")
+    surface = obj.Shape.Faces[0].Surface
+    assert (surface.NbUPoles, surface.NbVPoles, surface.VDegree) == (12, 40, 3)
+    # Trimmed half of the blade: the faired face keeps the source's UV rectangle.
+    source = blade.Shape.getElement("Face2")
+    assert obj.Shape.Faces[0].ParameterRange == pytest.approx(source.ParameterRange)
+    measured = fixtures.sample_distance(obj.Shape.Faces[0], source)
+    assert measured <= obj.MaxDeviation.Value * 1.05 + 1e-9
+    assert blade.isValid()  # the source is not touched
+
+
+def test_tolerance_mode_meets_tolerance_checked_by_occt(doc, blade):
+    source = blade.Shape.getElement("Face2")
+    tol = 4e-3 * source.BoundBox.DiagonalLength  # degree 8 -> 3 needs some room
+    obj = make.make_fairing((blade, ["Face2"]), tolerance=tol)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.MaxDeviation.Value <= tol
+    assert fixtures.sample_distance(obj.Shape.Faces[0], source, 15) <= tol
+    coarse = obj.PolesAfter
+    obj.Tolerance = 4 * tol
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert fixtures.sample_distance(obj.Shape.Faces[0], source, 15) <= 4 * tol
+    assert np.prod([int(x) for x in obj.PolesAfter.split(" x ")]) < np.prod(
+        [int(x) for x in coarse.split(" x ")])
+
+
+@pytest.mark.parametrize("search", ["linear", "guaranteed"])
+def test_noisy_face_tolerance_and_truth(doc, noisy, search):
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05, search=search)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert fixtures.sample_distance(obj.Shape.Faces[0], noisy.Shape.Faces[0], 15) <= 0.05
+    after = [int(x) for x in obj.PolesAfter.split(" x ")]
+    assert after[0] * after[1] < 50 * 80
+
+
+def test_source_change_triggers_recompute(doc, noisy):
+    obj = make.make_fairing((noisy, ["Face1"]), target=(18, 26))
+    doc.recompute()
+    before = obj.Shape.BoundBox
+    noisy.Placement = FreeCAD.Placement(FreeCAD.Vector(0, 0, 10), FreeCAD.Rotation())
+    doc.recompute()
+    assert _ok(obj)
+    assert obj.Shape.BoundBox.ZMin == pytest.approx(before.ZMin + 10, abs=1e-6)
+
+
+def test_boundary_corners_stay(doc, noisy):
+    obj = make.make_fairing((noisy, ["Face1"]), target=(18, 26), boundary="corners")
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    src = noisy.Shape.Faces[0].Surface
+    new = obj.Shape.Faces[0].Surface
+    for u in (0.0, 1.0):
+        for v in (0.0, 1.0):
+            assert (new.value(u, v) - src.value(u, v)).Length < 1e-9
+
+
+def test_boundary_edges_fit_the_source_edges_better(doc, noisy):
+    free = make.make_fairing((noisy, ["Face1"]), target=(10, 14))
+    edges = make.make_fairing((noisy, ["Face1"]), target=(10, 14), boundary="edges")
+    doc.recompute()
+    assert _ok(free) and _ok(edges)
+    src = noisy.Shape.Faces[0].Surface
+
+    def edge_error(obj):
+        new = obj.Shape.Faces[0].Surface
+        return max((new.value(0.0, v) - src.value(0.0, v)).Length for v in np.linspace(0, 1, 200))
+
+    assert edge_error(edges) < edge_error(free)
+
+
+def test_bad_tolerance_fails_with_plain_status(doc, noisy):
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05)
+    doc.recompute()
+    obj.Tolerance = 0.0
+    doc.recompute()
+    assert not obj.isValid()
+    assert "tolerance must be a positive distance" in obj.Status
+
+
+def test_unreachable_tolerance_is_reported(doc, blade):
+    obj = make.make_fairing((blade, ["Face2"]), tolerance=1e-9)
+    doc.recompute()
+    assert not obj.isValid()
+    assert obj.Status.startswith("Error:")
+
+
+def test_non_bspline_face_is_refused(doc):
+    box = fixtures.add_shape(doc, Part.makeBox(10, 10, 10), "Box")
+    obj = make.make_fairing((box, ["Face1"]), target=(4, 4))
+    doc.recompute()
+    assert not obj.isValid()
+    assert "not a B-spline surface" in obj.Status
+
+
+def test_fair_curve_edge(doc):
+    points = [FreeCAD.Vector(x, 10 * np.sin(x / 10), 0.05 * (-1) ** i)
+              for i, x in enumerate(np.linspace(0, 60, 61))]
+    curve = Part.BSplineCurve()
+    curve.interpolate(points)
+    src = fixtures.add_shape(doc, curve.toShape(), "Wiggly")
+    obj = make.make_fairing((src, ["Edge1"]), target=12)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.PolesAfter == "12"
+    edge = obj.Shape.Edges[0]
+    assert edge.Curve.NbPoles == 12
+    far = max(src.Shape.Edges[0].distToShape(Part.Vertex(edge.valueAt(t)))[0]
+              for t in np.linspace(*edge.ParameterRange, 50))
+    assert far <= obj.MaxDeviation.Value * 1.05
+
+
+def test_one_undo_step(doc, noisy):
+    doc.openTransaction("Fair surface")
+    make.make_fairing((noisy, ["Face1"]), target=(18, 26))
+    doc.recompute()
+    doc.commitTransaction()
+    assert doc.getObject("Fairing") is not None
+    doc.undo()
+    assert doc.getObject("Fairing") is None
+    assert doc.getObject("Noisy") is not None
+    doc.redo()
+    assert doc.getObject("Fairing") is not None
+
+
+def test_save_reopen_recompute_and_migrate(doc, noisy, tmp_path):
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05)
+    doc.recompute()
+    poles = obj.PolesAfter
+    obj.removeProperty("Measure")  # as saved by an older version
+    path = str(tmp_path / "fairing.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        again = reopened.getObject("Fairing")
+        assert "Measure" in again.PropertiesList  # onDocumentRestored migration
+        assert again.Proxy.Type == "Fairing::SurfaceFairing"
+        again.Tolerance = 0.1
+        reopened.recompute()
+        assert _ok(again), again.Status
+        again.Tolerance = 0.05
+        reopened.recompute()
+        assert again.PolesAfter == poles
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+
+def test_step_export_and_read_back(doc, blade, tmp_path):
+    obj = make.make_fairing((blade, ["Face2", "Face3"]), target=(12, 40))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    path = str(tmp_path / "faired.step")
+    Part.export([obj], path)
+    back = Part.read(path)
+    assert back.isValid() and len(back.Faces) == 2
+    assert back.Area == pytest.approx(obj.Shape.Area, rel=1e-6)
+    assert {(f.Surface.NbUPoles, f.Surface.NbVPoles) for f in back.Faces} == {(12, 40)}
+
+
+def test_whole_object_clamps_target_per_face(doc, blade):
+    obj = make.make_fairing(blade, target=(12, 40))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert len(obj.Shape.Faces) == 3
+
+
+def test_preview_speed_on_50x80_face(noisy):
+    face = noisy.Shape.Faces[0]
+    for kwargs, limit in ((dict(target=(18, 26)), 0.5), (dict(tolerance=0.05), 1.0)):
+        best = min(_timed(make.fair_face, face, **kwargs) for _ in range(3))
+        assert best < limit, (kwargs, best)
+
+
+def _timed(func, *args, **kwargs):
+    start = time.perf_counter()
+    func(*args, **kwargs)
+    return time.perf_counter() - start
