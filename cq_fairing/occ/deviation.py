@@ -44,7 +44,7 @@ def _density(density):
     return int(pair[0]), int(pair[1])
 
 
-def face_uv_grid(face, density=DEFAULT_DENSITY):
+def face_uv_grid(face, density=DEFAULT_DENSITY, classify=True):
     """A UV grid over the face's UV box and the mask of samples inside the trim.
 
     Parameters
@@ -52,6 +52,8 @@ def face_uv_grid(face, density=DEFAULT_DENSITY):
     face : TopoDS_Face
     density : int or (int, int)
         Samples per direction.
+    classify : bool, optional
+        ``False`` for a face known to be untrimmed: every sample is inside.
 
     Returns
     -------
@@ -65,8 +67,10 @@ def face_uv_grid(face, density=DEFAULT_DENSITY):
     s0, s1, t0, t1 = BRep_Tool.Surface_s(face).Bounds()
     u = np.clip(np.linspace(u0, u1, nu), s0, s1)
     v = np.clip(np.linspace(v0, v1, nv), t0, t1)
+    inside = np.ones((nu, nv), dtype=bool)
+    if not classify:
+        return u, v, inside
     classifier = BRepTopAdaptor_FClass2d(face, 1e-9)
-    inside = np.empty((nu, nv), dtype=bool)
     for i, uu in enumerate(u):
         for j, vv in enumerate(v):
             state = classifier.Perform(gp_Pnt2d(float(uu), float(vv)))
@@ -111,7 +115,13 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         raise InvalidInputError(
             f"projection must be one of {PROJECTIONS}, got {projection!r}."
         )
-    u, v, inside = face_uv_grid(original_face, density)
+    return deviation_on_grid(original_face, faired_face,
+                             face_uv_grid(original_face, density), projection)
+
+
+def deviation_on_grid(original_face, faired_face, grid, projection="local"):
+    """:func:`sample_face_deviation` on a precomputed :func:`face_uv_grid` (trusted)."""
+    u, v, inside = grid
     uv = np.array([(a, b) for i, a in enumerate(u) for j, b in enumerate(v) if inside[i, j]])
     if uv.size == 0:
         raise InvalidInputError("no UV sample falls inside the face; raise the density.")

@@ -37,7 +37,7 @@ from ..core.geometry import BSplineSurface
 from ..errors import (InvalidInputError, InvalidToleranceError,
                       NumericalError, ToleranceNotMetError)
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
-from .deviation import face_uv_grid, sample_face_deviation
+from .deviation import deviation_on_grid, face_uv_grid
 from .search import max_scales, project, search_scales
 
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
@@ -200,7 +200,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details):
     if boundary == "fixed" and info.trimmed:
         notes.append("boundary='fixed' keeps the surface's border rows; this trimmed face's "
                      "edges lie inside the surface, so they may still move")
-    sampler = _Sampler(face, surface, density)
+    sampler = _Sampler(face_uv_grid(face, density, classify=info.trimmed), surface)
     source = surface
     finish = _finisher(surface, info.unperiodized, boundary)
     if max_scales(surface, degree) == (None, None) and n is None:
@@ -221,7 +221,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details):
         return _unchanged(face, info, surface, "the finest admissible target is the "
                           "source space itself; nothing to fair", tol)
     new_face = surface_to_face(faired, face)
-    deviation = sample_face_deviation(face, new_face, density)
+    deviation = deviation_on_grid(face, new_face, sampler.grid)
     report = FaceFairReport(
         new_face, "faired", "; ".join(notes), result=result, info=info,
         poles_before=surface.shape, poles_after=faired.shape,
@@ -275,14 +275,32 @@ def _core_fair(source, target, degree):
 
 
 class _Sampler:
-    """Original points on a UV grid of the face (inside the trim), for the search."""
+    """Original points on a UV grid of the face (inside the trim), for the search.
 
-    def __init__(self, face, surface, density):
-        self.u, self.v, self.inside = face_uv_grid(face, density)
-        self.reference = surface.evaluate_grid(self.u, self.v)[self.inside]
+    Collocation matrices are cached per spline space, so a candidate costs two small
+    dense products.
+    """
+
+    def __init__(self, grid, surface):
+        self.grid = grid
+        self.u, self.v, self.inside = grid
+        self._cache = {}
+        self.reference = self.evaluate(surface)
+
+    def _matrix(self, space, x):
+        key = (space.key, x.size)
+        if key not in self._cache:
+            self._cache[key] = space.collocation(x).toarray()
+        return self._cache[key]
+
+    def evaluate(self, surface):
+        net = surface.homogeneous() if surface.is_rational else surface.poles
+        mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
+        grid = np.matmul(mv, np.tensordot(mu, net, axes=(1, 0)))[self.inside]
+        return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
 
     def parametric(self, faired):
-        points = faired.evaluate_grid(self.u, self.v)[self.inside]
+        points = self.evaluate(faired)
         return float(np.linalg.norm(points - self.reference, axis=1).max())
 
 

@@ -33,12 +33,20 @@ from ..errors import ToleranceNotMetError
 __all__ = ["project", "search_scales", "max_scales"]
 
 
+_OPERATORS = {}
+
+
 def _operator(source, target):
-    """Dense ``G^{-1} E`` mapping source coefficients to the target (k_t, k_s)."""
+    """Dense ``G^{-1} E`` mapping source coefficients to the target (k_t, k_s), cached."""
     if target is None:
         return None
-    lu = spla.splu(gram_matrix(target).tocsc())
-    return lu.solve(gram_matrix(target, source).toarray())
+    key = (source.key, target.key)
+    if key not in _OPERATORS:
+        if len(_OPERATORS) > 256:
+            _OPERATORS.clear()
+        lu = spla.splu(gram_matrix(target).tocsc())
+        _OPERATORS[key] = lu.solve(gram_matrix(target, source).toarray())
+    return _OPERATORS[key]
 
 
 def project(surface, target_u, target_v):

@@ -28,7 +28,7 @@ from OCP.BRepLib import BRepLib
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
-from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
 from .convert import as_shape, indexed_faces, replace_surface, to_geom_surface, finish_edges
@@ -92,7 +92,7 @@ def _selection(faces, count):
 
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert=False,
                progress=None, boundary="free", target_degree=None, density=None,
-               details=False):
+               details=False, max_gap=None):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -112,9 +112,15 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
         Convert the whole shape to NURBS first (``BRepBuilderAPI_NurbsConvert``, exact;
         every analytic face becomes a B-spline face, also unselected ones).
     progress : callable, optional
-        ``progress(done, total, report)`` after each face.
+        ``progress(done, total, report)`` after each face of the first pass.
     details : bool, optional
         Keep the core's wavelet details per face (slower on large nets).
+    max_gap : float, optional
+        Largest gap allowed along an edge; default ``tol``.  Two faired neighbours can
+        each move by up to ``tol``, so a gap can reach ``2 tol``: the faces next to a
+        larger gap are faired again with half their tolerance (up to three times), and
+        a face still next to a too-large gap gets its original surface back (status
+        ``'unchanged'``, the message says why).  Not applied with explicit ``n``.
 
     Returns
     -------
@@ -133,31 +139,93 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
     if tol is None and n is None:
         tol = default_tolerance(shape)
-    source = shape
-    if convert:
-        source = BRepBuilderAPI_NurbsConvert(shape, True).Shape()
+    if max_gap is not None:
+        check_options(max_gap, None, method, boundary)
+    max_gap = tol if max_gap is None else float(max_gap)
+    source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
-    copy = BRepBuilderAPI_Copy(source, True, False).Shape()
-    targets = indexed_faces(copy)
-    free_before = free_edge_count(shape)
-    reports, touched = [], []
-    for index, (original, target) in enumerate(zip(originals, targets)):
-        report = _one_face(index, original, selected, dict(
-            tol=tol, n=n, method=method, boundary=boundary, target_degree=target_degree,
-            density=density, details=details))
-        if report.faired:
-            touched += replace_surface(target, to_geom_surface(report.surface))
-            report.face = target
-        reports.append(report)
+    job = _Job(source, originals, dict(method=method, boundary=boundary,
+                                       target_degree=target_degree, density=density,
+                                       details=details))
+    for index in range(len(originals)):
+        job.fair(index, selected, tol, n)
         if progress is not None:
-            progress(index + 1, len(originals), report)
-    finish_edges(touched)
-    BRepLib.UpdateTolerances_s(copy, False)
-    gaps = edge_gaps(copy, touched)
+            progress(index + 1, len(originals), job.reports[index])
+    copy, gaps = job.build()
+    if tol is not None:
+        copy, gaps = job.close_gaps(copy, gaps, max_gap)
     return ShapeFairResult(
-        copy, reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
-        tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps)
+        copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
+        tol, free_edge_count(shape), free_edge_count(copy), time.perf_counter() - start, gaps)
+
+
+class _Job:
+    """The faces of the source, what was done to each, and the rebuilt copy.
+
+    Every build starts from a fresh ``BRepBuilderAPI_Copy`` of the source and puts each
+    faired surface in once, so a face faired again never stacks replacements.
+    """
+
+    def __init__(self, source, originals, options):
+        self.source, self.originals, self.options = source, originals, options
+        self.reports = [None] * len(originals)
+        self.tol = {}
+
+    def fair(self, index, selected, tol, n):
+        self.tol[index] = tol
+        self.reports[index] = _one_face(index, self.originals[index], selected,
+                                        dict(self.options, tol=tol, n=n))
+
+    def build(self):
+        """A fresh copy with every faired surface in place, and its edge gaps."""
+        copy = BRepBuilderAPI_Copy(self.source, True, False).Shape()
+        targets = indexed_faces(copy)
+        touched = []
+        for report, target in zip(self.reports, targets):
+            if report.faired:
+                touched += replace_surface(target, to_geom_surface(report.surface))
+                report.face = target
+        finish_edges(touched)
+        BRepLib.UpdateTolerances_s(copy, False)
+        return copy, edge_gaps(copy, touched)
+
+    def close_gaps(self, copy, gaps, max_gap):
+        """Re-fair (halved tolerance) or restore the faired faces next to large gaps."""
+        for _ in range(3):
+            culprits = self._culprits(copy, gaps, max_gap)
+            if not culprits:
+                return copy, gaps
+            for index in culprits:
+                self.fair(index, {index}, 0.5 * self.tol[index], None)
+            copy, gaps = self.build()
+        culprits = self._culprits(copy, gaps, max_gap)
+        if not culprits:
+            return copy, gaps
+        for index in culprits:
+            self._restore(index, max_gap)
+        return self.build()
+
+    def _culprits(self, copy, gaps, max_gap):
+        emap = TopTools_IndexedDataMapOfShapeListOfShape()
+        TopExp.MapShapesAndAncestors_s(copy, TopAbs_EDGE, TopAbs_FACE, emap)
+        fmap = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(copy, TopAbs_FACE, fmap)
+        out = set()
+        for edge_index, gap in gaps.items():
+            if gap > max_gap:
+                for face in emap.FindFromIndex(edge_index):
+                    index = fmap.FindIndex(face) - 1
+                    if self.reports[index].faired:
+                        out.add(index)
+        return sorted(out)
+
+    def _restore(self, index, max_gap):
+        original = self.originals[index]
+        self.reports[index] = FaceFairReport(
+            original, "unchanged", f"kept the original surface: fairing opened a gap larger "
+            f"than max_gap={max_gap:g} along a shared edge even at tol={self.tol[index]:g}",
+            original=original, index=index)
 
 
 def _one_face(index, face, selected, options):
