@@ -1,11 +1,12 @@
 r"""Deviation and curvature of core surfaces on sample grids (numpy + scipy only).
 
 Deviation of the faired surface :math:`F` from the source :math:`S` at a sample
-:math:`p = F(u_i, v_j)` is the signed distance to the closest point of :math:`S`,
-approximated by the distance to the tangent plane at the nearest point of a dense
-source sample: :math:`d = (p - S(q))\cdot n_S(q)`.  The error of this point-to-plane
-estimate is :math:`O(h^2\kappa)` for a source sample spacing :math:`h`; the tests compare it
-with FreeCAD's ``Part.Face.distToShape``.
+:math:`p = F(u_i, v_j)` is the signed distance to the closest point of :math:`S`:
+the foot point :math:`(u^*, v^*) = \arg\min |S(u, v) - p|^2` is found by Gauss-Newton
+steps :math:`\Delta = (J^T J)^{-1} J^T (p - S)`, :math:`J = [S_u\ S_v]`, started at the
+nearest point of a dense source sample and kept inside the face's parameter box; then
+:math:`|d| = |p - S(u^*, v^*)|` with the sign of :math:`(p - S)\cdot n_S`.  The tests compare it with FreeCAD's
+``Part.Face.distToShape``.
 
 Curvatures follow from the fundamental forms: with :math:`E, F, G` and :math:`L, M, N`,
 :math:`K = (LN - M^2)/(EG - F^2)` and :math:`H = (EN - 2FM + GL) / (2(EG - F^2))`.
@@ -34,13 +35,47 @@ def parametric_deviation(source, faired, uv_range, count=40):
     return float(np.sqrt((diff ** 2).sum(axis=2)).max())
 
 
-def _unit_normals(surface, u, v):
-    n = np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
-    length = np.linalg.norm(n, axis=2, keepdims=True)
-    return n / np.where(length > 0, length, 1.0)
+def _contract(rows, basis_v, d):
+    """``sum_k rows[q, k, :] * basis_v[q, k]`` with a sparse ``basis_v`` (q, k_v)."""
+    rows = rows.reshape(rows.shape[0], -1, d)
+    return np.column_stack([np.asarray(basis_v.multiply(rows[:, :, i]).sum(axis=1)).ravel()
+                            for i in range(d)])
 
 
-def signed_deviation(source, faired, uv_range, count=40, oversample=4):
+def _point_and_tangents(surface, u, v):
+    """Point, d/du and d/dv at scattered parameters ``(u_q, v_q)``, each (q, 3)."""
+    net = surface.poles if surface.weights is None else surface.homogeneous()
+    ku, kv, d = net.shape
+    flat = net.reshape(ku, kv * d)
+    rows0 = surface.u_space.collocation(u, 0) @ flat
+    rows1 = surface.u_space.collocation(u, 1) @ flat
+    bv0, bv1 = (surface.v_space.collocation(v, n).tocsr() for n in (0, 1))
+    s, su, sv = _contract(rows0, bv0, d), _contract(rows1, bv0, d), _contract(rows0, bv1, d)
+    if surface.weights is None:
+        return s, su, sv
+    w, wu, wv = s[:, -1:], su[:, -1:], sv[:, -1:]
+    point = s[:, :-1] / w
+    return point, (su[:, :-1] - point * wu) / w, (sv[:, :-1] - point * wv) / w
+
+
+def foot_points(surface, points, u, v, uv_range, iterations=4):
+    """Gauss-Newton closest points on ``surface`` from start parameters ``u, v``."""
+    u0, u1, v0, v1 = uv_range
+    for _ in range(iterations):
+        s, su, sv = _point_and_tangents(surface, u, v)
+        r = points - s
+        a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
+        g1, g2 = (su * r).sum(1), (sv * r).sum(1)
+        det = np.where(np.abs(a * c - b * b) > 1e-300, a * c - b * b, 1e-300)
+        u = np.clip(u + (c * g1 - b * g2) / det, u0, u1)
+        v = np.clip(v + (a * g2 - b * g1) / det, v0, v1)
+    s, su, sv = _point_and_tangents(surface, u, v)
+    n = np.cross(su, sv)
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    return s, n
+
+
+def signed_deviation(source, faired, uv_range, count=40, oversample=2):
     """Signed closest-point distances from faired samples to the source surface.
 
     Parameters
@@ -63,9 +98,14 @@ def signed_deviation(source, faired, uv_range, count=40, oversample=4):
     points = faired.evaluate_grid(u, v)
     us, vs = sample_parameters(uv_range, count * oversample)
     dense = source.evaluate_grid(us, vs).reshape(-1, 3)
-    normals = _unit_normals(source, us, vs).reshape(-1, 3)
-    _, nearest = cKDTree(dense).query(points.reshape(-1, 3))
-    d = np.einsum("ij,ij->i", points.reshape(-1, 3) - dense[nearest], normals[nearest])
+    flat = points.reshape(-1, 3)
+    _, nearest = cKDTree(dense).query(flat)
+    iu, iv = np.divmod(nearest, vs.size)
+    foot, normals = foot_points(source, flat, us[iu], vs[iv], uv_range)
+    offset = flat - foot
+    # |p - foot| is the distance even where the foot point sits on the face's border
+    # (there p - foot is not along the normal); the normal only gives the sign.
+    d = np.copysign(np.linalg.norm(offset, axis=1), np.einsum("ij,ij->i", offset, normals))
     return points, d.reshape(count, count)
 
 

@@ -61,7 +61,7 @@ class Legend:
         self._labels = []
         for child in (camera, light, self._coords, binding, self._colors, self._mesh, font):
             root.addChild(child)
-        for x, y in ((0.95, 0.88), (0.86, 0.77), (0.86, -0.47)):
+        for x, y in ((0.95, 0.45), (0.86, 0.33), (0.86, -0.87)):
             sep, node = _label("", x, y)
             root.addChild(sep)
             self._labels.append(node)
@@ -71,7 +71,7 @@ class Legend:
 
     def update(self, title, low, high, unit, colors):
         """Redraw for the range ``low..high`` with ramp end colours ``colors``."""
-        x0, x1, y0, y1 = 0.88, 0.95, -0.45, 0.8
+        x0, x1, y0, y1 = 0.88, 0.95, -0.85, 0.35
         points, rgb = [], []
         for i in range(STEPS + 1):
             t = i / STEPS

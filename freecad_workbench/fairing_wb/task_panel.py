@@ -92,6 +92,7 @@ class FairSurfacePanel:
         self.preview.clicked.connect(self.on_preview)
         self.figures = _row(layout, "", QtWidgets.QLabel("Press Preview for figures."),
                             "fairing_figures")
+        self.figures.setWordWrap(True)
         self.error = _row(layout, "", QtWidgets.QLabel(""), "fairing_error")
         self.error.setStyleSheet("color: #b00000")
         self.error.setWordWrap(True)
@@ -166,8 +167,8 @@ class FairSurfacePanel:
             self.error.setText(str(error))
             return None
         lines = [f"{' x '.join(map(str, r.poles_before))} -> "
-                 f"{' x '.join(map(str, r.poles_after))} control points, "
-                 f"max deviation {r.max_deviation:.4g} mm, {1000 * r.seconds:.0f} ms"
+                 f"{' x '.join(map(str, r.poles_after))} control points\n"
+                 f"max deviation {r.max_deviation:.4g} mm, time {1000 * r.seconds:.0f} ms"
                  for r in results]
         self.figures.setText("\n".join(lines))
         return results

@@ -1,0 +1,118 @@
+"""Deviation and curvature maps against FreeCAD's own distance and curvature."""
+
+import numpy as np
+import pytest
+
+import FreeCAD
+import Part
+from fairing_wb import analysis, conversion, deviation_map, make
+
+import fixtures
+
+
+@pytest.fixture
+def doc():
+    document = FreeCAD.newDocument("MapTest")
+    name = document.Name
+    yield document
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+@pytest.fixture
+def fairing(doc):
+    surface, _ = fixtures.noisy_blade_surface(50, 80, noise=0.2)
+    source = fixtures.add_shape(doc, surface.toShape(), "Noisy")
+    obj = make.make_fairing((source, ["Face1"]), target=(12, 20))
+    doc.recompute()
+    assert obj.isValid(), obj.Status
+    return obj
+
+
+def test_deviation_map_values_match_occt_distance(doc, fairing):
+    dmap = deviation_map.make_map(fairing)
+    dmap.Samples = 20
+    doc.recompute()
+    assert dmap.isValid()
+    assert dmap.Mesh.CountPoints == 400 == len(dmap.Values) == len(dmap.VertexColors)
+    source = fairing.Source[0].Shape.Faces[0]
+    points = dmap.Mesh.Points
+    for i in range(0, 400, 37):
+        occt = source.distToShape(Part.Vertex(points[i].Vector))[0]
+        assert dmap.Values[i] == pytest.approx(occt, abs=2e-3 * max(dmap.Maximum, 1e-9) + 1e-6)
+    assert dmap.Maximum <= fairing.MaxDeviation.Value * 1.05
+    assert dmap.Unit == "mm"
+
+
+def test_colours_run_green_to_red(doc, fairing):
+    dmap = deviation_map.make_map(fairing)
+    doc.recompute()
+    low, high = deviation_map.AnalysisMap.range(dmap)
+    assert low == 0.0 and high == pytest.approx(dmap.Maximum)
+    i_max = int(np.argmax(dmap.Values))
+    i_min = int(np.argmin(dmap.Values))
+    red, green = dmap.VertexColors[i_max], dmap.VertexColors[i_min]
+    assert red[0] > 0.8 and red[1] < 0.1
+    assert green[1] > green[0]
+
+
+def test_map_does_not_touch_the_faired_model(doc, fairing):
+    poles = fairing.Shape.Faces[0].Surface.getPoles()
+    seconds = fairing.FairingTime  # changes on every recompute of the fairing
+    deviation_map.make_map(fairing)
+    doc.recompute()
+    assert fairing.FairingTime == seconds
+    assert fairing.Shape.Faces[0].Surface.getPoles() == poles
+    assert fairing.State == [] or fairing.State == ["Up-to-date"]
+
+
+def test_curvature_of_a_cylinder_face_closed_form():
+    radius = 7.0
+    face = Part.makeCylinder(radius, 20).Faces[0].toNurbs().Faces[0]
+    core = conversion.surface_from_face(face)
+    _, mean = analysis.curvature(core, face.ParameterRange, 9, "mean")
+    _, gauss = analysis.curvature(core, face.ParameterRange, 9, "gaussian")
+    assert np.abs(np.abs(mean) - 1 / (2 * radius)).max() < 1e-6
+    assert np.abs(gauss).max() < 1e-8
+
+
+def test_curvature_matches_occt_on_the_blade():
+    face = fixtures.blade_shape().Faces[1]
+    core = conversion.surface_from_face(face)
+    u0, u1, v0, v1 = face.ParameterRange
+    _, mean = analysis.curvature(core, face.ParameterRange, 5, "mean")
+    us, vs = np.linspace(u0, u1, 5), np.linspace(v0, v1, 5)
+    occt = np.array([[face.Surface.curvature(u, v, "Mean") for v in vs] for u in us])
+    # OCCT's sign follows its own normal; compare magnitudes.
+    assert np.allclose(np.abs(mean), np.abs(occt), rtol=1e-5, atol=1e-9)
+
+
+def test_curvature_maps_before_after_share_range(doc, fairing):
+    faired, source = deviation_map.make_curvature_maps(fairing)
+    doc.recompute()
+    deviation_map.share_range([faired, source])
+    doc.recompute()
+    assert faired.isValid() and source.isValid()
+    assert (faired.RangeMin, faired.RangeMax) == (source.RangeMin, source.RangeMax)
+    # Fairing calmed the curvature: its spread is smaller than the noisy source's.
+    assert np.std(faired.Values) < np.std(source.Values)
+    box, shifted = fairing.Shape.BoundBox, source.Mesh.BoundBox  # shown beside
+    assert shifted.XMin > box.XMax or shifted.YMin > box.YMax
+
+
+def test_map_survives_save_and_reopen(doc, fairing, tmp_path):
+    dmap = deviation_map.make_map(fairing)
+    doc.recompute()
+    values = list(dmap.Values)
+    path = str(tmp_path / "map.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        again = [o for o in reopened.Objects if o.TypeId == "Mesh::FeaturePython"][0]
+        again.touch()
+        reopened.recompute()
+        assert again.isValid()
+        assert again.Values == pytest.approx(values)
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
