@@ -291,6 +291,9 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         obj.TargetU, obj.TargetV = int(target[0]), int(target[-1])
     else:
         obj.Mode = "Tolerance"
+        first = obj_source.Shape.getElement(subs[0])
+        if subs[0].startswith("Face") and hasattr(first.Surface, "NbUPoles"):
+            obj.TargetU, obj.TargetV = first.Surface.NbUPoles, first.Surface.NbVPoles
         obj.Tolerance = (tolerance if tolerance is not None
                          else preferences.default_tolerance(obj_source.Shape))
     obj.Method, obj.Boundary, obj.Search, obj.Measure = method, boundary, search, measure

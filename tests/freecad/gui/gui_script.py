@@ -108,6 +108,8 @@ def run():
     check("Levels enabled with a face", is_active("Fairing_Levels"))
     check("FairCurve disabled with a face only", not is_active("Fairing_FairCurve"))
 
+    Gui.activeDocument().activeView().viewIsometric()
+    Gui.SendMsgToActiveView("ViewFit")
     Gui.runCommand("Fairing_FairSurface")
     pump()
     panel = find("FairingTaskPanel")
