@@ -15,7 +15,7 @@ import Part
 import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
-           "face_on_surface", "full_knots"]
+           "face_on_surface", "full_knots", "uv_range"]
 
 
 def full_knots(knots, mults):
@@ -73,6 +73,17 @@ def surface_from_face(face):
         full_knots(surface.getUKnots(), surface.getUMultiplicities()),
         full_knots(surface.getVKnots(), surface.getVMultiplicities()),
         (surface.UDegree, surface.VDegree), weights)
+
+
+def uv_range(face, surface):
+    """The face's ``(u0, u1, v0, v1)`` clipped to the core surface's domain.
+
+    OCCT's parameter range of a trimmed face may exceed the surface domain by its
+    tolerance (1e-10 or so); the core evaluates inside the domain only.
+    """
+    (a, b), (c, d) = surface.domain
+    u0, u1, v0, v1 = face.ParameterRange
+    return (min(max(u0, a), b), min(max(u1, a), b), min(max(v0, c), d), min(max(v1, c), d))
 
 
 def part_surface(surface):
@@ -148,7 +159,7 @@ def face_on_surface(surface, face):
     for wire in face.Wires:
         edges = []
         for edge in wire.OrderedEdges:
-            pcurve, _, _, first, last = edge.curveOnSurface(0)
+            pcurve, first, last = face.curveOnSurface(edge)  # the p-curve on *this* face
             edges.append(pcurve.toShape(surface, first, last))
         wires.append(Part.Wire(edges))
     result = Part.Face(surface, wires[0])

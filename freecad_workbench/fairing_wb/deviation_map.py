@@ -65,7 +65,7 @@ def _face_samples(obj, source_face, faired_face, count):
     """(points, values) of one face pair for the map's Kind/Which."""
     source = conversion.surface_from_face(source_face)
     faired = conversion.surface_from_face(faired_face)
-    uv_range = source_face.ParameterRange
+    uv_range = conversion.uv_range(source_face, source)
     if obj.Kind == "Deviation":
         return analysis.signed_deviation(source, faired, uv_range, count)
     surface = faired if obj.Which == "Faired" else source

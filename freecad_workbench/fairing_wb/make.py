@@ -198,7 +198,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     source = conversion.surface_from_face(face)
     result = fair_surface_net(source, tolerance, target, method, search, measure)
     faired = _fix_boundary(source, result.surface, boundary)
-    uv_range = face.ParameterRange
+    uv_range = conversion.uv_range(face, source)
     _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
     deviation = float(np.abs(distances).max())
     if tolerance is not None and boundary != "free" and deviation > tolerance:
@@ -230,7 +230,8 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
         (n,) = _target_spans(target, (source.n_poles,), (source.degree,), "curve")
         result = cf.fair_curve(source.poles, n, **common)
     first, last = edge.ParameterRange
-    t = np.linspace(first, last, 200)
+    low, high = source.domain
+    t = np.linspace(max(first, low), min(last, high), 200)
     deviation = float(np.linalg.norm(source.evaluate(t) - result.curve.evaluate(t), axis=1).max())
     shape = conversion.part_curve(result.curve).toShape(first, last)
     return FairedShape(shape, (source.n_poles,), (result.curve.n_poles,), deviation,

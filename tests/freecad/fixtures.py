@@ -59,8 +59,9 @@ def blade_shape():
 
 
 def sample_distance(faired_face, source_face, count=12):
-    """Max FreeCAD ``distToShape`` from faired samples to the source face (independent)."""
+    """Max FreeCAD ``distToShape`` from faired samples (inside its trim) to the source face."""
     u0, u1, v0, v1 = faired_face.ParameterRange
     surface = faired_face.Surface
     return max(source_face.distToShape(Part.Vertex(surface.value(u, v)))[0]
-               for u in np.linspace(u0, u1, count) for v in np.linspace(v0, v1, count))
+               for u in np.linspace(u0, u1, count) for v in np.linspace(v0, v1, count)
+               if faired_face.isPartOfDomain(u, v))

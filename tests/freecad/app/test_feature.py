@@ -226,3 +226,32 @@ def _timed(func, *args, **kwargs):
     start = time.perf_counter()
     func(*args, **kwargs)
     return time.perf_counter() - start
+
+
+def test_trimmed_rational_face_keeps_its_trim(doc):
+    shape = Part.read(str(fixtures.REAL / "linkrods.step"))
+    src = fixtures.add_shape(doc, shape, "Linkrods")
+    index = next(i for i, f in enumerate(shape.Faces)
+                 if isinstance(f.Surface, Part.BSplineSurface) and f.Surface.NbVPoles == 81)
+    face = shape.Faces[index]
+    assert face.Surface.isURational() or face.Surface.isVRational()
+    obj = make.make_fairing((src, [f"Face{index + 1}"]), target=(7, 40))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    faired = obj.Shape.Faces[0]
+    assert faired.isValid() and len(faired.Edges) == len(face.Edges)
+    assert faired.Area == pytest.approx(face.Area, rel=0.02)
+    assert fixtures.sample_distance(faired, face, 8) <= obj.MaxDeviation.Value * 1.05 + 1e-9
+
+
+def test_energy_method_is_passed_or_refused_clearly(noisy):
+    face = noisy.Shape.Faces[0]
+    import inspect
+    import cq_fairing as cf
+
+    if "method" in inspect.signature(cf.fair_surface).parameters:
+        result = make.fair_face(face, target=(18, 26), method="energy")
+        assert result.shape.isValid()
+    else:
+        with pytest.raises(cf.InvalidInputError, match="no energy fairing"):
+            make.fair_face(face, target=(18, 26), method="energy")
