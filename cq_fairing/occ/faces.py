@@ -352,7 +352,7 @@ def _into(faired, source):
     au = _operator(faired.u_space, source.u_space)
     av = _operator(faired.v_space, source.v_space)
     net = np.tensordot(au, net, axes=(1, 0))
-    return np.einsum("jb,abd->ajd", av, net)
+    return np.matmul(av, net)
 
 
 def _non_rational(surface):

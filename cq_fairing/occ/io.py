@@ -105,12 +105,12 @@ def _read_brep(path):
 
 
 def _check_output(path, force):
+    if path.is_dir():
+        raise OutputPathError(f"cannot write '{path}': it is a folder; give a file name.")
     kind = _kind(path, WRITE_SUFFIXES, "write")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise OutputPathError(f"cannot write '{path}': folder '{folder}' does not exist.")
-    if path.is_dir():
-        raise OutputPathError(f"cannot write '{path}': it is a folder; give a file name.")
     if path.exists() and not force:
         raise OutputPathError(
             f"'{path}' already exists; choose another name or pass force=True to overwrite."
@@ -154,13 +154,16 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
         )
     kind = _check_output(path, force)
     n_faces = len(indexed_faces(shape))
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix, prefix=".cq_fairing_", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(suffix=path.suffix, prefix=".cq_fairing_", dir=path.parent)
+    except OSError as exc:
+        raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
     os.close(fd)
     try:
         (_write_step if kind == "step" else _write_brep)(shape, tmp, unit)
         _verify_written(tmp, n_faces)
         os.replace(tmp, path)
-    except PermissionError as exc:
+    except OSError as exc:
         raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
     finally:
         if os.path.exists(tmp):

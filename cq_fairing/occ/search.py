@@ -23,9 +23,9 @@ accuracy control lands with a surface search.
 import math
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
-from ..core.fairing import target_space
+from ..core.banded import BandedSPD
+from ..core.fairing import _cartesian, _coefficients, target_space
 from ..core.geometry import BSplineSurface
 from ..core.gram import gram_matrix
 from ..errors import ToleranceNotMetError
@@ -44,29 +44,33 @@ def _operator(source, target):
     if key not in _OPERATORS:
         if len(_OPERATORS) > 256:
             _OPERATORS.clear()
-        lu = spla.splu(gram_matrix(target).tocsc())
-        _OPERATORS[key] = lu.solve(gram_matrix(target, source).toarray())
+        cross = gram_matrix(target, source).toarray()
+        _OPERATORS[key] = BandedSPD(gram_matrix(target)).solve(cross)
     return _OPERATORS[key]
 
 
-def project(surface, target_u, target_v):
+def project(surface, target_u, target_v, along_u=None):
     """The L2-best surface in ``target_u x target_v`` (``None`` keeps a direction).
 
     Rational surfaces are projected in homogeneous coordinates; a non-positive weight
     in the result raises :class:`~cq_fairing.errors.NumericalError` from the core's rule.
+    ``along_u`` may hold the net already projected along u (a search reuses it).
     """
-    from ..core.fairing import _cartesian, _coefficients
-
-    net = _coefficients(surface)
-    au, av = _operator(surface.u_space, target_u), _operator(surface.v_space, target_v)
-    if au is not None:
-        net = np.tensordot(au, net, axes=(1, 0))
+    net = along_u if along_u is not None else project_u(surface, target_u)
+    av = _operator(surface.v_space, target_v)
     if av is not None:
-        net = np.einsum("jb,abd->ajd", av, net)
+        net = np.matmul(av, net)
     poles, weights = _cartesian(net, surface.is_rational)
     tu = surface.u_space if target_u is None else target_u
     tv = surface.v_space if target_v is None else target_v
     return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
+
+
+def project_u(surface, target_u):
+    """Homogeneous (or Cartesian) net projected along u only, shape (k_tu, k_v, d')."""
+    net = _coefficients(surface)
+    au = _operator(surface.u_space, target_u)
+    return net if au is None else np.tensordot(au, net, axes=(1, 0))
 
 
 def max_scales(surface, target_degree):
@@ -121,9 +125,13 @@ def search_scales(surface, tol, target_degree, deviation, finish=None):
             spaces[axis][n] = target_space(source, int(n), target_degree[axis])
         return spaces[axis][n]
 
+    halves = {}
+
     def run(n):
         if n not in cache:
-            faired = finish(project(surface, space(0, n[0]), space(1, n[1])))
+            if n[0] not in halves:
+                halves[n[0]] = project_u(surface, space(0, n[0]))
+            faired = finish(project(surface, space(0, n[0]), space(1, n[1]), halves[n[0]]))
             cache[n] = (faired, deviation(faired))
         return cache[n]
 

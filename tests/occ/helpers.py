@@ -1,0 +1,68 @@
+"""Independent OCCT measurements used by the OCP layer tests (no cq_fairing code)."""
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepGProp import BRepGProp
+from OCP.BRepTools import BRepTools
+from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+from OCP.GProp import GProp_GProps
+from OCP.TopAbs import TopAbs_FACE
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+
+def faces_of(shape):
+    fmap = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
+    return [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
+
+
+def uv_box_grid(face, nu=7, nv=9):
+    """A grid over the face's UV box, clipped to the surface's own bounds."""
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+    s0, s1, t0, t1 = BRep_Tool.Surface_s(face).Bounds()
+    return np.clip(np.linspace(u0, u1, nu), s0, s1), np.clip(np.linspace(v0, v1, nv), t0, t1)
+
+
+def occ_points(face, u, v):
+    """``BRepAdaptor_Surface`` values on the grid u x v, shape (len(u), len(v), 3)."""
+    adaptor = BRepAdaptor_Surface(face)
+    out = np.empty((len(u), len(v), 3))
+    for i, a in enumerate(u):
+        for j, b in enumerate(v):
+            p = adaptor.Value(float(a), float(b))
+            out[i, j] = (p.X(), p.Y(), p.Z())
+    return out
+
+
+def global_distance(points, face):
+    """``GeomAPI_ProjectPointOnSurf`` distance of each point to the face's surface.
+
+    Returns the smallest orthogonal-projection distance, or inf where OCCT finds none.
+    """
+    surface = BRep_Tool.Surface_s(face)
+    s0, s1, t0, t1 = surface.Bounds()
+    projector = GeomAPI_ProjectPointOnSurf()
+    projector.Init(surface, s0, s1, t0, t1)
+    from OCP.gp import gp_Pnt
+
+    out = np.full(len(points), np.inf)
+    for k, (x, y, z) in enumerate(points):
+        projector.Perform(gp_Pnt(float(x), float(y), float(z)))
+        if projector.NbPoints():
+            out[k] = projector.LowerDistance()
+    return out
+
+
+def volume(shape):
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props)
+    return props.Mass()
+
+
+def area(shape):
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(shape, props)
+    return props.Mass()

@@ -1,0 +1,119 @@
+"""Control nets out of OCP faces and back: checked against OCCT's own evaluation."""
+
+from collections import Counter
+
+import numpy as np
+import pytest
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepTools import BRepTools
+
+from cq_fairing.errors import InvalidInputError, UnsupportedGeometryError
+from cq_fairing.occ import face_to_surface, list_faces, surface_to_face
+from tests.occ.helpers import area, faces_of, occ_points, uv_box_grid
+
+MODELS = ["terrain.brep", "IEA_15MW_CFD.stp", "impeller.igs", "testtoler.brep",
+          "ring_nurbs.brep", "linkrods.step"]
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_net_evaluates_like_occt_on_every_bspline_face(real, name):
+    """Core evaluation of the extracted net == BRepAdaptor_Surface, 1e-9 relative."""
+    shape = real(name)
+    checked = 0
+    for face, info in zip(faces_of(shape), list_faces(shape)):
+        if not info.is_bspline:
+            continue
+        surface, _ = face_to_surface(face)
+        u, v = uv_box_grid(face)
+        expected = occ_points(face, u, v)
+        scale = max(np.abs(expected).max(), 1.0)
+        np.testing.assert_allclose(surface.evaluate_grid(u, v), expected, rtol=0,
+                                   atol=1e-9 * scale)
+        checked += 1
+    assert checked == sum(i.is_bspline for i in list_faces(shape)) > 0
+
+
+@pytest.mark.parametrize("name", ["linkrods.step", "IEA_15MW_CFD.stp", "ring_nurbs.brep",
+                                  "testtoler.brep"])
+def test_surface_to_face_round_trip_keeps_trim_and_geometry(real, name):
+    shape = real(name)
+    for face, info in zip(faces_of(shape), list_faces(shape)):
+        if not info.is_bspline:
+            continue
+        surface, _ = face_to_surface(face)
+        rebuilt = surface_to_face(surface, face)
+        assert BRepCheck_Analyzer(rebuilt).IsValid()
+        np.testing.assert_allclose(BRepTools.UVBounds_s(rebuilt), BRepTools.UVBounds_s(face),
+                                   atol=1e-9)
+        assert area(rebuilt) == pytest.approx(area(face), rel=1e-7)
+        u, v = uv_box_grid(face)
+        np.testing.assert_allclose(occ_points(rebuilt, u, v), occ_points(face, u, v),
+                                   atol=1e-9 * max(1.0, np.abs(occ_points(face, u, v)).max()))
+
+
+def test_inventory_matches_sources_md(real):
+    infos = list_faces(real("linkrods.step"))
+    assert Counter(i.surface_type for i in infos) == {"Torus": 9, "Cylinder": 4, "Plane": 6,
+                                                      "BSpline": 18}
+    bspline = [i for i in infos if i.is_bspline]
+    assert sum(i.rational for i in bspline) == 16
+    assert all(i.trimmed and i.in_solid for i in bspline)
+    assert Counter((i.u_degree, i.v_degree) for i in bspline) == {(6, 10): 6, (6, 8): 6,
+                                                                 (6, 3): 4, (3, 1): 2}
+    iea = list_faces(real("IEA_15MW_CFD.stp"))
+    assert sorted((i.n_poles_u, i.n_poles_v, i.u_degree, i.v_degree) for i in iea)[-1] == \
+        (17, 204, 3, 8)
+    assert sum(i.trimmed for i in iea) == 2 and not any(i.in_solid for i in iea)
+    ring, = list_faces(real("ring_nurbs.brep"))
+    assert ring.u_periodic and ring.v_periodic and not ring.trimmed
+    imp = list_faces(real("impeller.igs"))
+    assert Counter(i.surface_type for i in imp) == {"BSpline": 247, "Revolution": 30}
+    assert sum(i.rational for i in imp) == 212
+    shell = list_faces(real("testtoler.brep"))
+    assert len(shell) == 56 and not any(i.trimmed or i.rational for i in shell)
+
+
+def test_periodic_face_is_unperiodized_and_stays_closed(real):
+    face, = faces_of(real("ring_nurbs.brep"))
+    surface, info = face_to_surface(face)
+    assert info.unperiodized == ("u", "v")
+    assert surface.poles.shape == (16, 51, 3)
+    assert surface.u_knots[0] == surface.u_knots[5] and surface.u_knots[-1] == surface.u_knots[-6]
+    np.testing.assert_allclose(surface.poles[0], surface.poles[-1], atol=1e-12)
+    np.testing.assert_allclose(surface.poles[:, 0], surface.poles[:, -1], atol=1e-12)
+
+
+def test_errors_for_wrong_inputs(real):
+    plane = next(f for f, i in zip(faces_of(real("linkrods.step")), list_faces(real("linkrods.step")))
+                 if i.surface_type == "Plane")
+    with pytest.raises(UnsupportedGeometryError, match="convert"):
+        face_to_surface(plane)
+    with pytest.raises(InvalidInputError, match="face"):
+        face_to_surface(real("ring_nurbs.brep"))
+    with pytest.raises(InvalidInputError):
+        face_to_surface("not a face")
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    surface, _ = face_to_surface(face)
+    from cq_fairing import BSplineSurface
+
+    shrunk = BSplineSurface(surface.poles, surface.u_knots / 2, surface.v_knots / 2,
+                            surface.u_degree, surface.v_degree)
+    with pytest.raises(InvalidInputError, match="domain"):
+        surface_to_face(shrunk, face)
+
+
+def test_located_face_round_trip():
+    """A face moved by a TopLoc_Location: net in global coordinates, rebuilt in place."""
+    import cadquery as cq
+
+    solid = cq.Workplane().sphere(2.0).val().transformShape(cq.Matrix()).moved(
+        cq.Location(cq.Vector(10, -3, 4)))
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+
+    nurbs = BRepBuilderAPI_NurbsConvert(solid.wrapped, True).Shape()
+    face = faces_of(nurbs)[0]
+    surface, _ = face_to_surface(face)
+    u, v = uv_box_grid(face)
+    np.testing.assert_allclose(surface.evaluate_grid(u, v), occ_points(face, u, v), atol=1e-9)
+    rebuilt = surface_to_face(surface, face)
+    np.testing.assert_allclose(occ_points(rebuilt, u, v), occ_points(face, u, v), atol=1e-9)

@@ -1,0 +1,108 @@
+"""Reading and writing model files: typed errors, atomic writes, round trips."""
+
+import hashlib
+import os
+
+import numpy as np
+import pytest
+
+from cq_fairing.errors import FileFormatError, OutputPathError
+from cq_fairing.occ import list_faces, read_shape, write_shape
+from tests.conftest import REAL_DATA
+from tests.occ.helpers import area, faces_of, volume
+
+
+@pytest.mark.parametrize("name, n_faces", [
+    ("linkrods.step", 37), ("IEA_15MW_CFD.stp", 3), ("impeller.igs", 277),
+    ("testtoler.brep", 56), ("ring_nurbs.brep", 1), ("terrain.brep", 1)])
+def test_reads_every_real_model(real, name, n_faces):
+    assert len(list_faces(real(name))) == n_faces
+
+
+def test_missing_empty_corrupt_truncated_and_unknown_files(tmp_path):
+    with pytest.raises(FileFormatError, match="no such file"):
+        read_shape(tmp_path / "absent.step")
+    (tmp_path / "empty.step").write_bytes(b"")
+    with pytest.raises(FileFormatError, match="empty"):
+        read_shape(tmp_path / "empty.step")
+    (tmp_path / "junk.step").write_text("this is not STEP\n" * 10)
+    with pytest.raises(FileFormatError):
+        read_shape(tmp_path / "junk.step")
+    (tmp_path / "junk.brep").write_text("DBRep_DrawableShape\nnonsense\n")
+    with pytest.raises(FileFormatError):
+        read_shape(tmp_path / "junk.brep")
+    data = (REAL_DATA / "linkrods.step").read_bytes()
+    (tmp_path / "half.step").write_bytes(data[: len(data) // 2])
+    with pytest.raises(FileFormatError):
+        read_shape(tmp_path / "half.step")
+    (tmp_path / "model.obj").write_text("v 0 0 0\n")
+    with pytest.raises(FileFormatError, match="suffix"):
+        read_shape(tmp_path / "model.obj")
+
+
+def test_step_without_faces_is_refused(tmp_path):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+    from OCP.gp import gp_Pnt
+
+    writer = STEPControl_Writer()
+    writer.Transfer(BRepBuilderAPI_MakeVertex(gp_Pnt(1, 2, 3)).Vertex(), STEPControl_AsIs)
+    writer.Write(str(tmp_path / "point.step"))
+    with pytest.raises(FileFormatError, match="no shape with faces"):
+        read_shape(tmp_path / "point.step")
+
+
+@pytest.mark.parametrize("suffix", [".step", ".brep"])
+def test_write_round_trip_keeps_faces_and_geometry(real, tmp_path, suffix):
+    shape = real("linkrods.step")
+    out = tmp_path / f"copy{suffix}"
+    write_shape(shape, out)
+    back = read_shape(out)
+    assert len(faces_of(back)) == len(faces_of(shape))
+    assert volume(back) == pytest.approx(volume(shape), rel=1e-6)
+    assert area(back) == pytest.approx(area(shape), rel=1e-6)
+    assert sorted(os.listdir(tmp_path)) == [out.name]  # no temporary file left
+
+
+def test_write_refuses_bad_outputs_and_never_touches_the_input(real, tmp_path):
+    shape = real("ring_nurbs.brep")
+    out = tmp_path / "ring.brep"
+    write_shape(shape, out)
+    digest = hashlib.sha256(out.read_bytes()).hexdigest()
+    with pytest.raises(OutputPathError, match="already exists"):
+        write_shape(shape, out)
+    with pytest.raises(OutputPathError, match="input"):
+        write_shape(shape, out, force=True, input_path=out)
+    assert hashlib.sha256(out.read_bytes()).hexdigest() == digest
+    write_shape(shape, out, force=True)
+    with pytest.raises(OutputPathError, match="does not exist"):
+        write_shape(shape, tmp_path / "missing" / "x.brep")
+    with pytest.raises(OutputPathError, match="folder"):
+        write_shape(shape, tmp_path)
+    with pytest.raises(OutputPathError):
+        write_shape(shape, "/proc/cq_fairing_cannot_write_here.brep")
+    with pytest.raises(FileFormatError, match="suffix"):
+        write_shape(shape, tmp_path / "ring.iges")
+
+
+def test_invalid_shape_is_not_written(tmp_path):
+    from OCP.TopoDS import TopoDS_Compound
+    from OCP.BRep import BRep_Builder
+
+    compound = TopoDS_Compound()
+    BRep_Builder().MakeCompound(compound)
+    with pytest.raises(FileFormatError):
+        write_shape(compound, tmp_path / "empty.brep")
+    assert not list(tmp_path.iterdir())
+
+
+def test_step_unit_setting_is_restored(real, tmp_path):
+    from OCP.Interface import Interface_Static
+
+    before = Interface_Static.CVal_s("write.step.unit")
+    write_shape(real("ring_nurbs.brep"), tmp_path / "ring_m.step", unit="M")
+    assert Interface_Static.CVal_s("write.step.unit") == before
+    back = read_shape(tmp_path / "ring_m.step")
+    assert volume(back) == pytest.approx(volume(real("ring_nurbs.brep")), rel=1e-6, abs=1e-9)
+    assert area(back) == pytest.approx(area(real("ring_nurbs.brep")), rel=1e-6)
+    assert np.isfinite(area(back))
