@@ -64,7 +64,9 @@ class _MapCommand(_Command):
     kind = "Deviation"
 
     def IsActive(self):
-        return _has_document() and _selected_fairing() is not None
+        fairing = _selected_fairing()
+        return _has_document() and fairing is not None and any(
+            s.startswith("Face") for s in fairing.Source[1])
 
     def Activated(self):
         fairing = _selected_fairing()

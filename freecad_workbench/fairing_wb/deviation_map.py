@@ -11,6 +11,7 @@ import numpy as np
 
 import FreeCAD
 import Mesh
+import cq_fairing as cf
 
 from . import analysis, conversion, preferences
 
@@ -104,6 +105,10 @@ class AnalysisMap:
         source, subs = fairing.Source
         merged, values = Mesh.Mesh(), []
         faces = [s for s in subs if s.startswith("Face")]
+        if not faces or not fairing.Shape.Faces:
+            raise cf.InvalidInputError(
+                f"{fairing.Label} has no faired faces (edges only or failed); deviation and "
+                "curvature maps are drawn on faces.")
         for sub, faired_face in zip(faces, fairing.Shape.Faces):
             points, v = _face_samples(obj, source.Shape.getElement(sub), faired_face,
                                       obj.Samples)

@@ -224,7 +224,24 @@ def run():
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Edge1")
     check("FairCurve enabled with an edge", is_active("Fairing_FairCurve"))
+    Gui.runCommand("Fairing_FairCurve")
+    pump()
+    curve_panel = find("FairingTaskPanel")
+    check("curve panel opens", curve_panel is not None and curve_panel.windowTitle() == "Fair curve"
+          and not find("fairing_target_v").isVisible())
+    find("fairing_mode").setCurrentIndex(1)
+    find("fairing_target_u").setValue(20)
+    press_task_ok()
+    pump()
+    curves = [o for o in doc.Objects if o.Name.startswith("Fairing") and o.Shape.Edges
+              and not o.Shape.Faces]
+    check("FairCurve OK creates an edge fairing", len(curves) == 1 and curves[0].isValid()
+          and curves[0].Shape.Edges[0].Curve.NbPoles == 20, [o.Name for o in doc.Objects])
     Gui.Selection.clearSelection()
+    if curves:
+        Gui.Selection.addSelection(curves[0])
+        check("DeviationMap disabled for an edge fairing", not is_active("Fairing_DeviationMap"))
+        Gui.Selection.clearSelection()
 
     # Points to surface on a grid file (the file dialog is the only part skipped).
     import numpy as np
