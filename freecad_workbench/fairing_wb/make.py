@@ -298,9 +298,9 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         obj.Tolerance = (tolerance if tolerance is not None
                          else preferences.default_tolerance(obj_source.Shape))
     obj.Method, obj.Boundary, obj.Search, obj.Measure = method, boundary, search, measure
+    obj_source.Visibility = False  # App-level property: undo shows the source again
     if FreeCAD.GuiUp:
         from . import view_provider
 
         view_provider.ViewProviderFairing(obj.ViewObject)
-        obj_source.ViewObject.Visibility = False
     return obj

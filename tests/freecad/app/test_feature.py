@@ -166,9 +166,10 @@ def test_one_undo_step(doc, noisy):
     doc.recompute()
     doc.commitTransaction()
     assert doc.getObject("Fairing") is not None
+    assert noisy.Visibility is False  # hidden, not deleted
     doc.undo()
     assert doc.getObject("Fairing") is None
-    assert doc.getObject("Noisy") is not None
+    assert doc.getObject("Noisy") is not None and noisy.Visibility is True
     doc.redo()
     assert doc.getObject("Fairing") is not None
 

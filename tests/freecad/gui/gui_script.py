@@ -148,6 +148,15 @@ def run():
     check("one undo step", doc.UndoCount == undo_before + 1, (undo_before, doc.UndoCount))
     check("source hidden, not deleted", source.ViewObject.Visibility is False
           and doc.getObject("NoisyBlade") is not None)
+    name = fairing.Name
+    Gui.runCommand("Std_Undo")
+    pump()
+    check("undo removes the feature and shows the source",
+          doc.getObject(name) is None and source.ViewObject.Visibility is True)
+    Gui.runCommand("Std_Redo")
+    pump()
+    fairing = doc.getObject(name)
+    check("redo restores it", fairing is not None and source.ViewObject.Visibility is False)
     check("tolerance met (feature figure)", fairing.MaxDeviation.Value <= 0.05 + 1e-9,
           fairing.MaxDeviation)
 
