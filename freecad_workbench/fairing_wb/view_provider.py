@@ -71,6 +71,7 @@ class ViewProviderMap:
         from . import legend
 
         self.Object = vobj.Object
+        self.ViewObject = vobj
         self.legend = legend.Legend()
         vobj.RootNode.addChild(self.legend.node)
         self._refresh(vobj)
@@ -103,9 +104,12 @@ class ViewProviderMap:
         shown = vobj.Visibility and getattr(vobj, "ShowLegend", True)
         self.legend.show(bool(shown))
 
-    def finishRestoring(self, vobj):
-        """Reopened documents show grey meshes until Coloring is toggled."""
-        self._refresh(vobj)
+    def finishRestoring(self, vobj=None):
+        """Reopened documents show grey meshes until Coloring is toggled.
+
+        FreeCAD 0.20 calls this without arguments; the view object comes from attach().
+        """
+        self._refresh(vobj or self.ViewObject)
 
     def __getstate__(self):
         return None

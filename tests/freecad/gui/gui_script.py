@@ -284,10 +284,21 @@ def run():
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
     doc = FreeCAD.openDocument(path)
-    doc.recompute()
     pump()
     restored = [o for o in doc.Objects if o.TypeId == "Mesh::FeaturePython" and o.Kind == "Deviation"][0]
-    check("reopened map still coloured", restored.ViewObject.Coloring is True and restored.isValid())
+    for obj in doc.Objects:
+        obj.ViewObject.Visibility = obj == restored
+    Gui.SendMsgToActiveView("ViewFit")
+    pump()
+    shot = os.path.join(ARTIFACTS, "reopened_map.png")
+    Gui.activeDocument().activeView().saveImage(shot, 400, 300, "White")
+    image = QtGui.QImage(shot)
+    # Left 70 % only: the legend on the right is coloured whatever the mesh shows.
+    colours = [QtGui.QColor(image.pixel(x, y)) for x in range(0, 280, 4) for y in range(0, 300, 4)]
+    vivid = sum(1 for c in colours if c.green() > c.red() + 60 or c.red() > c.green() + 60)
+    check("reopened map renders in colour (not grey)", restored.ViewObject.Coloring is True
+          and vivid > 100, f"{vivid} vivid pixels")
+    doc.recompute()
     check("reopened fairing valid", all(o.isValid() for o in doc.Objects if o.Name.startswith("Fairing")))
     check("console echo of make_fairing", "make_fairing" in Gui.getMainWindow().findChild(
         QtWidgets.QPlainTextEdit, "Python console").toPlainText()
