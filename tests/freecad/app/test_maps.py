@@ -116,3 +116,20 @@ def test_map_survives_save_and_reopen(doc, fairing, tmp_path):
         assert again.Values == pytest.approx(values)
     finally:
         FreeCAD.closeDocument(reopened.Name)
+
+
+def test_switch_map_to_gaussian_curvature(doc, fairing):
+    cmap = deviation_map.make_map(fairing, "MeanCurvature", "Faired")
+    cmap.Samples = 21  # odd: the middle sample sits at the middle of the UV box
+    doc.recompute()
+    cmap.Kind = "GaussianCurvature"
+    doc.recompute()
+    assert cmap.isValid() and cmap.Unit == "1/mm^2"
+    core = conversion.surface_from_face(fairing.Shape.Faces[0])
+    _, gauss = analysis.curvature(core, fairing.Shape.Faces[0].ParameterRange, cmap.Samples,
+                                  "gaussian")
+    assert np.allclose(cmap.Values, gauss.ravel())
+    face = fairing.Shape.Faces[0]
+    u0, u1, v0, v1 = face.ParameterRange
+    occt = face.Surface.curvature(0.5 * (u0 + u1), 0.5 * (v0 + v1), "Gauss")
+    assert gauss[10, 10] == pytest.approx(occt, rel=1e-6, abs=1e-12)
