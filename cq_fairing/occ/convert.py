@@ -378,7 +378,7 @@ def finish_edges(edges, tolerance=1e-7, rebuild_3d=False):
     (right for a free face: its edges then lie exactly on it).
     """
     for edge in edges:
-        if rebuild_3d:
+        if rebuild_3d and not BRep_Tool.Degenerated_s(edge):
             ShapeBuild_Edge().RemoveCurve3d(edge)
             BRepLib.BuildCurve3d_s(edge, tolerance)
         BRepLib.SameParameter_s(edge, tolerance)

@@ -32,7 +32,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 from OCP.Bnd import Bnd_Box
 from OCP.TopoDS import TopoDS
 
-from ..core.fairing import SurfaceFairResult, fair_surface
+from ..core.fairing import SurfaceFairResult, fair_surface, target_space
 from ..core.geometry import BSplineSurface
 from ..errors import (InvalidInputError, InvalidToleranceError,
                       NumericalError, ToleranceNotMetError)
@@ -217,7 +217,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details):
         result = _core_fair(source, target, degree)
     if result is not None:
         result = result.replace(surface=faired)
-    if _same_spaces(faired, source):
+    if _is_identity(source, target, degree):
         return _unchanged(face, info, surface, "the finest admissible target is the "
                           "source space itself; nothing to fair", tol)
     new_face = surface_to_face(faired, face)
@@ -234,8 +234,12 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details):
     return report
 
 
-def _same_spaces(a, b):
-    return a.u_space.same_as(b.u_space) and a.v_space.same_as(b.v_space)
+def _is_identity(source, target, degree):
+    """True when the target scales give back the source's own spaces."""
+    for space, n, deg in zip((source.u_space, source.v_space), target, degree):
+        if n is not None and not target_space(space, int(n), deg).same_as(space):
+            return False
+    return True
 
 
 def _unchanged(face, info, surface, message, tol):

@@ -186,7 +186,14 @@ class _Job:
             if report.faired:
                 touched += replace_surface(target, to_geom_surface(report.surface))
                 report.face = target
-        finish_edges(touched)
+        emap = TopTools_IndexedDataMapOfShapeListOfShape()
+        TopExp.MapShapesAndAncestors_s(copy, TopAbs_EDGE, TopAbs_FACE, emap)
+        free = [e for e in touched if emap.FindFromKey(e).Size() == 1
+                and not BRep_Tool.IsClosed_s(e, TopoDS.Face_s(emap.FindFromKey(e).First()))]
+        shared = [e for e in touched if emap.FindFromKey(e).Size() != 1
+                  or BRep_Tool.IsClosed_s(e, TopoDS.Face_s(emap.FindFromKey(e).First()))]
+        finish_edges(free, rebuild_3d=True)
+        finish_edges(shared)
         BRepLib.UpdateTolerances_s(copy, False)
         return copy, edge_gaps(copy, touched)
 

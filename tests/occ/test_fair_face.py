@@ -1,0 +1,184 @@
+"""fair_face on the real models: within tolerance by OCCT's own projection, trims kept."""
+
+import numpy as np
+import pytest
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepTools import BRepTools
+
+from cq_fairing.errors import InvalidInputError, InvalidTargetError, InvalidToleranceError
+from cq_fairing.occ import face_to_surface, fair_face, list_faces, sample_face_deviation
+from tests.occ.helpers import area, faces_of, global_distance, occ_points, uv_box_grid
+
+
+def check_within(report, original, tol, n_check=12):
+    """Independent check: GeomAPI_ProjectPointOnSurf of original samples onto the result."""
+    assert report.status == "faired", report.message
+    assert BRepCheck_Analyzer(report.face).IsValid()
+    assert report.max_deviation <= tol
+    u, v = uv_box_grid(original, n_check, n_check)
+    points = occ_points(original, u, v).reshape(-1, 3)
+    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
+    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
+    from OCP.gp import gp_Pnt2d
+
+    cls = BRepTopAdaptor_FClass2d(original, 1e-9)
+    inside = np.array([cls.Perform(gp_Pnt2d(float(a), float(b))) in (TopAbs_IN, TopAbs_ON)
+                       for a in u for b in v])
+    orthogonal = global_distance(points[inside], report.face)
+    assert np.isfinite(orthogonal).mean() > 0.8  # projections exist for most samples
+    # distance to the bounded patch <= min(orthogonal projection, same-parameter point)
+    same = np.linalg.norm(occ_points(report.face, u, v).reshape(-1, 3)[inside]
+                          - points[inside], axis=1)
+    assert np.minimum(orthogonal, same).max() <= tol * (1 + 1e-6)
+    # the trim is kept: same UV box, same number of wires
+    np.testing.assert_allclose(BRepTools.UVBounds_s(report.face), BRepTools.UVBounds_s(original),
+                               atol=1e-9)
+
+
+def test_iea_blade_faces_degree_3x8_fair_within_tolerance(real):
+    faces = faces_of(real("IEA_15MW_CFD.stp"))
+    for face, info in zip(faces, list_faces(real("IEA_15MW_CFD.stp"))):
+        if (info.n_poles_u, info.n_poles_v) != (17, 204):
+            continue
+        tol = 0.01
+        report = fair_face(face, tol=tol, details=False)
+        check_within(report, face, tol)
+        assert report.poles_before == (17, 204)
+        assert np.prod(report.poles_after) < 17 * 204 / 2
+        assert area(report.face) == pytest.approx(area(face), rel=1e-3)
+
+
+def test_terrain_312x323_fairs_within_tolerance(real):
+    face, = faces_of(real("terrain.brep"))
+    tol = 25.0  # model units; the patch is about 11 600 across
+    report = fair_face(face, tol=tol, details=False)
+    check_within(report, face, tol)
+    assert np.prod(report.poles_after) < 0.5 * 312 * 323
+
+
+def test_ring_periodic_face_stays_closed(real):
+    face, = faces_of(real("ring_nurbs.brep"))
+    tol = 0.1  # the bounding-box diagonal is about 128
+    report = fair_face(face, tol=tol, details=False)
+    check_within(report, face, tol)
+    assert "periodic" in report.message
+    net = report.surface.poles
+    np.testing.assert_allclose(net[0], net[-1], atol=1e-12)
+    np.testing.assert_allclose(net[:, 0], net[:, -1], atol=1e-12)
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(report.face)
+    v = np.linspace(v0, v1, 11)
+    seam = occ_points(report.face, [u0, u1], v)
+    np.testing.assert_allclose(seam[0], seam[1], atol=1e-9)
+
+
+def test_rational_trimmed_faces_of_linkrods(real):
+    shape = real("linkrods.step")
+    done = 0
+    for face, info in zip(faces_of(shape), list_faces(shape)):
+        if not (info.is_bspline and info.rational and info.n_poles_v > 30):
+            continue
+        tol = 2e-3
+        report = fair_face(face, tol=tol, details=False)
+        check_within(report, face, tol)
+        assert report.poles_after[1] < report.poles_before[1]
+        if report.surface.weights is not None:
+            assert report.surface.weights.min() > 0
+        done += 1
+    assert done >= 4
+
+
+IMPELLER_SAMPLE = None
+
+
+def impeller_sample(shape):
+    """Representative impeller faces: each (degree, net, rational) kind once or twice."""
+    seen, chosen = {}, []
+    for face, info in zip(faces_of(shape), list_faces(shape)):
+        if not info.is_bspline:
+            continue
+        key = (info.u_degree, info.v_degree, info.rational, info.trimmed,
+               min(info.n_poles_u, info.n_poles_v) >= 8)
+        if seen.get(key, 0) < 2:
+            seen[key] = seen.get(key, 0) + 1
+            chosen.append((face, info))
+    return chosen
+
+
+def test_impeller_representative_faces(real):
+    """Two faces of every (degree, rational, trimmed, large-net) kind of the impeller."""
+    chosen = impeller_sample(real("impeller.igs"))
+    assert len(chosen) >= 8
+    faired = 0
+    for face, info in chosen:
+        tol = 0.05
+        report = fair_face(face, tol=tol, details=False)
+        if report.status == "unchanged":
+            continue
+        check_within(report, face, tol)
+        faired += 1
+    assert faired >= 4
+
+
+def test_explicit_n_and_core_result(real):
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    report = fair_face(face, n=(None, 20))
+    assert report.poles_after == (17, 23)
+    assert report.tolerance is None
+    result = report.result
+    assert result is not None and result.n[1] == 20
+    source, _ = face_to_surface(face)
+    np.testing.assert_allclose(result.reconstruct(), source.poles, atol=1e-8 * np.abs(
+        source.poles).max())
+
+
+def test_non_bspline_faces_skipped_or_converted(real):
+    shape = real("linkrods.step")
+    infos = list_faces(shape)
+    torus = next(f for f, i in zip(faces_of(shape), infos) if i.surface_type == "Torus")
+    report = fair_face(torus)
+    assert report.status == "skipped-not-bspline" and "convert=True" in report.message
+    assert report.face.IsSame(torus)
+    converted = fair_face(torus, convert=True, tol=1e-3, details=False)
+    assert converted.status in ("faired", "unchanged")
+    if converted.faired:
+        assert converted.max_deviation <= 1e-3
+
+
+def test_deviation_samples_agree_with_global_projection(real):
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    report = fair_face(face, tol=0.02, details=False)
+    local = sample_face_deviation(face, report.face, density=12)
+    full = sample_face_deviation(face, report.face, density=12, projection="global")
+    assert np.all(full["distance"] <= local["distance"] + 1e-12)
+    np.testing.assert_allclose(full["distance"], local["distance"], atol=1e-6)
+    assert np.all(local["distance"] <= local["parametric"] + 1e-12)
+    np.testing.assert_allclose(np.abs(local["signed"]), local["distance"])
+    assert local["max"] == pytest.approx(local["distance"].max())
+
+
+def test_boundary_fixed_keeps_border_rows(real):
+    face = faces_of(real("testtoler.brep"))[next(
+        i for i, info in enumerate(list_faces(real("testtoler.brep"))) if info.n_poles_u > 100)]
+    source, _ = face_to_surface(face)
+    report = fair_face(face, tol=5.0, boundary="fixed", details=False)
+    assert report.status == "faired"
+    net = report.surface.poles
+    assert net.shape == source.poles.shape
+    for rows in ((0, slice(None)), (-1, slice(None)), (slice(None), 0), (slice(None), -1)):
+        np.testing.assert_allclose(net[rows], source.poles[rows], atol=1e-9)
+    assert report.max_deviation <= 5.0
+
+
+def test_bad_arguments(real):
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    for tol in (0.0, -1.0, float("nan"), float("inf"), "1"):
+        with pytest.raises(InvalidToleranceError):
+            fair_face(face, tol=tol)
+    with pytest.raises(InvalidInputError):
+        fair_face(face, tol=1.0, n=5)
+    with pytest.raises(InvalidTargetError):
+        fair_face(face, n=(None, 500))
+    with pytest.raises(InvalidInputError):
+        fair_face(face, method="nope")
+    with pytest.raises(InvalidInputError):
+        fair_face(face, boundary="glued")
