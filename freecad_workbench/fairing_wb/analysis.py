@@ -5,8 +5,8 @@ Deviation of the faired surface :math:`F` from the source :math:`S` at a sample
 the foot point :math:`(u^*, v^*) = \arg\min |S(u, v) - p|^2` is found by Gauss-Newton
 steps :math:`\Delta = (J^T J)^{-1} J^T (p - S)`, :math:`J = [S_u\ S_v]`, started at the
 nearest point of a dense source sample and kept inside the face's parameter box; then
-:math:`|d| = |p - S(u^*, v^*)|` with the sign of :math:`(p - S)\cdot n_S`.  The tests compare it with FreeCAD's
-``Part.Face.distToShape``.
+:math:`|d| = |p - S(u^*, v^*)|` with the sign of :math:`(p - S)\cdot n_S`.  The tests
+compare it with FreeCAD's ``Part.Face.distToShape``.
 
 Curvatures follow from the fundamental forms: with :math:`E, F, G` and :math:`L, M, N`,
 :math:`K = (LN - M^2)/(EG - F^2)` and :math:`H = (EN - 2FM + GL) / (2(EG - F^2))`.

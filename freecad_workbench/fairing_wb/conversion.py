@@ -2,9 +2,9 @@
 
 FreeCAD stores distinct knots plus multiplicities; the core stores full clamped knot
 vectors.  Periodic geometry is converted to its clamped (non-periodic) equivalent with
-OCCT's ``setUNotPeriodic`` and ``segment`` (the same shape, more poles) before conversion, so it is handled
-rather than refused.  Rational geometry keeps its weights (all-one weights count as
-polynomial).  Other surface types (planes, cylinders, ...) raise
+OCCT's ``setUNotPeriodic`` and ``segment`` (the same shape, more poles) before
+conversion, so it is handled rather than refused.  Rational geometry keeps its weights
+(all-one weights count as polynomial).  Other surface types (planes, cylinders, ...) raise
 :class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
 """
 

@@ -7,7 +7,6 @@ older document (migration).  The proxy's module path ``fairing_wb.feature`` is f
 saved documents refer to it.
 """
 
-import FreeCAD
 import Part
 import cq_fairing as cf
 

@@ -20,7 +20,8 @@ class PreferencesDialog(QtWidgets.QDialog):
         self.tolerance.setObjectName("fairing_default_tolerance")
         self.tolerance.setProperty("unit", "mm")
         self.tolerance.setProperty("decimals", 4)
-        self.tolerance.setProperty("rawValue", preferences.params().GetFloat("DefaultTolerance", 0.0))
+        self.tolerance.setProperty("rawValue",
+                                   preferences.params().GetFloat("DefaultTolerance", 0.0))
         self.tolerance.setToolTip("0 means 1e-3 of the model's bounding-box diagonal")
         self.density = QtWidgets.QSpinBox()
         self.density.setObjectName("fairing_sample_density")

@@ -6,7 +6,6 @@ Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_ta
 GUI tests can find them with ``Gui.getMainWindow().findChild``.
 """
 
-import FreeCAD
 import FreeCADGui
 import cq_fairing as cf
 from PySide2 import QtCore, QtWidgets
@@ -194,12 +193,14 @@ class FairSurfacePanel:
 
     def _echo_properties(self, s, boundary):
         if s["target"] is None:
-            FreeCADGui.doCommand(f"fairing.Mode = 'Tolerance'; fairing.Tolerance = {s['tolerance']!r}")
+            FreeCADGui.doCommand(
+                f"fairing.Mode = 'Tolerance'; fairing.Tolerance = {s['tolerance']!r}")
         else:
             FreeCADGui.doCommand(f"fairing.Mode = 'Target'; fairing.TargetU, fairing.TargetV = "
                                  f"{s['target'][0]}, {s['target'][1]}")
-        FreeCADGui.doCommand(f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}; "
-                             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
+        FreeCADGui.doCommand(
+            f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}; "
+            f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
 
     def reject(self):
         self._close()

@@ -1,6 +1,5 @@
 """View providers of the Fairing feature and of the analysis maps (GUI only)."""
 
-import FreeCAD
 import FreeCADGui
 
 from . import icon_path
