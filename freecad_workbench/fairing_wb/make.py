@@ -103,6 +103,14 @@ def _target_spans(target, source_poles, degrees, what):
     return tuple(spans)
 
 
+def _faired_row(poles, source_space, target_space):
+    """A boundary pole row faired into ``target_space`` (unchanged if it is the source's)."""
+    if target_space.same_as(source_space):
+        return poles
+    return cf.fair_curve(poles, target_space.n_spans, knots=source_space.knots,
+                         degree=source_space.degree, target_degree=target_space.degree).poles
+
+
 def _fix_boundary(source, faired, boundary):
     """Pin corners, or replace the boundary pole rows by the faired boundary curves.
 
@@ -117,14 +125,9 @@ def _fix_boundary(source, faired, boundary):
         return faired
     src, net = source.poles, faired.poles.copy()
     if boundary == "edges" and source.weights is None:
-        nv = faired.v_space.n_spans
-        nu = faired.u_space.n_spans
         for i in (0, -1):
-            net[i] = cf.fair_curve(src[i], nv, knots=source.v_knots, degree=source.v_degree,
-                                   target_degree=faired.v_degree).poles
-            net[:, i] = cf.fair_curve(src[:, i], nu, knots=source.u_knots,
-                                      degree=source.u_degree,
-                                      target_degree=faired.u_degree).poles
+            net[i] = _faired_row(src[i], source.v_space, faired.v_space)
+            net[:, i] = _faired_row(src[:, i], source.u_space, faired.u_space)
     for i in (0, -1):
         for j in (0, -1):
             net[i, j] = src[i, j]

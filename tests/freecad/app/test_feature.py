@@ -256,3 +256,26 @@ def test_energy_method_is_passed_or_refused_clearly(noisy):
     else:
         with pytest.raises(cf.InvalidInputError, match="no energy fairing"):
             make.fair_face(face, target=(18, 26), method="energy")
+
+
+def _gap(face_a, face_b, shared):
+    """Max distance from face_a's faired boundary near ``shared`` to faired face_b."""
+    middle = shared.valueAt(sum(shared.ParameterRange) / 2)
+    near = min(face_a.Edges, key=lambda e: e.distToShape(Part.Vertex(middle))[0])
+    return max(face_b.distToShape(Part.Vertex(near.valueAt(t)))[0]
+               for t in np.linspace(*near.ParameterRange, 30))
+
+
+def test_boundary_edges_keeps_shell_faces_closer():
+    shape = Part.Shape()
+    shape.read(str(fixtures.REAL / "testtoler.brep"))
+    a, b = shape.Faces[40], shape.Faces[44]  # 126 x 12 and 141 x 15, degree 5, adjacent
+    shared = next(e for e in a.Edges for g in b.Edges if e.isSame(g))
+    gaps, deviations = {}, {}
+    for boundary in ("free", "edges"):
+        ra = make.fair_face(a, target=(40, 12), boundary=boundary)
+        rb = make.fair_face(b, target=(40, 15), boundary=boundary)
+        gaps[boundary] = _gap(ra.shape, rb.shape, shared)
+        deviations[boundary] = max(ra.max_deviation, rb.max_deviation)
+    assert gaps["edges"] < 0.5 * gaps["free"]
+    assert deviations["edges"] < deviations["free"]
