@@ -31,6 +31,11 @@ def test_install_and_uninstall(tmp_path):
     assert gone.returncode == 0 and not link.exists() and not (site / "cq_fairing_repo.pth").exists()
 
 
-def test_package_xml_has_subdirectory():
-    text = (REPO / "freecad_workbench" / "package.xml").read_text()
-    assert "<subdirectory>./</subdirectory>" in text and "<classname>FairingWorkbench</classname>" in text
+def test_package_xml_parses_with_freecads_metadata_reader():
+    import FreeCAD
+
+    meta = FreeCAD.Metadata(str(REPO / "freecad_workbench" / "package.xml"))
+    assert meta.Name == "Fairing"
+    workbench = meta.Content["workbench"][0]
+    assert (workbench.Classname, workbench.Subdirectory) == ("FairingWorkbench", "./")
+    assert (REPO / "freecad_workbench" / meta.Icon).exists()
