@@ -45,6 +45,21 @@ ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Boundary": make.BOU
                 "Search": make.SEARCHES, "Measure": make.MEASURES}
 
 
+def _sewn(compound, deviation):
+    """Sew faired faces whose borders meet within twice the deviation (valid result only).
+
+    Each face is faired on its own, so shared borders may open by up to about twice the
+    deviation; sewing rejoins them into shells.  The sewing tolerance is capped at 1 % of
+    the compound's size; if sewing does not give a valid shape the compound is kept.
+    """
+    if not compound.Faces:
+        return compound
+    diagonal = compound.BoundBox.DiagonalLength
+    sewn = compound.copy()
+    sewn.sewShape(min(max(2.0 * deviation, 1e-7 * diagonal), 1e-2 * diagonal))
+    return sewn if sewn.isValid() and len(sewn.Faces) == len(compound.Faces) else compound
+
+
 def _clamped_target(target, face):
     """With several faces, a face smaller than the target keeps its own pole count."""
     surface = face.Surface
@@ -119,8 +134,9 @@ class Fairing:
                                               kwargs["method"], kwargs["search"],
                                               kwargs["measure"]))
         shapes = [r.shape for r in results]
-        shape = shapes[0] if len(shapes) == 1 else Part.makeCompound(shapes)
-        return shape, results
+        if len(shapes) == 1:
+            return shapes[0], results
+        return _sewn(Part.makeCompound(shapes), max(r.max_deviation for r in results)), results
 
     def __getstate__(self):
         return {"Type": self.Type, "Version": getattr(self, "Version", VERSION)}

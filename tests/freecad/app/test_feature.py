@@ -209,11 +209,14 @@ def test_step_export_and_read_back(doc, blade, tmp_path):
     assert {(f.Surface.NbUPoles, f.Surface.NbVPoles) for f in back.Faces} == {(12, 40)}
 
 
-def test_whole_object_clamps_target_per_face(doc, blade):
+def test_whole_object_clamps_target_per_face_and_sews(doc, blade):
     obj = make.make_fairing(blade, target=(12, 40))
     doc.recompute()
     assert _ok(obj), obj.Status
-    assert len(obj.Shape.Faces) == 3
+    assert len(obj.Shape.Faces) == 3 and obj.Shape.isValid()
+    # The two blade halves share an edge: sewn into one shell (the source has 3 shells).
+    assert len(blade.Shape.Shells) == 3
+    assert sorted(len(s.Faces) for s in obj.Shape.Shells) == [2]
 
 
 def test_preview_speed_on_50x80_face(noisy):
