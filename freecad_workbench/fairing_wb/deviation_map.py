@@ -74,6 +74,20 @@ def _face_samples(obj, source_face, faired_face, count):
     return analysis.curvature(surface, uv_range, count, kind)
 
 
+def _pairs(source_faces, faired_faces):
+    """Match each faired face to its source face (nearest bounding-box centre).
+
+    Sewing may reorder the faces of a multi-face Fairing; a faired face stays within the
+    tolerance of its source, so the nearest centre identifies it.
+    """
+    left = list(source_faces)
+    for faired in faired_faces:
+        centre = faired.BoundBox.Center
+        best = min(left, key=lambda f: (f.BoundBox.Center - centre).Length)
+        left.remove(best)
+        yield best, faired
+
+
 class AnalysisMap:
     """Proxy of a deviation / curvature map."""
 
@@ -109,9 +123,9 @@ class AnalysisMap:
             raise cf.InvalidInputError(
                 f"{fairing.Label} has no faired faces (edges only or failed); deviation and "
                 "curvature maps are drawn on faces.")
-        for sub, faired_face in zip(faces, fairing.Shape.Faces):
-            points, v = _face_samples(obj, source.Shape.getElement(sub), faired_face,
-                                      obj.Samples)
+        for source_face, faired_face in _pairs([source.Shape.getElement(f) for f in faces],
+                                               fairing.Shape.Faces):
+            points, v = _face_samples(obj, source_face, faired_face, obj.Samples)
             mesh, v = _grid_mesh(points, v)
             merged.addMesh(mesh)
             values.extend(v.tolist())

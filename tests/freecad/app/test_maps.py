@@ -133,3 +133,15 @@ def test_switch_map_to_gaussian_curvature(doc, fairing):
     u0, u1, v0, v1 = face.ParameterRange
     occt = face.Surface.curvature(0.5 * (u0 + u1), 0.5 * (v0 + v1), "Gauss")
     assert gauss[10, 10] == pytest.approx(occt, rel=1e-6, abs=1e-12)
+
+
+def test_map_of_a_sewn_multi_face_fairing(doc):
+    blade = fixtures.add_shape(doc, fixtures.blade_shape(), "Blade")
+    obj = make.make_fairing((blade, ["Face1", "Face2", "Face3"]), target=(12, 40))
+    doc.recompute()
+    assert obj.isValid(), obj.Status
+    dmap = deviation_map.make_map(obj)
+    dmap.Samples = 12
+    doc.recompute()
+    assert dmap.isValid() and dmap.Mesh.CountPoints == 3 * 144
+    assert dmap.Maximum <= 1.05 * obj.MaxDeviation.Value
