@@ -178,7 +178,22 @@ class _Job:
                                         dict(self.options, tol=tol, n=n))
 
     def build(self):
-        """A fresh copy with every faired surface in place, and its edge gaps."""
+        """A fresh copy with every faired surface in place, and its edge gaps.
+
+        A rebuilt face that ``BRepCheck_Analyzer`` rejects gets its original surface
+        back (status ``'failed'``) and the copy is built again.
+        """
+        copy, gaps, invalid = self._build_once()
+        if invalid:
+            for index in invalid:
+                original = self.originals[index]
+                self.reports[index] = FaceFairReport(
+                    original, "failed", "the faired face did not pass BRepCheck inside the "
+                    "shape; kept the original surface", original=original, index=index)
+            copy, gaps, _ = self._build_once()
+        return copy, gaps
+
+    def _build_once(self):
         copy = BRepBuilderAPI_Copy(self.source, True, False).Shape()
         targets = indexed_faces(copy)
         touched = []
@@ -195,7 +210,9 @@ class _Job:
         finish_edges(free, rebuild_3d=True)
         finish_edges(shared)
         BRepLib.UpdateTolerances_s(copy, False)
-        return copy, edge_gaps(copy, touched)
+        invalid = [i for i, (report, target) in enumerate(zip(self.reports, targets))
+                   if report.faired and not BRepCheck_Analyzer(target).IsValid()]
+        return copy, edge_gaps(copy, touched), invalid
 
     def close_gaps(self, copy, gaps, max_gap):
         """Re-fair (halved tolerance) or restore the faired faces next to large gaps."""
