@@ -1,0 +1,132 @@
+"""CadQuery front end: ``fair_face``/``fair_shape`` on cadquery objects and ``Workplane.fair``.
+
+Usage::
+
+    import cadquery as cq
+    from cq_fairing.cadquery_plugin import register, fair_shape
+
+    register()                                   # adds Workplane.fair
+    part = cq.importers.importStep("blade.step")
+    faired = part.fair(tol=0.05)                 # every B-spline face of the solids
+    one = part.faces(">Z").fair(n=(None, 12))    # selected faces, solid rebuilt
+
+Following CadQuery's plugin convention the method is a plain function attached to
+``cq.Workplane``; it returns a new Workplane (``newObject``) and never changes the
+objects on the stack.  The numbers behind each result (deviation, poles before/after,
+status per face) are on ``Workplane.fair_report`` of the returned Workplane.
+"""
+
+import cadquery as cq
+
+from .errors import InvalidInputError
+from .occ import fair_face as _fair_face
+from .occ import fair_shape as _fair_shape
+from .occ.convert import indexed_faces
+
+__all__ = ["register", "fair_face", "fair_shape", "fair"]
+
+
+def fair_face(face, *, tol=None, n=None, method="wavelet", return_report=False, **options):
+    """Fair a ``cq.Face`` (see :func:`cq_fairing.occ.fair_face` for the options).
+
+    Returns
+    -------
+    cq.Face, or (cq.Face, FaceFairReport) with ``return_report=True``
+        The original face object when it was not faired (see ``report.status``).
+    """
+    if not isinstance(face, cq.Face):
+        raise InvalidInputError(f"face must be a cadquery Face, got {type(face).__name__}.")
+    report = _fair_face(face.wrapped, tol=tol, n=n, method=method, **options)
+    out = cq.Face(report.face) if report.faired else face
+    return (out, report) if return_report else out
+
+
+def fair_shape(shape, *, tol=None, n=None, method="wavelet", faces=None, return_report=False,
+               **options):
+    """Fair the B-spline faces of a ``cq.Shape`` (Solid, Shell, Compound...).
+
+    ``faces`` may hold indices or ``cq.Face`` objects of ``shape``.  Other options as in
+    :func:`cq_fairing.occ.fair_shape`.
+
+    Returns
+    -------
+    cq.Shape (same kind), or (cq.Shape, ShapeFairResult) with ``return_report=True``
+    """
+    if not isinstance(shape, cq.Shape):
+        raise InvalidInputError(f"shape must be a cadquery Shape, got {type(shape).__name__}.")
+    result = _fair_shape(shape.wrapped, tol=tol, n=n, method=method,
+                         faces=_face_indices(shape, faces), **options)
+    out = cq.Shape.cast(result.shape)
+    return (out, result) if return_report else out
+
+
+def _face_indices(shape, faces):
+    if faces is None:
+        return None
+    all_faces = indexed_faces(shape.wrapped)
+    out = []
+    for item in faces:
+        if isinstance(item, cq.Face):
+            match = [i for i, f in enumerate(all_faces) if f.IsSame(item.wrapped)]
+            if not match:
+                raise InvalidInputError("a selected face does not belong to the shape.")
+            out.append(match[0])
+        else:
+            out.append(item)
+    return out
+
+
+def fair(self, tol=None, n=None, method="wavelet", **options):
+    """``Workplane.fair``: fair the selected faces or solids; returns a new Workplane.
+
+    * Faces selected from a solid (``.faces(...)``): the solid is rebuilt with those
+      faces faired (it stays one closed solid) and pushed on the new stack.
+    * Solids, shells or compounds on the stack: each is faired whole.
+    * Free faces: each is faired alone.
+    * Nothing selected: the first solid found on the chain.
+    """
+    objects = [o for o in self.objects if isinstance(o, cq.Shape)]
+    if not objects:
+        objects = [self.findSolid()]
+    faces = [o for o in objects if isinstance(o, cq.Face)]
+    parent = _parent_solid(self) if faces and len(faces) == len(objects) else None
+    reports = []
+    if parent is not None:
+        shape, report = fair_shape(parent, tol=tol, n=n, method=method, faces=faces,
+                                   return_report=True, **options)
+        results, reports = [shape], [report]
+    else:
+        results = []
+        for obj in objects:
+            if isinstance(obj, cq.Face):
+                out, report = fair_face(obj, tol=tol, n=n, method=method,
+                                        return_report=True, **options)
+            else:
+                out, report = fair_shape(obj, tol=tol, n=n, method=method,
+                                         return_report=True, **options)
+            results.append(out)
+            reports.append(report)
+    new = self.newObject(results)
+    new.fair_report = reports
+    return new
+
+
+def _parent_solid(workplane):
+    """The solid the selected faces came from, or None (free faces)."""
+    try:
+        solid = workplane.findSolid(searchStack=False, searchParents=True)
+    except ValueError:
+        return None
+    if isinstance(solid, cq.Compound) and len(solid.Solids()) == 1:
+        solid = solid.Solids()[0]
+    owned = indexed_faces(solid.wrapped)
+    for face in workplane.objects:
+        if not any(f.IsSame(face.wrapped) for f in owned):
+            return None
+    return solid
+
+
+def register():
+    """Attach :func:`fair` to ``cadquery.Workplane`` as ``Workplane.fair`` (idempotent)."""
+    cq.Workplane.fair = fair
+    return fair

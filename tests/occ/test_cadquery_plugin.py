@@ -1,0 +1,59 @@
+"""The CadQuery plugin on real models: Workplane.fair, fair_face, fair_shape."""
+
+import cadquery as cq
+import pytest
+
+from cq_fairing.cadquery_plugin import fair_face, fair_shape, register
+from cq_fairing.errors import InvalidInputError
+from tests.conftest import REAL_DATA
+from tests.occ.helpers import volume
+
+
+@pytest.fixture(scope="module")
+def linkrods():
+    return cq.importers.importStep(str(REAL_DATA / "linkrods.step"))
+
+
+def test_workplane_fair_on_selected_bspline_faces_rebuilds_the_solid(linkrods):
+    register()
+    selected = linkrods.faces("%BSPLINE")
+    assert selected.size() == 18
+    out = selected.fair(tol=5e-3)
+    assert isinstance(out, cq.Workplane) and out is not selected
+    solid = out.val()
+    assert isinstance(solid, cq.Solid) and solid.isValid()
+    assert len(solid.Faces()) == 37
+    assert solid.Volume() == pytest.approx(linkrods.val().Volume(), rel=5e-3)
+    report, = out.fair_report
+    assert report.valid and sum(r.faired for r in report.faces) >= 12
+    # the input Workplane is untouched
+    assert linkrods.val().isValid() and len(linkrods.val().Faces()) == 37
+
+
+def test_workplane_fair_whole_solid_and_free_faces():
+    register()
+    blade = cq.importers.importStep(str(REAL_DATA / "IEA_15MW_CFD.stp"))
+    faces = blade.faces()
+    out = faces.fair(tol=0.01)
+    assert out.size() == 3
+    assert all(isinstance(f, cq.Face) and f.isValid() for f in out.vals())
+    assert [r.status for r in out.fair_report].count("faired") == 2
+
+
+def test_fair_face_and_fair_shape_return_cadquery_objects(linkrods):
+    shape = linkrods.val()
+    out, result = fair_shape(shape, tol=5e-3, return_report=True)
+    assert isinstance(out, cq.Solid) and out.isValid()
+    assert volume(out.wrapped) == pytest.approx(volume(shape.wrapped), rel=5e-3)
+    bspline = [f for f in shape.Faces() if f.geomType() == "BSPLINE"]
+    face, report = fair_face(bspline[3], tol=5e-3, return_report=True)
+    assert isinstance(face, cq.Face) and face.isValid()
+    assert report.max_deviation <= 5e-3
+    planar = [f for f in shape.Faces() if f.geomType() == "PLANE"][0]
+    assert fair_face(planar) is planar
+    only = fair_shape(shape, tol=5e-3, faces=bspline[:2])
+    assert isinstance(only, cq.Solid) and only.isValid()
+    with pytest.raises(InvalidInputError):
+        fair_face(shape)
+    with pytest.raises(InvalidInputError):
+        fair_shape("solid")
