@@ -54,14 +54,22 @@ class BandedSPD:
             ) from exc
         self.size = k
         self.width = width
+        self._matrix = sp.csr_matrix(matrix)
 
     def solve(self, rhs):
-        """Solve ``G x = rhs`` for ``rhs`` of shape (k, ...)."""
+        """Solve ``G x = rhs`` for ``rhs`` of shape (k, ...).
+
+        One step of iterative refinement (``x += G^{-1}(rhs - G x)``, a sparse product
+        and a second banded solve) recovers the digits lost to ill-conditioning of
+        wavelet Gram matrices (condition numbers up to ~1e8 for ``n << m``).
+        """
         rhs = np.asarray(rhs, dtype=float)
         flat = rhs.reshape(self.size, int(np.prod(rhs.shape[1:], dtype=int)))
         if flat.size == 0:
             return rhs.copy()
         x = la.cho_solve_banded((self._factor, False), flat, check_finite=False)
+        residual = flat - self._matrix @ x
+        x += la.cho_solve_banded((self._factor, False), residual, check_finite=False)
         return x.reshape(rhs.shape)
 
     def condition_estimate(self):

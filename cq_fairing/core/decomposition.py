@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 
 from .banded import BandedSPD
 from .gram import gram_matrix
-from .wavelets import wavelet_matrix
+from .wavelets import COMPACT_RATIO_LIMIT, nonpivot_columns, row_ranges, wavelet_matrix
 
 __all__ = ["Decomposition", "decomposition", "refinement_matrix", "is_subspace"]
 
@@ -76,7 +76,9 @@ class Decomposition:
     @cached_property
     def Q(self):
         """Compact wavelets in the source basis, sparse, shape (k, k - r)."""
-        return wavelet_matrix(self.E).tocsc()
+        source_spans = self.source.dimension - self.source.degree
+        compact = self.nested or self.target.n_spans <= COMPACT_RATIO_LIMIT * source_spans
+        return wavelet_matrix(self.E, compact=compact).tocsc()
 
     @cached_property
     def _wavelet_moments(self):
@@ -93,6 +95,17 @@ class Decomposition:
         """Sparse LU of the stacked analysis matrix ``[E; Q^T G_SS]`` (k x k)."""
         stacked = sp.vstack([self.E, self._wavelet_moments]).tocsc()
         return spla.splu(stacked)
+
+    @cached_property
+    def resolves_target(self):
+        """True when ``E`` has full row rank by its sparsity (greedy matching), cheaply.
+
+        Checked before building wavelets; a ``False`` means the target space is locally
+        finer than the source and the decomposition is not invertible.
+        """
+        lo, hi = row_ranges(self.E)
+        _, matched = nonpivot_columns(lo, hi)
+        return matched >= self.target.dimension
 
     @cached_property
     def nested(self):

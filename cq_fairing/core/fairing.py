@@ -9,6 +9,7 @@ Fig. 10).  Rational input is faired in homogeneous coordinates :math:`(w x, w)`.
 """
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -72,6 +73,7 @@ class FairResult:
     details : tuple of ndarray
         Detail coefficients per level, finest first; level ``i`` has shape
         ``(k_i - k_{i+1}, d')`` with ``d' = d + 1`` for rational input (homogeneous).
+        Computed on first access, so fairing alone never builds wavelets.
     scales : tuple of int
         Knot spans of every space visited, source first, ``n`` last.
     n : int
@@ -83,7 +85,6 @@ class FairResult:
 
     source: BSplineCurve
     curve: BSplineCurve
-    details: tuple
     scales: tuple
     n: int
     schedule: str
@@ -92,6 +93,16 @@ class FairResult:
     evaluations: int = None
     table: tuple = None
     fairness: dict = None
+
+    @cached_property
+    def details(self):
+        """Detail coefficients per level, finest first (computed on first access)."""
+        coefficients = _coefficients(self.source)
+        details = []
+        for step in self.steps:
+            details.append(step.detail(coefficients))
+            coefficients = step.coarse(coefficients)
+        return tuple(details)
 
     @property
     def poles(self):
@@ -152,7 +163,6 @@ class SurfaceFairResult:
 
     source: BSplineSurface
     surface: BSplineSurface
-    details: tuple
     scales: tuple
     n: tuple
     schedule: str
@@ -161,6 +171,21 @@ class SurfaceFairResult:
     evaluations: int = None
     table: tuple = None
     fairness: dict = None
+
+    @cached_property
+    def details(self):
+        """:class:`SurfaceDetails` per level, finest first (computed on first access)."""
+        net = _coefficients(self.source)
+        details = []
+        for step_u, step_v in self.steps:
+            upper, lower = step_u.coarse(net), step_u.detail(net)
+            details.append(SurfaceDetails(
+                u=_along_v(step_v.coarse, lower),
+                v=_along_v(step_v.detail, upper),
+                uv=_along_v(step_v.detail, lower),
+            ))
+            net = _along_v(step_v.coarse, upper)
+        return tuple(details)
 
     @property
     def poles(self):
@@ -253,46 +278,49 @@ def target_space(source, n, degree=None):
     return SplineSpace.quasi_uniform(int(n), degree, source.domain)
 
 
+def checked_plan(source, target, schedule):
+    """:func:`plan_spaces`, dropping top ladder levels the source cannot resolve.
+
+    A non-uniform source can be locally coarser than the first uniform level of the
+    ladder (its ``<Phi|Phi_S>`` is then rank deficient); the next lower level is tried,
+    down to the direct step, which raises if even the target is not resolved.
+    """
+    spaces = plan_spaces(source, target, schedule)
+    while len(spaces) > 2 and not decomposition(spaces[0], spaces[1]).resolves_target:
+        spaces = [spaces[0]] + spaces[2:]
+    return spaces
+
+
 def project_curve(curve, target, schedule="auto"):
     """Fair ``curve`` into ``target`` space (trusted inputs). Returns :class:`FairResult`."""
-    spaces = plan_spaces(curve.space, target, schedule)
+    spaces = checked_plan(curve.space, target, schedule)
     coefficients = _coefficients(curve)
-    steps, details = [], []
-    for source, dest in zip(spaces[:-1], spaces[1:]):
-        step = _step(source, dest)
-        details.append(step.detail(coefficients))
+    steps = [_step(a, b) for a, b in zip(spaces[:-1], spaces[1:])]
+    for step in steps:
         coefficients = step.coarse(coefficients)
-        steps.append(step)
     poles, weights = _cartesian(coefficients, curve.is_rational)
     faired = BSplineCurve(poles, target.knots, target.degree, weights)
-    return FairResult(curve, faired, tuple(details), tuple(s.n_spans for s in spaces),
+    return FairResult(curve, faired, tuple(s.n_spans for s in spaces),
                       target.n_spans, schedule, tuple(steps))
 
 
 def project_surface(surface, target_u, target_v, schedule="auto"):
     """Fair ``surface`` into ``target_u x target_v`` (trusted). Returns :class:`SurfaceFairResult`."""
-    plan_u = plan_spaces(surface.u_space, target_u, schedule)
-    plan_v = plan_spaces(surface.v_space, target_v, schedule)
+    plan_u = checked_plan(surface.u_space, target_u, schedule)
+    plan_v = checked_plan(surface.v_space, target_v, schedule)
     levels = max(len(plan_u), len(plan_v)) - 1
     plan_u += [plan_u[-1]] * (levels + 1 - len(plan_u))
     plan_v += [plan_v[-1]] * (levels + 1 - len(plan_v))
     net = _coefficients(surface)
-    steps, details = [], []
-    for i in range(levels):
-        step_u, step_v = _step(plan_u[i], plan_u[i + 1]), _step(plan_v[i], plan_v[i + 1])
-        upper, lower = step_u.coarse(net), step_u.detail(net)
-        net = _along_v(step_v.coarse, upper)
-        details.append(SurfaceDetails(
-            u=_along_v(step_v.coarse, lower),
-            v=_along_v(step_v.detail, upper),
-            uv=_along_v(step_v.detail, lower),
-        ))
-        steps.append((step_u, step_v))
+    steps = [(_step(plan_u[i], plan_u[i + 1]), _step(plan_v[i], plan_v[i + 1]))
+             for i in range(levels)]
+    for step_u, step_v in steps:
+        net = _along_v(step_v.coarse, step_u.coarse(net))
     poles, weights = _cartesian(net, surface.is_rational)
     faired = BSplineSurface(poles, target_u.knots, target_v.knots, target_u.degree,
                             target_v.degree, weights)
     scales = tuple((a.n_spans, b.n_spans) for a, b in zip(plan_u, plan_v))
-    return SurfaceFairResult(surface, faired, tuple(details), scales,
+    return SurfaceFairResult(surface, faired, scales,
                              (target_u.n_spans, target_v.n_spans), schedule, tuple(steps))
 
 

@@ -88,6 +88,11 @@ class SplineSpace:
                 "Unclamp periodic data first (see cq_fairing.core.periodic)."
             )
         interior = t[degree + 1: -degree - 1]
+        if interior.size and (interior[0] <= t[0] or interior[-1] >= t[-1]):
+            raise InvalidInputError(
+                f"an end knot is repeated more than degree + 1 = {degree + 1} times, which "
+                "gives basis functions with empty support; remove the extra end knots."
+            )
         if interior.size:
             _, counts = np.unique(interior, return_counts=True)
             if counts.max() > degree:

@@ -37,6 +37,15 @@ from ..errors import NumericalError
 __all__ = ["row_ranges", "nonpivot_columns", "wavelet_matrix"]
 
 
+COMPACT_RATIO_LIMIT = 0.4
+"""Above this ratio of target to source spans (non-nested) the shortest windows stop being
+numerically dependent (near-coincident knots make them nearly singular) and the true
+wavelets decay slowly instead of having short support; an orthonormal null-space
+basis from a dense SVD (O(k^3)) is used instead.  The default ladder schedule keeps
+every step below 1/3, so this only happens when the target itself keeps more than 40 %
+of the source's poles."""
+
+
 def row_ranges(E, threshold=1e-10):
     """For each column of ``E``, the first and last row holding a significant entry.
 
@@ -137,21 +146,27 @@ def _solve_windows(band, lo, hi, starts, ends, rank_tol=1e-10):
         padded[:, : s.shape[1]] = s
         null = padded <= rank_tol * padded[:, :1]                       # (N, W)
         q = np.einsum("nj,nj,nji->ni", null, vh[:, :, -1], vh)
+        peak = np.abs(q).max(axis=1)
         for local, member in enumerate(members):
-            if abs(q[local, -1]) > 1e-12:
+            if abs(q[local, -1]) > 1e-9 * peak[local]:
                 vectors[member] = q[local]
             else:
                 failed.append(member)
     return vectors, failed
 
 
-def wavelet_matrix(E):
+def wavelet_matrix(E, compact=True):
     r"""Compactly supported, full-rank basis ``Q`` of the null space of ``E``.
 
     Parameters
     ----------
     E : scipy.sparse matrix, shape (r, k)
         :math:`\langle \Phi_n | \Phi_S \rangle` (target rows, source columns).
+    compact : bool, optional
+        Build compact column-window wavelets (default).  ``False`` gives an orthonormal
+        null-space basis from a dense SVD; :class:`~.decomposition.Decomposition` asks
+        for it when the target keeps more than :data:`COMPACT_RATIO_LIMIT` of the
+        source's spans and the spaces are not nested.
 
     Returns
     -------
@@ -175,17 +190,19 @@ def wavelet_matrix(E):
         )
     if columns.size == 0:
         return sp.csc_matrix((k, 0))
+    if not compact:
+        vectors, starts = [None] * columns.size, np.zeros(columns.size, dtype=int)
+        _fill_global(E, vectors, starts, list(range(columns.size)))
+        return _assemble(vectors, starts, k)
     band = _column_band(E, lo, int((hi - lo).max()) + 1)
     starts = _window_starts(columns, lo, hi)
     vectors, failed = _solve_windows(band, lo, hi, starts, columns)
-    while failed:  # double the few windows whose last column is not yet dependent
+    if failed:  # one retry with windows three times as wide, then global null vectors
         idx = np.array(failed)
-        idx = idx[starts[idx] > 0]
-        starts[idx] = np.maximum(2 * starts[idx] - columns[idx] - 1, 0)
-        retry, failed_again = _solve_windows(band, lo, hi, starts[idx], columns[idx])
+        starts[idx] = np.maximum(columns[idx] - 3 * (columns[idx] - starts[idx] + 1), 0)
+        retry, _ = _solve_windows(band, lo, hi, starts[idx], columns[idx])
         for j, member in enumerate(idx):
             vectors[member] = retry[j]
-        failed = [idx[j] for j in failed_again]
     missing = [i for i, v in enumerate(vectors) if v is None]
     if missing:
         _fill_global(E, vectors, starts, missing)
