@@ -1,0 +1,513 @@
+r"""Accuracy control: the fewest control points whose faired result stays within a tolerance.
+
+Fairing to scale :math:`n` (``n`` knot spans, ``n + p`` poles) gives a deviation
+:math:`e(n)` from the source, measured at dense samples (:mod:`cq_fairing.core.measures`,
+true geometric distance by default).  Accuracy control solves the inverse problem
+:math:`\min\{n : e(n) \le \varepsilon\}` (Ji et al. 2014, section 4).  :math:`e` is
+*not* monotone in :math:`n` in general (the spaces :math:`V_n` are not nested), so a
+search can only certify what it has measured.  Three strategies:
+
+``"linear"`` (Ji et al. 2014, eq. 16-19, Table 2)
+    Dyadic descent :math:`n = 2^j` until :math:`e > \varepsilon`, then the linear
+    hypothesis on :math:`y = \lg e` versus :math:`x = j = \log_2 n`:
+    :math:`j = \frac{x_2 - x_1}{b - a}\lg\varepsilon + \frac{b x_1 - a x_2}{b - a}`,
+    :math:`n = \operatorname{round}(2^j)`, replacing the bracket end on the same side of
+    :math:`\varepsilon`, until the passing and failing scales are adjacent.
+``"polyfit"`` (eq. 20-40, Table 3)
+    Least-squares polynomial of degree ``order`` (2..6) through the dyadic table
+    :math:`(j, \lg e(2^j))`, solved for :math:`\lg\varepsilon` inside the dyadic bracket,
+    :math:`n = \lceil 2^j \rceil`.  The prediction is then measured; if it misses the
+    tolerance, linear-hypothesis iterations continue from the bracket, so the answer is
+    always within tolerance (but not necessarily the fewest poles).
+``"guaranteed"`` (default)
+    Dyadic bracket (the smallest passing dyadic scale :math:`2^{j+1}` and the failing
+    :math:`2^j`), bisection to a passing :math:`n^*` with :math:`n^* - 1` failing, then a
+    downward scan that accepts any smaller passing scale until :data:`SCAN_WINDOW`
+    consecutive scales below the current answer fail.  What is guaranteed, precisely:
+
+    1. the result is measured, and its deviation at the dense samples is ``<= tol``;
+    2. it has no more poles than the smallest passing dyadic scale (the best one-scale
+       DWFA answer);
+    3. the :data:`SCAN_WINDOW` scales just below it were measured and all exceed ``tol``.
+
+    It is the exact minimum whenever :math:`e` exceeds ``tol`` for every scale more than
+    :data:`SCAN_WINDOW` below the first crossing (checked against exhaustive search in the
+    tests); nothing cheaper than measuring every smaller scale can promise more.
+
+Surfaces minimise the total pole count :math:`(n_u + p_u)(n_v + p_v)`.  ``"guaranteed"``
+finds :math:`u_{lo}` (the fewest u-spans with v untouched) and :math:`v_{lo}`, then walks
+:math:`n_u = u_{lo}, u_{lo}+1, \dots`: for each it tests the largest :math:`n_v` that would
+beat the best total so far and, if that passes, bisects down to the smallest passing
+:math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
+when even :math:`n_v = v_{lo}` could not improve.  The answer is measured within ``tol``
+and scanned like the curve case in both directions.  ``"linear"`` and ``"polyfit"``
+apply the seed's methods along the equal-ratio diagonal
+:math:`(n_u, n_v) \approx s\,(n_{u,\max}, n_{v,\max})`.
+
+Only coarse projections :math:`C_n = G_{nn}^{-1}E\,C_S` are computed during the search
+(operators cached per pair of spaces); the wavelet details are computed once, for the
+answer.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
+from .decomposition import decomposition
+from .fairing import _cartesian, _coefficients, project_curve, project_surface
+from .geometry import BSplineCurve, BSplineSurface
+from .measures import CurveProbe, SurfaceProbe
+from .schedule import plan_spaces
+from .spaces import SplineSpace
+
+__all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
+           "STRATEGIES", "SCAN_WINDOW", "check_tolerance", "dyadic_table"]
+
+STRATEGIES = ("guaranteed", "linear", "polyfit")
+SCAN_WINDOW = 4
+"""Consecutive failing scales below the answer that the guaranteed search measures."""
+
+
+class ScaleError(NamedTuple):
+    """One measured scale of an accuracy-control search (a row of ``result.table``).
+
+    Attributes
+    ----------
+    n : int or (int, int)
+        Knot spans (curves) or ``(n_u, n_v)`` (surfaces).
+    poles : int
+        Control points of the faired geometry (total for surfaces).
+    scale : float
+        Dyadic scale :math:`\\log_2 n` (curves) or of the diagonal index (surfaces).
+    deviation : float
+        Maximum deviation at the dense samples.
+    step : int
+        Order in which the scale was measured (0 first).
+    """
+
+    n: object
+    poles: int
+    scale: float
+    deviation: float
+    step: int
+
+
+# -- validation ----------------------------------------------------------------------------------
+def check_tolerance(tol):
+    """Return ``tol`` as a float; raise :class:`InvalidToleranceError` unless positive and finite."""
+    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)):
+        raise InvalidToleranceError(
+            f"tol must be a positive number (a length in model units, e.g. 0.02 mm), got {tol!r}."
+        )
+    value = float(tol)
+    if not np.isfinite(value) or value <= 0:
+        raise InvalidToleranceError(
+            f"tol must be a positive finite length (e.g. 0.02 mm), got {value!r}; "
+            "pass the largest deviation you accept between original and faired geometry."
+        )
+    return value
+
+
+def _check_options(strategy, order):
+    if strategy not in STRATEGIES:
+        raise InvalidInputError(f"strategy must be one of {STRATEGIES}, got {strategy!r}.")
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 2 <= order <= 6:
+        raise InvalidInputError(
+            f"order (degree of the least-squares fit of strategy='polyfit') must be an "
+            f"integer from 2 to 6, got {order!r}."
+        )
+
+
+def _check_degree(value, source_degree, name):
+    if value is None:
+        return min(3, source_degree)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InvalidInputError(f"{name} must be an integer >= 1, got {value!r}.")
+    return int(value)
+
+
+# -- measured error functions ------------------------------------------------------------------
+class _Chain:
+    """Coarse coefficients of one direction per target scale, cached along the schedule."""
+
+    def __init__(self, space, degree, schedule):
+        self.space, self.degree, self.schedule = space, degree, schedule
+        self.n_max = space.dimension - degree
+        self._cache = {}
+
+    def target(self, n):
+        return SplineSpace.quasi_uniform(int(n), self.degree, self.space.domain)
+
+    def coarse(self, coefficients, n, key=None):
+        """Coefficients in ``V_n`` along axis 0 (intermediate spaces cached under ``key``)."""
+        spaces = plan_spaces(self.space, self.target(n), self.schedule)
+        c = coefficients
+        for i, (src, dst) in enumerate(zip(spaces[:-1], spaces[1:])):
+            cache_key = (key, dst.key, i)
+            if cache_key not in self._cache:
+                if len(self._cache) > 256:
+                    self._cache.clear()
+                self._cache[cache_key] = c if src.same_as(dst) else decomposition(src, dst).coarse(c)
+            c = self._cache[cache_key]
+        return c
+
+
+class _Measured:
+    """An error function ``e(n)`` with a cache, an evaluation counter and a log."""
+
+    def __init__(self, measure, poles, scale):
+        self._measure, self._poles, self._scale = measure, poles, scale
+        self.values = {}
+
+    def __call__(self, n):
+        if n not in self.values:
+            self.values[n] = (float(self._measure(n)), len(self.values))
+        return self.values[n][0]
+
+    @property
+    def evaluations(self):
+        return len(self.values)
+
+    def table(self):
+        rows = [ScaleError(n, self._poles(n), self._scale(n), v, step)
+                for n, (v, step) in self.values.items()]
+        return tuple(sorted(rows, key=lambda r: r.step))
+
+
+def _curve_error(curve, degree, schedule, deviation):
+    chain = _Chain(curve.space, degree, schedule)
+    probe = CurveProbe(curve, method=deviation)
+    coefficients = _coefficients(curve)
+
+    def geometry(n):
+        poles, weights = _cartesian(chain.coarse(coefficients, n), curve.is_rational)
+        return BSplineCurve(poles, chain.target(n).knots, degree, weights)
+
+    def measure(n):
+        return probe.max_deviation(geometry(n))[0]
+
+    err = _Measured(measure, lambda n: n + degree, lambda n: float(np.log2(n)))
+    return err, chain.n_max
+
+
+# -- one-dimensional searches ---------------------------------------------------------------------
+def _dyadic_bracket(err, n_max, tol, extra_points=0):
+    """Descend ``2^j`` from the largest power below ``n_max``; return (fail, pass, table).
+
+    ``fail`` is 0 when even ``n = 1`` passes.  With ``extra_points`` the descent goes on
+    past the first failure until that many dyadic points are measured in total.
+    """
+    j = int(np.floor(np.log2(n_max)))
+    fail, passing, points = 0, n_max, []
+    while j >= 0:
+        n = 2 ** j
+        e = err(n)
+        points.append((j, e))
+        if fail == 0:
+            if e <= tol:
+                passing = n
+            else:
+                fail = n
+        if fail and len(points) >= extra_points:
+            break
+        j -= 1
+    return fail, passing, points
+
+
+def _require(err, n_max, tol, what):
+    e = err(n_max)
+    if e > tol:
+        best = min(v for v, _ in err.values.values())
+        raise ToleranceNotMetError(
+            f"no target within tol={tol:g}: even the largest admissible target ({what}) "
+            f"deviates by {e:.4g}; raise the tolerance or fair to the source's own degree "
+            "and knots.", tolerance=tol, best_deviation=best,
+        )
+
+
+def _guaranteed(err, n_max, tol, window=SCAN_WINDOW):
+    """Bracket, bisect, then scan ``window`` failing scales below the answer."""
+    _require(err, n_max, tol, f"n={n_max}")
+    fail, passing, _ = _dyadic_bracket(err, n_max, tol)
+    while passing - fail > 1:
+        mid = (passing + fail) // 2
+        if err(mid) <= tol:
+            passing = mid
+        else:
+            fail = mid
+    n, misses = passing - 1, 0
+    while n >= 1 and misses < window:
+        if err(n) <= tol:
+            passing, misses = n, 0
+        else:
+            misses += 1
+        n -= 1
+    return passing
+
+
+def _lg(e):
+    return float(np.log10(max(e, 1e-300)))
+
+
+def _linear_iterations(err, tol, fail, passing, max_iter=64):
+    """Eq. 16-19: replace the bracket end on the same side, until the ends are adjacent."""
+    target = _lg(tol)
+    for _ in range(max_iter):
+        if passing - fail <= 1 or fail == 0:
+            break
+        x1, a = np.log2(passing), _lg(err(passing))
+        x2, b = np.log2(fail), _lg(err(fail))
+        j = (x2 - x1) / (b - a) * target + (b * x1 - a * x2) / (b - a) if b != a else 0.5 * (x1 + x2)
+        n = int(np.clip(np.round(2.0 ** j), fail + 1, passing - 1))
+        if err(n) <= tol:
+            passing = n
+        else:
+            fail = n
+    return passing
+
+
+def _linear(err, n_max, tol):
+    _require(err, n_max, tol, f"n={n_max}")
+    fail, passing, _ = _dyadic_bracket(err, n_max, tol)
+    return _linear_iterations(err, tol, fail, passing)
+
+
+def polyfit_scale(points, tol, order, bracket):
+    """Root of the least-squares polynomial ``lg e(j)`` at ``lg tol`` (eq. 20-40).
+
+    Parameters
+    ----------
+    points : sequence of (j, e)
+        Dyadic table.
+    order : int
+        Polynomial degree 2..6.
+    bracket : (float, float)
+        ``(j_fail, j_pass)``; the largest real root inside is returned, ``None`` if none.
+    """
+    x = np.array([p[0] for p in points], dtype=float)
+    y = np.array([_lg(p[1]) for p in points])
+    coef = np.polyfit(x, y, min(order, x.size - 1))
+    coef[-1] -= _lg(tol)
+    roots = np.roots(coef)
+    lo, hi = bracket
+    real = roots[np.abs(roots.imag) < 1e-9].real
+    inside = real[(real >= lo - 1e-9) & (real <= hi + 1e-9)]
+    return float(inside.max()) if inside.size else None
+
+
+def _polyfit(err, n_max, tol, order):
+    _require(err, n_max, tol, f"n={n_max}")
+    fail, passing, points = _dyadic_bracket(err, n_max, tol, extra_points=max(7, order + 1))
+    if fail == 0:
+        return passing
+    j = polyfit_scale(points, tol, order, (np.log2(fail), np.log2(passing)))
+    if j is not None:
+        n = int(np.clip(np.ceil(2.0 ** j - 1e-9), fail + 1, passing))
+        if err(n) <= tol:
+            return n
+        fail = n
+    return _linear_iterations(err, tol, fail, passing)
+
+
+def _search_1d(err, n_max, tol, strategy, order):
+    if strategy == "guaranteed":
+        return _guaranteed(err, n_max, tol)
+    if strategy == "linear":
+        return _linear(err, n_max, tol)
+    return _polyfit(err, n_max, tol, order)
+
+
+def dyadic_table(curve, j_min=0, *, target_degree=None, schedule="hybrid", deviation="geometric"):
+    """Max deviation at every dyadic scale ``2^j``, ``j_min <= j <= log2(n_max)`` (Table 1).
+
+    Returns
+    -------
+    list of (j, n, deviation), finest first.
+    """
+    degree = _check_degree(target_degree, curve.degree, "target_degree")
+    err, n_max = _curve_error(curve, degree, schedule, deviation)
+    top = int(np.floor(np.log2(n_max)))
+    return [(j, 2 ** j, err(2 ** j)) for j in range(top, j_min - 1, -1)]
+
+
+# -- public entry points --------------------------------------------------------------------------
+def fair_curve_to_tolerance(curve, tol, *, target_degree=None, schedule="auto",
+                            strategy="guaranteed", order=6, deviation="geometric"):
+    r"""Fair ``curve`` with the fewest poles whose deviation stays within ``tol``.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        Validated source curve.
+    tol : float
+        Largest allowed deviation (model units), ``> 0``.
+    target_degree : int, optional
+        Default ``min(3, curve.degree)``.
+    schedule : {"auto", "direct", "hybrid"}
+    strategy : {"guaranteed", "linear", "polyfit"}
+        See the module documentation.
+    order : int
+        Polynomial degree for ``"polyfit"`` (2..6).
+    deviation : {"geometric", "parametric"}
+        Distance used for the tolerance (true two-sided, or same-parameter).
+
+    Returns
+    -------
+    FairResult
+        With ``max_deviation``, ``evaluations`` (deviation measurements) and ``table``
+        (:class:`ScaleError` rows in measurement order).
+
+    Raises
+    ------
+    InvalidToleranceError
+        ``tol`` not a positive finite number.
+    ToleranceNotMetError
+        Even the largest admissible target exceeds ``tol``.
+    """
+    tol = check_tolerance(tol)
+    _check_options(strategy, order)
+    degree = _check_degree(target_degree, curve.degree, "target_degree")
+    err, n_max = _curve_error(curve, degree, schedule, deviation)
+    if n_max < 1:
+        raise InvalidInputError(
+            f"a degree-{degree} target needs more than {curve.n_poles} source poles.")
+    n = _search_1d(err, n_max, tol, strategy, order)
+    target = SplineSpace.quasi_uniform(n, degree, curve.domain)
+    result = project_curve(curve, target, schedule)
+    return result.replace(max_deviation=err(n), evaluations=err.evaluations, table=err.table())
+
+
+def _surface_error(surface, degrees, schedule, deviation):
+    chain_u = _Chain(surface.u_space, degrees[0], schedule)
+    chain_v = _Chain(surface.v_space, degrees[1], schedule)
+    probe = SurfaceProbe(surface, method=deviation)
+    net = _coefficients(surface)
+
+    def geometry(nu, nv):
+        upper = chain_u.coarse(net, nu, key="u")
+        moved = np.swapaxes(upper, 0, 1)
+        coarse = np.swapaxes(chain_v.coarse(moved, nv, key=("v", nu)), 0, 1)
+        poles, weights = _cartesian(coarse, surface.is_rational)
+        return BSplineSurface(poles, chain_u.target(nu).knots, chain_v.target(nv).knots,
+                              degrees[0], degrees[1], weights)
+
+    def measure(n):
+        return probe.max_deviation(geometry(*n))[0]
+
+    err = _Measured(measure, lambda n: (n[0] + degrees[0]) * (n[1] + degrees[1]),
+                    lambda n: float(np.log2(max(n))))
+    return err, chain_u, chain_v
+
+
+def _min_along(err, fixed, tol, lo_fail, hi_pass, axis):
+    """Smallest passing index along ``axis`` between a failing and a passing one."""
+    def at(k):
+        return err((k, fixed) if axis == 0 else (fixed, k))
+    while hi_pass - lo_fail > 1:
+        mid = (hi_pass + lo_fail) // 2
+        if at(mid) <= tol:
+            hi_pass = mid
+        else:
+            lo_fail = mid
+    return hi_pass
+
+
+def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
+    _require(err, (U, V), tol, f"n=({U}, {V})")
+    u_err = _Projected(err, lambda k: (k, V))
+    v_err = _Projected(err, lambda k: (U, k))
+    u_lo = _guaranteed(u_err, U, tol, window)
+    v_lo = _guaranteed(v_err, V, tol, window)
+    best = (U, V)
+    nu = u_lo
+    while nu <= U:
+        cap = (best[0] + pu) * (best[1] + pv) // (nu + pu) - pv
+        if (cap + pv) * (nu + pu) >= (best[0] + pu) * (best[1] + pv):
+            cap -= 1
+        cap = min(cap, V)
+        if cap < v_lo:
+            break
+        if err((nu, cap)) <= tol:
+            best = (nu, _min_along(err, nu, tol, v_lo - 1, cap, axis=1))
+        nu += 1
+    return _scan_surface(err, best, tol, window)
+
+
+def _scan_surface(err, best, tol, window):
+    """Accept any passing net with one direction reduced, up to ``window`` misses."""
+    improved = True
+    while improved:
+        improved = False
+        for axis in (0, 1):
+            misses, k = 0, best[axis] - 1
+            while k >= 1 and misses < window:
+                cand = (k, best[1]) if axis == 0 else (best[0], k)
+                if err(cand) <= tol:
+                    best, misses, improved = cand, 0, True
+                else:
+                    misses += 1
+                k -= 1
+    return best
+
+
+class _Projected:
+    """A one-dimensional view ``k -> err(map(k))`` sharing the parent's cache."""
+
+    def __init__(self, err, mapping):
+        self.err, self.mapping = err, mapping
+
+    def __call__(self, k):
+        return self.err(self.mapping(k))
+
+    @property
+    def values(self):
+        return self.err.values
+
+
+def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), schedule="auto",
+                              strategy="guaranteed", order=6, deviation="geometric"):
+    r"""Fair ``surface`` with the fewest poles in total whose deviation stays within ``tol``.
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+    tol : float
+    target_degree : (int or None, int or None)
+    schedule : {"auto", "direct", "hybrid"}
+    strategy : {"guaranteed", "linear", "polyfit"}
+        ``"guaranteed"`` minimises :math:`(n_u + p_u)(n_v + p_v)`; the seed strategies
+        search the equal-ratio diagonal (see the module documentation).
+    order : int
+    deviation : {"geometric", "parametric"}
+
+    Returns
+    -------
+    SurfaceFairResult
+        With ``max_deviation``, ``evaluations`` and ``table``.
+
+    Raises
+    ------
+    InvalidToleranceError, ToleranceNotMetError
+    """
+    tol = check_tolerance(tol)
+    _check_options(strategy, order)
+    tdu, tdv = (None, None) if target_degree is None else target_degree
+    pu = _check_degree(tdu, surface.u_degree, "target_degree (u)")
+    pv = _check_degree(tdv, surface.v_degree, "target_degree (v)")
+    err, chain_u, chain_v = _surface_error(surface, (pu, pv), schedule, deviation)
+    U, V = chain_u.n_max, chain_v.n_max
+    if U < 1 or V < 1:
+        raise InvalidInputError("the surface has too few poles for the target degrees.")
+    if strategy == "guaranteed":
+        n = _guaranteed_surface(err, U, V, pu, pv, tol)
+    else:
+        top = max(U, V)
+
+        def diagonal(k):
+            return (max(1, int(round(k * U / top))), max(1, int(round(k * V / top))))
+
+        k = _search_1d(_Projected(err, diagonal), top, tol, strategy, order)
+        n = diagonal(k)
+    result = project_surface(surface, chain_u.target(n[0]), chain_v.target(n[1]), schedule)
+    return result.replace(max_deviation=err(n), evaluations=err.evaluations, table=err.table())

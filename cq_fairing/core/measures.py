@@ -1,0 +1,866 @@
+r"""Deviation and fairness measures between an original and a faired curve or surface.
+
+Deviation
+---------
+Both geometries are sampled at the same dense parameters: ``per_span`` (default 8)
+equally spaced parameters in every knot span of the finer space, the ends and all
+breakpoints included (:func:`sample_parameters`).  Two distances are offered:
+
+* ``"parametric"``: the same-parameter distance :math:`|A(u) - B(u)|`.  It costs one
+  evaluation and is an *upper bound* of the true distance from :math:`A(u)` to the
+  geometry :math:`B` (and from :math:`B(u)` to :math:`A`).
+* ``"geometric"``: the true (closest-point) distance, in both directions, whose
+  maximum is the two-sided Hausdorff estimate
+
+  .. math:: h(A, B) = \max\Bigl(\max_{u} d(A(u), B),\; \max_{u} d(B(u), A)\Bigr).
+
+  The foot point on a curve :math:`C` solves :math:`C'(t)\cdot(C(t) - P) = 0` by Newton's
+  method (vectorised over all points, clamped to the domain) started at the nearest
+  sample; on a surface the 2x2 Newton system of
+  :math:`(S_u\cdot(S-P),\ S_v\cdot(S-P)) = 0` is used, started at the nearest sample
+  in a window of :math:`\pm 2` samples around the same parameter (both surfaces share
+  their parametrisation).  Every distance returned is the distance to an actual point
+  of the geometry, so it can only over-estimate the exact point-to-geometry distance,
+  never under-estimate it: tolerance checks stay on the safe side.
+
+Maxima use the cheap bound to skip work: the true distance is computed only at samples
+whose same-parameter distance exceeds the running maximum (or the tolerance), in
+decreasing order of the bound.
+
+Fairness
+--------
+Curvature :math:`\kappa = |C'\times C''|/|C'|^3` and torsion
+:math:`\tau = (C'\times C'')\cdot C'''/|C'\times C''|^2` along curves; principal, mean
+and Gaussian curvature of surfaces from the fundamental forms; the bending energies
+
+.. math::  E_C = \int |C''(t)|^2\,dt, \qquad
+           E_S = \iint |S_{uu}|^2 + 2|S_{uv}|^2 + |S_{vv}|^2 \,du\,dv
+
+computed exactly from Gram matrices of derivatives (:func:`~cq_fairing.core.gram.gram_matrix`
+with ``nu = 2``, tensor products for surfaces; polynomial geometry); the number of
+curvature extrema and of inflections (wiggle count) and
+:math:`\int (d\kappa/ds)^2\,ds` along curves.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from ..errors import InvalidInputError
+from .geometry import BSplineCurve, BSplineSurface
+from .gram import gram_matrix, quadrature_rule
+from .spaces import basis_functions, find_spans
+
+__all__ = [
+    "Deviation", "DeviationMap", "sample_parameters", "curve_derivatives",
+    "surface_derivatives", "closest_points_curve", "closest_points_surface",
+    "CurveProbe", "SurfaceProbe", "deviation", "deviation_map",
+    "curve_curvature", "curvature_derivative_energy", "surface_curvatures",
+    "bending_energy", "count_extrema", "count_sign_changes", "curve_wiggles",
+    "surface_wiggles", "fairness_summary",
+]
+
+DEVIATIONS = ("geometric", "parametric")
+
+
+# -- samples and evaluation ---------------------------------------------------------------
+def sample_parameters(*spaces, per_span=8):
+    """Dense parameters: ``per_span`` per span of the merged breakpoints, ends included.
+
+    Parameters
+    ----------
+    *spaces : SplineSpace
+        One or more spaces on the same domain; their breakpoints are merged, so the
+        samples are at least ``per_span`` per span of the finer space.
+    per_span : int, optional
+        Samples per span (``>= 1``); every breakpoint is a sample.
+
+    Returns
+    -------
+    ndarray, shape (spans * per_span + 1,)
+    """
+    if isinstance(per_span, bool) or not isinstance(per_span, (int, np.integer)) or per_span < 1:
+        raise InvalidInputError(f"per_span must be an integer >= 1, got {per_span!r}.")
+    b = np.unique(np.concatenate([s.breakpoints for s in spaces]))
+    frac = np.arange(per_span) / per_span
+    inner = (b[:-1, None] + (b[1:] - b[:-1])[:, None] * frac[None, :]).ravel()
+    return np.append(inner, b[-1])
+
+
+def curve_derivatives(curve, u, order):
+    """Points and derivatives ``[C, C', ..., C^(order)]`` at ``u`` (rational allowed).
+
+    Returns
+    -------
+    list of ndarray, each shape (len(u), d)
+    """
+    u = np.asarray(u, dtype=float).ravel()
+    space = curve.space
+    coeffs = curve.homogeneous() if curve.is_rational else curve.poles
+    spans = find_spans(space, u)
+    basis = basis_functions(space, u, spans, order)
+    idx = spans[:, None] - space.degree + np.arange(space.degree + 1)[None, :]
+    local = coeffs[idx]
+    h = [np.einsum("qj,qjd->qd", basis[k], local) for k in range(order + 1)]
+    if not curve.is_rational:
+        return h
+    return _rational_curve(h)
+
+
+def _rational_curve(h):
+    """Quotient rule for ``x = X / w`` (The NURBS Book, eq. 4.8) on homogeneous derivatives."""
+    from math import comb
+
+    w = [hk[:, -1:] for hk in h]
+    out = []
+    for k in range(len(h)):
+        val = h[k][:, :-1].copy()
+        for i in range(1, k + 1):
+            val -= comb(k, i) * w[i] * out[k - i]
+        out.append(val / w[0])
+    return out
+
+
+def surface_derivatives(surface, u, v, order):
+    """Partial derivatives ``{(a, b): S_{u^a v^b}}`` with ``a + b <= order`` at points (u_i, v_i).
+
+    Returns
+    -------
+    dict of ndarray, each shape (len(u), d)
+    """
+    from math import comb
+
+    u = np.asarray(u, dtype=float).ravel()
+    v = np.asarray(v, dtype=float).ravel()
+    us, vs = surface.u_space, surface.v_space
+    coeffs = surface.homogeneous() if surface.is_rational else surface.poles
+    su, sv = find_spans(us, u), find_spans(vs, v)
+    bu = basis_functions(us, u, su, order)
+    bv = basis_functions(vs, v, sv, order)
+    iu = su[:, None] - us.degree + np.arange(us.degree + 1)[None, :]
+    iv = sv[:, None] - vs.degree + np.arange(vs.degree + 1)[None, :]
+    local = coeffs[iu[:, :, None], iv[:, None, :]]
+    keys = [(a, b) for a in range(order + 1) for b in range(order + 1 - a)]
+    h = {key: np.einsum("qi,qj,qijd->qd", bu[key[0]], bv[key[1]], local) for key in keys}
+    if not surface.is_rational:
+        return h
+    w = {key: val[:, -1:] for key, val in h.items()}
+    out = {}
+    for a, b in keys:
+        val = h[(a, b)][:, :-1].copy()
+        for i in range(a + 1):
+            for j in range(b + 1):
+                if i or j:
+                    val -= comb(a, i) * comb(b, j) * w[(i, j)] * out[(a - i, b - j)]
+        out[(a, b)] = val / w[(0, 0)]
+    return out
+
+
+def _grid_points(surface, u, v):
+    """Surface points on the grid ``u x v`` with sparse tensor evaluation, shape (Nu, Nv, d)."""
+    coeffs = surface.homogeneous() if surface.is_rational else surface.poles
+    ku, kv, d = coeffs.shape
+    mu = surface.u_space.collocation(u)
+    mv = surface.v_space.collocation(v)
+    rows = (mu @ coeffs.reshape(ku, kv * d)).reshape(len(u), kv, d)
+    grid = (mv @ rows.transpose(1, 0, 2).reshape(kv, len(u) * d)).reshape(len(v), len(u), d)
+    grid = grid.transpose(1, 0, 2)
+    if surface.is_rational:
+        return grid[..., :-1] / grid[..., -1:]
+    return grid
+
+
+# -- closest points ---------------------------------------------------------------------------
+def closest_points_curve(curve, points, u0, iterations=25):
+    r"""Foot points on ``curve`` of ``points`` by clamped Newton iterations.
+
+    Solves :math:`f(t) = C'(t)\cdot(C(t) - P) = 0` with
+    :math:`f' = |C'|^2 + C''\cdot(C - P)` (a gradient step when :math:`f' \le 0`),
+    clamping ``t`` to the domain; keeps the start when Newton does not improve it.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+    points : ndarray, shape (q, d)
+    u0 : ndarray, shape (q,)
+        Start parameters (e.g. the nearest sample).
+
+    Returns
+    -------
+    t : ndarray, shape (q,)
+    distance : ndarray, shape (q,)
+        ``|C(t) - P|``, never below the exact distance to the curve.
+    """
+    points = np.asarray(points, dtype=float)
+    lo, hi = curve.domain
+    t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
+    start_d = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
+    active = np.arange(t.size)
+    for _ in range(iterations):
+        if active.size == 0:
+            break
+        c, c1, c2 = curve_derivatives(curve, t[active], 2)
+        r = c - points[active]
+        f = np.einsum("qd,qd->q", c1, r)
+        speed2 = np.einsum("qd,qd->q", c1, c1)
+        fp = speed2 + np.einsum("qd,qd->q", c2, r)
+        denom = np.where(fp > 1e-14 * np.maximum(speed2, 1e-300), fp, np.maximum(speed2, 1e-300))
+        new = np.clip(t[active] - f / denom, lo, hi)
+        moved = np.abs(new - t[active]) > 1e-14 * (hi - lo)
+        t[active] = new
+        active = active[moved]
+    d = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
+    worse = d > start_d
+    t[worse] = np.clip(np.asarray(u0, dtype=float)[worse], lo, hi)
+    return t, np.minimum(d, start_d)
+
+
+def closest_points_surface(surface, points, u0, v0, iterations=25):
+    r"""Foot points on ``surface`` by clamped 2x2 Newton iterations.
+
+    Solves :math:`g = (S_u\cdot r,\ S_v\cdot r) = 0`, :math:`r = S(u, v) - P`, with the
+    Hessian :math:`H = J^T J + [S_{uu}\cdot r,\ S_{uv}\cdot r;\ S_{uv}\cdot r,\ S_{vv}\cdot r]`
+    (Gauss-Newton :math:`J^T J` when :math:`H` is not positive definite), clamping to the
+    domain; keeps the start when Newton does not improve it.
+
+    Returns
+    -------
+    u, v, distance : ndarray, shape (q,)
+    """
+    points = np.asarray(points, dtype=float)
+    (ulo, uhi), (vlo, vhi) = surface.domain
+    u = np.clip(np.asarray(u0, dtype=float).copy(), ulo, uhi)
+    v = np.clip(np.asarray(v0, dtype=float).copy(), vlo, vhi)
+    u_start, v_start = u.copy(), v.copy()
+    start_d = np.linalg.norm(surface_derivatives(surface, u, v, 0)[(0, 0)] - points, axis=1)
+    active = np.arange(u.size)
+    scale = max(uhi - ulo, vhi - vlo)
+    for _ in range(iterations):
+        if active.size == 0:
+            break
+        s = surface_derivatives(surface, u[active], v[active], 2)
+        r = s[(0, 0)] - points[active]
+        su, sv = s[(1, 0)], s[(0, 1)]
+        g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
+        a = np.einsum("qd,qd->q", su, su)
+        b = np.einsum("qd,qd->q", su, sv)
+        c = np.einsum("qd,qd->q", sv, sv)
+        ha = a + np.einsum("qd,qd->q", s[(2, 0)], r)
+        hb = b + np.einsum("qd,qd->q", s[(1, 1)], r)
+        hc = c + np.einsum("qd,qd->q", s[(0, 2)], r)
+        det = ha * hc - hb * hb
+        bad = (det <= 1e-14 * (a * c + 1e-300)) | (ha <= 0)
+        ha, hb, hc = np.where(bad, a, ha), np.where(bad, b, hb), np.where(bad, c, hc)
+        det = ha * hc - hb * hb
+        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
+        du = -(hc * g1 - hb * g2) / det
+        dv = -(ha * g2 - hb * g1) / det
+        nu_ = np.clip(u[active] + du, ulo, uhi)
+        nv_ = np.clip(v[active] + dv, vlo, vhi)
+        moved = (np.abs(nu_ - u[active]) + np.abs(nv_ - v[active])) > 1e-14 * scale
+        u[active], v[active] = nu_, nv_
+        active = active[moved]
+    d = np.linalg.norm(surface_derivatives(surface, u, v, 0)[(0, 0)] - points, axis=1)
+    worse = d > start_d
+    u[worse], v[worse] = u_start[worse], v_start[worse]
+    return u, v, np.minimum(d, start_d)
+
+
+# -- results ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Deviation:
+    """Summary of the deviation between two geometries at dense samples.
+
+    Attributes
+    ----------
+    max, mean, rms : float
+        Over the samples of the source (``mean``/``rms``) and both directions (``max``).
+    location : tuple of float
+        Parameter ``(u,)`` or ``(u, v)`` of the sample where the maximum occurs.
+    point : ndarray, shape (d,)
+        The geometry point at ``location`` from which the maximum distance is measured.
+    method : {"geometric", "parametric"}
+    n_samples : int
+    """
+
+    max: float
+    mean: float
+    rms: float
+    location: tuple
+    point: np.ndarray
+    method: str
+    n_samples: int
+
+
+@dataclass(frozen=True)
+class DeviationMap:
+    """Per-sample deviation of a faired geometry from its source, ready for viewers.
+
+    Attributes
+    ----------
+    parameters : tuple of ndarray
+        ``(u,)`` for curves, ``(u, v)`` for surfaces (the sample grid axes).
+    points : ndarray, shape (N, d) or (Nu, Nv, d)
+        Source points at the samples.
+    values : ndarray, shape (N,) or (Nu, Nv)
+        Distance from each source point to the faired geometry (``method``).
+    signed : ndarray, same shape as ``values``
+        ``values`` with the sign of :math:`(F - S)\cdot n`, ``n`` the source's unit
+        normal (surfaces) or principal normal (curves; 0 where the curvature vanishes).
+    method : {"geometric", "parametric"}
+    """
+
+    parameters: tuple
+    points: np.ndarray
+    values: np.ndarray
+    signed: np.ndarray
+    method: str
+
+    @property
+    def max(self):
+        return float(self.values.max())
+
+    @property
+    def mean(self):
+        return float(self.values.mean())
+
+    @property
+    def rms(self):
+        return float(np.sqrt(np.mean(self.values ** 2)))
+
+
+# -- probes: cached source samples, fast maxima --------------------------------------------------
+class CurveProbe:
+    """Dense samples of a source curve, reused to measure many faired candidates.
+
+    Parameters
+    ----------
+    source : BSplineCurve
+    per_span : int
+        Samples per span of the source space (the finer space when fairing).
+    method : {"geometric", "parametric"}
+    u : ndarray, optional
+        Explicit sample parameters (overrides ``per_span``).
+    """
+
+    def __init__(self, source, per_span=8, method="geometric", u=None):
+        _check_method(method)
+        self.source = source
+        self.method = method
+        self.u = sample_parameters(source.space, per_span=per_span) if u is None else u
+        self.points = curve_derivatives(source, self.u, 0)[0]
+        self._tree = None
+
+    @property
+    def tree(self):
+        if self._tree is None:
+            self._tree = cKDTree(self.points)
+        return self._tree
+
+    def bound(self, faired):
+        """Faired points and the same-parameter distance at every sample."""
+        other = curve_derivatives(faired, self.u, 0)[0]
+        return other, np.linalg.norm(other - self.points, axis=1)
+
+    def true_distance(self, faired, other, idx):
+        """Two-sided true distance at samples ``idx`` (max of both directions)."""
+        tree = cKDTree(other) if idx.size > 0 else None
+        d_fs = np.zeros(idx.size)
+        if idx.size:
+            _, near = tree.query(self.points[idx])
+            _, d_fs = closest_points_curve(faired, self.points[idx], self.u[near])
+            _, near = self.tree.query(other[idx])
+            _, d_sf = closest_points_curve(self.source, other[idx], self.u[near])
+            d_fs = np.maximum(d_fs, d_sf)
+        return d_fs
+
+    def max_deviation(self, faired, tol=None):
+        """Largest deviation (dense samples); with ``tol`` stop once it is exceeded.
+
+        Returns
+        -------
+        value : float
+            The maximum; with ``tol`` and a miss, a value ``> tol`` that is a lower bound.
+        index : int
+            Sample index where it occurs.
+        """
+        other, bound = self.bound(faired)
+        if self.method == "parametric":
+            i = int(np.argmax(bound))
+            return float(bound[i]), i
+        return _pruned_max(bound, lambda idx: self.true_distance(faired, other, idx), tol)
+
+
+class SurfaceProbe:
+    """Dense grid samples of a source surface, reused to measure many candidates.
+
+    Parameters
+    ----------
+    source : BSplineSurface
+    per_span : int
+    method : {"geometric", "parametric"}
+    uv : (ndarray, ndarray), optional
+        Explicit grid axes (override ``per_span``).
+    """
+
+    def __init__(self, source, per_span=8, method="geometric", uv=None):
+        _check_method(method)
+        self.source = source
+        self.method = method
+        if uv is None:
+            uv = (sample_parameters(source.u_space, per_span=per_span),
+                  sample_parameters(source.v_space, per_span=per_span))
+        self.u, self.v = uv
+        self.points = _grid_points(source, self.u, self.v)
+
+    def bound(self, faired):
+        other = _grid_points(faired, self.u, self.v)
+        return other, np.linalg.norm(other - self.points, axis=2)
+
+    def true_distance(self, faired, other, flat_idx, window=2):
+        """Two-sided true distance at flat grid indices ``flat_idx``."""
+        if flat_idx.size == 0:
+            return np.zeros(0)
+        shape = self.points.shape[:2]
+        i, j = np.unravel_index(flat_idx, shape)
+        d_fs = self._one_way(faired, self.points, other, i, j, window)
+        d_sf = self._one_way(self.source, other, self.points, i, j, window)
+        return np.maximum(d_fs, d_sf)
+
+    def _one_way(self, target, here, there, i, j, window):
+        """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid)."""
+        u0, v0 = _window_start(here, there, i, j, self.u, self.v, window)
+        return closest_points_surface(target, here[i, j], u0, v0)[2]
+
+    def max_deviation(self, faired, tol=None):
+        """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid."""
+        other, bound = self.bound(faired)
+        flat = bound.ravel()
+        if self.method == "parametric":
+            k = int(np.argmax(flat))
+            return float(flat[k]), k
+        return _pruned_max(flat, lambda idx: self.true_distance(faired, other, idx), tol)
+
+
+def _pruned_max(bound, exact, tol):
+    """Max of ``exact`` over all samples, evaluating it only where ``bound`` can win.
+
+    ``bound >= exact`` holds sample-wise.  Samples are processed in decreasing order of
+    the bound, in doubling batches, until the next bound cannot beat the running
+    maximum.  Without ``tol`` the exact maximum is returned.  With ``tol`` the search
+    also stops as soon as the maximum exceeds ``tol`` (the value returned is then an
+    exact sample distance ``> tol``, a lower bound of the maximum) or once no remaining
+    bound exceeds ``tol`` (the value returned is then an upper bound ``<= tol``).
+    """
+    order = np.argsort(bound)[::-1]
+    best, best_i, start, batch = -1.0, int(order[0]), 0, 64
+    while start < order.size:
+        next_bound = float(bound[order[start]])
+        if start > 0 and next_bound <= best:
+            break
+        if tol is not None and next_bound <= tol:
+            return max(best, next_bound), best_i
+        idx = order[start:start + batch]
+        d = exact(idx)
+        k = int(np.argmax(d))
+        if d[k] > best:
+            best, best_i = float(d[k]), int(idx[k])
+        if tol is not None and best > tol:
+            return best, best_i
+        start += batch
+        batch *= 2
+    return best, best_i
+
+
+def _check_method(method):
+    if method not in DEVIATIONS:
+        raise InvalidInputError(
+            f"deviation must be one of {DEVIATIONS}, got {method!r}."
+        )
+# -- public deviation ----------------------------------------------------------------------------
+def _unwrap(source, faired):
+    """Accept (source, faired) geometries or a fair result as ``source``."""
+    if faired is None and hasattr(source, "source"):
+        faired = source.curve if hasattr(source, "curve") else source.surface
+        source = source.source
+    if isinstance(source, BSplineCurve) and isinstance(faired, BSplineCurve):
+        return source, faired, "curve"
+    if isinstance(source, BSplineSurface) and isinstance(faired, BSplineSurface):
+        return source, faired, "surface"
+    raise InvalidInputError(
+        "expected two BSplineCurve or two BSplineSurface objects (or one fair result), "
+        f"got {type(source).__name__} and {type(faired).__name__}."
+    )
+
+
+def _check_domains(a, b):
+    da = np.ravel(a.domain) if hasattr(a, "u_space") else np.array(a.domain)
+    db = np.ravel(b.domain) if hasattr(b, "u_space") else np.array(b.domain)
+    if np.abs(da - db).max() > 1e-12 * max(1.0, np.abs(da).max()):
+        raise InvalidInputError(
+            f"both geometries must share the parameter domain, got {tuple(da)} and {tuple(db)}."
+        )
+
+
+def deviation(source, faired=None, *, method="geometric", per_span=8):
+    """Max, mean and RMS deviation of ``faired`` from ``source`` at dense samples.
+
+    Parameters
+    ----------
+    source : BSplineCurve or BSplineSurface, or a FairResult / SurfaceFairResult
+    faired : same kind as ``source`` (omit when ``source`` is a fair result)
+    method : {"geometric", "parametric"}
+        True (closest-point, two-sided) or same-parameter distance.
+    per_span : int
+        Samples per span of the merged breakpoints of both geometries.
+
+    Returns
+    -------
+    Deviation
+        ``max`` is the two-sided maximum (Hausdorff estimate for ``"geometric"``);
+        ``mean`` and ``rms`` are over the distances from the source samples.
+    """
+    _check_method(method)
+    source, faired, kind = _unwrap(source, faired)
+    _check_domains(source, faired)
+    dmap = deviation_map(source, faired, method=method, per_span=per_span)
+    if kind == "curve":
+        probe = CurveProbe(source, method=method, u=dmap.parameters[0])
+        value, i = probe.max_deviation(faired)
+        location = (float(probe.u[i]),)
+        point = probe.points[i]
+    else:
+        probe = SurfaceProbe(source, method=method, uv=dmap.parameters)
+        value, k = probe.max_deviation(faired)
+        i, j = np.unravel_index(k, dmap.values.shape)
+        location = (float(probe.u[i]), float(probe.v[j]))
+        point = probe.points[i, j]
+    value = max(value, dmap.max)
+    return Deviation(value, dmap.mean, dmap.rms, location, np.array(point), method,
+                     int(dmap.values.size))
+
+
+def deviation_map(source, faired=None, *, method="geometric", per_span=8):
+    """Per-sample distance from the source to the faired geometry (:class:`DeviationMap`).
+
+    The sign is that of :math:`(F - S)\\cdot n` with ``n`` the unit normal of the source
+    surface (principal normal of a curve).  See :func:`deviation` for the arguments.
+    """
+    _check_method(method)
+    source, faired, kind = _unwrap(source, faired)
+    _check_domains(source, faired)
+    if kind == "curve":
+        u = sample_parameters(source.space, faired.space, per_span=per_span)
+        c = curve_derivatives(source, u, 2)
+        other = curve_derivatives(faired, u, 0)[0]
+        foot = other
+        if method == "geometric":
+            _, near = cKDTree(other).query(c[0])
+            t, _ = closest_points_curve(faired, c[0], u[near])
+            foot = curve_derivatives(faired, t, 0)[0]
+        normal = _principal_normal(c[1], c[2])
+        values = np.linalg.norm(foot - c[0], axis=1)
+        signed = values * np.sign(np.einsum("qd,qd->q", foot - c[0], normal))
+        return DeviationMap((u,), c[0], values, signed, method)
+    u = sample_parameters(source.u_space, faired.u_space, per_span=per_span)
+    v = sample_parameters(source.v_space, faired.v_space, per_span=per_span)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    s = surface_derivatives(source, uu.ravel(), vv.ravel(), 1)
+    pts = s[(0, 0)]
+    foot = _grid_points(faired, u, v).reshape(-1, pts.shape[1])
+    if method == "geometric":
+        here = pts.reshape(u.size, v.size, -1)
+        there = foot.reshape(u.size, v.size, -1)
+        i, j = np.unravel_index(np.arange(pts.shape[0]), (u.size, v.size))
+        fu, fv = _window_start(here, there, i, j, u, v)
+        fu, fv, _ = closest_points_surface(faired, pts, fu, fv)
+        foot = surface_derivatives(faired, fu, fv, 0)[(0, 0)]
+    normal = _unit_normal(s[(1, 0)], s[(0, 1)])
+    values = np.linalg.norm(foot - pts, axis=1)
+    signed = values * np.sign(np.einsum("qd,qd->q", foot - pts, normal)) if normal is not None \
+        else values.copy()
+    shape = (u.size, v.size)
+    return DeviationMap((u, v), pts.reshape(shape + (-1,)), values.reshape(shape),
+                        signed.reshape(shape), method)
+
+
+def _window_start(here, there, i, j, u, v, window=2):
+    """Parameters of the nearest ``there`` sample within +-window of each (i, j)."""
+    nu, nv = here.shape[:2]
+    best = np.full(i.size, np.inf)
+    bi, bj = i.copy(), j.copy()
+    p = here[i, j]
+    for di in range(-window, window + 1):
+        for dj in range(-window, window + 1):
+            ii, jj = np.clip(i + di, 0, nu - 1), np.clip(j + dj, 0, nv - 1)
+            d = np.linalg.norm(there[ii, jj] - p, axis=1)
+            better = d < best
+            best[better], bi[better], bj[better] = d[better], ii[better], jj[better]
+    return u[bi], v[bj]
+
+
+def _principal_normal(d1, d2):
+    """Unit principal normal (0 where the curvature vanishes); 2-D uses the left normal."""
+    if d1.shape[1] == 2:
+        n = np.stack([-d1[:, 1], d1[:, 0]], axis=1)
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        return n
+    t = d1 / np.maximum(np.linalg.norm(d1, axis=1, keepdims=True), 1e-300)
+    n = d2 - np.einsum("qd,qd->q", d2, t)[:, None] * t
+    norm = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.where(norm > 1e-12 * np.maximum(np.linalg.norm(d2, axis=1, keepdims=True), 1e-300),
+                    n / np.maximum(norm, 1e-300), 0.0)
+
+
+def _unit_normal(su, sv):
+    if su.shape[1] != 3:
+        return None
+    n = np.cross(su, sv)
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+# -- fairness -----------------------------------------------------------------------------------
+def _as3(x):
+    return x if x.shape[1] == 3 else np.hstack([x, np.zeros((x.shape[0], 3 - x.shape[1]))])
+
+
+def curve_curvature(curve, u):
+    r"""Curvature :math:`\kappa` and torsion :math:`\tau` at parameters ``u``.
+
+    .. math:: \kappa = \frac{|C'\times C''|}{|C'|^3}, \qquad
+              \tau = \frac{(C'\times C'')\cdot C'''}{|C'\times C''|^2}
+
+    (``tau`` is 0 where ``kappa`` vanishes and for planar curves).
+
+    Returns
+    -------
+    kappa, tau : ndarray, shape (len(u),)
+    """
+    d = curve_derivatives(curve, u, 3)
+    d1, d2, d3 = (_as3(x) for x in d[1:4])
+    cross = np.cross(d1, d2)
+    cn2 = np.einsum("qd,qd->q", cross, cross)
+    speed = np.linalg.norm(d1, axis=1)
+    kappa = np.sqrt(cn2) / np.maximum(speed, 1e-300) ** 3
+    small = cn2 <= 1e-24 * np.maximum(speed, 1e-300) ** 6
+    tau = np.where(small, 0.0, np.einsum("qd,qd->q", cross, d3) / np.where(small, 1.0, cn2))
+    return kappa, tau
+
+
+def _curvature_rate(curve, u):
+    r""":math:`d\kappa/dt` and the speed :math:`|C'|` at ``u``."""
+    d = curve_derivatives(curve, u, 3)
+    d1, d2, d3 = (_as3(x) for x in d[1:4])
+    cross = np.cross(d1, d2)
+    cn = np.maximum(np.linalg.norm(cross, axis=1), 1e-300)
+    speed = np.maximum(np.linalg.norm(d1, axis=1), 1e-300)
+    dcross = np.cross(d1, d3)
+    rate = (np.einsum("qd,qd->q", cross, dcross) / (cn * speed ** 3)
+            - 3.0 * cn * np.einsum("qd,qd->q", d1, d2) / speed ** 5)
+    return rate, speed
+
+
+def curvature_derivative_energy(curve, points_per_span=8):
+    r""":math:`\int (d\kappa/ds)^2\, ds = \int (d\kappa/dt)^2 / |C'|\, dt`.
+
+    Gauss-Legendre with ``points_per_span`` nodes per knot span (the integrand is
+    rational, so this is a quadrature, accurate to the rounding for smooth spans).
+    """
+    nodes, weights = quadrature_rule(curve.space.breakpoints, points_per_span)
+    rate, speed = _curvature_rate(curve, nodes)
+    return float(np.sum(weights * rate ** 2 / speed))
+
+
+def surface_curvatures(surface, u, v):
+    r"""Principal, mean and Gaussian curvature at points ``(u_i, v_i)``.
+
+    With :math:`E, F, G` and :math:`L, M, N` the first and second fundamental forms,
+    :math:`K = (LN - M^2)/(EG - F^2)`, :math:`H = (EN - 2FM + GL)/(2(EG - F^2))`,
+    :math:`\kappa_{1,2} = H \pm \sqrt{H^2 - K}` (sign of the normal
+    :math:`S_u\times S_v`).
+
+    Returns
+    -------
+    dict with ``k1``, ``k2``, ``mean``, ``gaussian`` : ndarray, shape (len(u),)
+    """
+    s = surface_derivatives(surface, u, v, 2)
+    su, sv = _as3(s[(1, 0)]), _as3(s[(0, 1)])
+    n = np.cross(su, sv)
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    E, F, G = (np.einsum("qd,qd->q", a, b) for a, b in ((su, su), (su, sv), (sv, sv)))
+    L, M, N = (np.einsum("qd,qd->q", _as3(s[key]), n) for key in ((2, 0), (1, 1), (0, 2)))
+    det = np.maximum(E * G - F * F, 1e-300)
+    K = (L * N - M * M) / det
+    H = (E * N - 2 * F * M + G * L) / (2 * det)
+    root = np.sqrt(np.maximum(H * H - K, 0.0))
+    return {"k1": H + root, "k2": H - root, "mean": H, "gaussian": K}
+
+
+def bending_energy(geometry):
+    r"""Exact bending energy of a polynomial curve or surface (Gram matrices of derivatives).
+
+    Curve: :math:`\int|C''|^2 = \sum_d c_d^T G^{(2)} c_d`.  Surface:
+    :math:`\sum_d \operatorname{tr}(P_d^T G^{(2)}_u P_d G^{(0)}_v) +
+    2\operatorname{tr}(P_d^T G^{(1)}_u P_d G^{(1)}_v) +
+    \operatorname{tr}(P_d^T G^{(0)}_u P_d G^{(2)}_v)` with :math:`G^{(\nu)}` the Gram
+    matrices of :math:`\nu`-th derivatives.  Rational geometry is integrated by
+    Gauss-Legendre quadrature instead (8 nodes per span and direction).
+    """
+    if isinstance(geometry, BSplineCurve):
+        if geometry.is_rational:
+            nodes, w = quadrature_rule(geometry.space.breakpoints, 8)
+            d2 = curve_derivatives(geometry, nodes, 2)[2]
+            return float(np.sum(w * np.einsum("qd,qd->q", d2, d2)))
+        g = gram_matrix(geometry.space, nu=2)
+        P = geometry.poles
+        return float(np.sum(P * (g @ P)))
+    if isinstance(geometry, BSplineSurface):
+        if geometry.is_rational:
+            return _rational_surface_energy(geometry)
+        P = geometry.poles
+        total = 0.0
+        for a, b, w in ((2, 0, 1.0), (1, 1, 2.0), (0, 2, 1.0)):
+            gu = gram_matrix(geometry.u_space, nu=a)
+            gv = gram_matrix(geometry.v_space, nu=b)
+            for d in range(P.shape[2]):
+                X = P[:, :, d]
+                total += w * float(np.sum(X * (gu @ (gv @ X.T).T)))
+        return total
+    raise InvalidInputError(f"expected a BSplineCurve or BSplineSurface, got {type(geometry).__name__}.")
+
+
+def _rational_surface_energy(surface):
+    nu_, wu = quadrature_rule(surface.u_space.breakpoints, 8)
+    nv_, wv = quadrature_rule(surface.v_space.breakpoints, 8)
+    uu, vv = np.meshgrid(nu_, nv_, indexing="ij")
+    s = surface_derivatives(surface, uu.ravel(), vv.ravel(), 2)
+    dens = sum(c * np.einsum("qd,qd->q", s[k], s[k]) for k, c in (((2, 0), 1), ((1, 1), 2), ((0, 2), 1)))
+    return float(np.sum(dens.reshape(uu.shape) * wu[:, None] * wv[None, :]))
+
+
+def count_sign_changes(values, threshold=0.0):
+    """Number of sign changes along the last axis, ignoring ``|values| <= threshold``.
+
+    Returns an int for 1-D input and the sum over rows otherwise.
+    """
+    x = np.atleast_2d(np.asarray(values, dtype=float))
+    total = 0
+    for row in x:
+        s = np.sign(row[np.abs(row) > threshold])
+        total += int(np.count_nonzero(s[1:] != s[:-1]))
+    return total
+
+
+def count_extrema(values, rel_threshold=1e-6):
+    """Number of interior local extrema along the last axis (summed over rows).
+
+    Steps smaller than ``rel_threshold`` times the row's range are ignored (rounding
+    noise on flat stretches).
+    """
+    x = np.atleast_2d(np.asarray(values, dtype=float))
+    total = 0
+    for row in x:
+        span = float(row.max() - row.min())
+        total += count_sign_changes(np.diff(row), rel_threshold * span)
+    return total
+
+
+def curve_wiggles(curve, per_span=8, reference=None):
+    r"""Curvature extrema and inflections of a curve at dense samples.
+
+    Inflections count sign changes of :math:`(C'\times C'')\cdot b`, ``b`` the mean
+    binormal (the signed curvature for planar curves).  Samples are ``per_span`` per
+    span of ``reference`` (default the curve itself; pass the source to compare a
+    faired curve on the same samples).
+
+    Returns
+    -------
+    dict with ``curvature_extrema`` and ``inflections`` (int)
+    """
+    u = sample_parameters((reference or curve).space, per_span=per_span)
+    kappa, _ = curve_curvature(curve, u)
+    d = curve_derivatives(curve, u, 2)
+    cross = np.cross(_as3(d[1]), _as3(d[2]))
+    b = cross.sum(axis=0)
+    b = b / max(np.linalg.norm(b), 1e-300)
+    signed = cross @ b
+    scale = np.abs(signed).max() if signed.size else 0.0
+    return {"curvature_extrema": count_extrema(kappa),
+            "inflections": count_sign_changes(signed, 1e-9 * scale)}
+
+
+def surface_wiggles(surface, per_span=4, reference=None):
+    r"""Curvature extrema and normal-curvature sign changes along iso-parameter lines.
+
+    Iso-lines sit at the breakpoints of ``reference`` (default the surface itself;
+    pass the source to compare a faired surface on the same lines); along each the
+    curvature of the iso-curve and the sign of its normal curvature
+    :math:`S_{ww}\cdot n` are sampled ``per_span`` times per span of ``reference``.
+
+    Returns
+    -------
+    dict with ``curvature_extrema`` and ``inflections`` (int, summed over all iso-lines)
+    """
+    ref = reference or surface
+    u = sample_parameters(ref.u_space, per_span=per_span)
+    v = sample_parameters(ref.v_space, per_span=per_span)
+    u_lines, v_lines = ref.u_space.breakpoints, ref.v_space.breakpoints
+    extrema = inflections = 0
+    for fixed, moving, along in ((u_lines, v, "v"), (v_lines, u, "u")):
+        if along == "v":
+            uu, vv = np.meshgrid(fixed, moving, indexing="ij")
+            k1, k2 = (0, 1), (0, 2)
+        else:
+            vv, uu = np.meshgrid(fixed, moving, indexing="ij")
+            k1, k2 = (1, 0), (2, 0)
+        s = surface_derivatives(surface, uu.ravel(), vv.ravel(), 2)
+        d1, d2 = _as3(s[k1]), _as3(s[k2])
+        n = np.cross(_as3(s[(1, 0)]), _as3(s[(0, 1)]))
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        speed = np.maximum(np.linalg.norm(d1, axis=1), 1e-300)
+        kappa = (np.linalg.norm(np.cross(d1, d2), axis=1) / speed ** 3).reshape(uu.shape)
+        normal_k = (np.einsum("qd,qd->q", d2, n) / speed ** 2).reshape(uu.shape)
+        extrema += count_extrema(kappa)
+        inflections += count_sign_changes(normal_k, 1e-9 * np.abs(normal_k).max())
+    return {"curvature_extrema": int(extrema), "inflections": int(inflections)}
+
+
+def _curve_fairness(curve, reference):
+    u = sample_parameters(reference.space, per_span=8)
+    kappa, tau = curve_curvature(curve, u)
+    out = {"bending_energy": bending_energy(curve),
+           "curvature_min": float(kappa.min()), "curvature_max": float(kappa.max()),
+           "torsion_max_abs": float(np.abs(tau).max()),
+           "curvature_derivative_energy": curvature_derivative_energy(curve)}
+    out.update(curve_wiggles(curve, reference=reference))
+    return out
+
+
+def _surface_fairness(surface, reference):
+    u = sample_parameters(reference.u_space, per_span=4)
+    v = sample_parameters(reference.v_space, per_span=4)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    c = surface_curvatures(surface, uu.ravel(), vv.ravel())
+    out = {"bending_energy": bending_energy(surface),
+           "gaussian_min": float(c["gaussian"].min()), "gaussian_max": float(c["gaussian"].max()),
+           "mean_abs_max": float(np.abs(c["mean"]).max()),
+           "principal_abs_max": float(max(np.abs(c["k1"]).max(), np.abs(c["k2"]).max()))}
+    out.update(surface_wiggles(surface, reference=reference))
+    return out
+
+
+def fairness_summary(source, faired=None):
+    """Fairness figures before and after: ``{name: {"before": x, "after": y}}``.
+
+    Curves: bending energy, curvature min/max, largest torsion, curvature-derivative
+    energy, curvature extrema and inflections.  Surfaces: bending energy, Gaussian
+    curvature range, largest mean and principal curvature, iso-line wiggles.
+    Both are sampled at the same parameters (those of the source), so the counts
+    compare like with like.
+    """
+    source, faired, kind = _unwrap(source, faired)
+    measure = _curve_fairness if kind == "curve" else _surface_fairness
+    before, after = measure(source, source), measure(faired, source)
+    return {key: {"before": before[key], "after": after[key]} for key in before}
