@@ -67,15 +67,24 @@ def _ladder(source, target):
     exact halvings.
     """
     source_spans = source.dimension - source.degree
+    on_ladder = _is_on_ladder(source, target)
     levels = [target]
     while True:
         above = SplineSpace.quasi_uniform(2 * levels[-1].n_spans, target.degree, target.domain)
         if above.same_as(source):
             break
-        if above.n_spans > MAX_FIRST_STEP_RATIO * source_spans:
+        if not on_ladder and above.n_spans > MAX_FIRST_STEP_RATIO * source_spans:
             break
         levels.append(above)
     return levels[::-1]
+
+
+def _is_on_ladder(source, target):
+    """True when the source is ``V_{n 2^j}`` of the target's degree (pure DWFA halvings)."""
+    if not source.is_quasi_uniform or source.degree != target.degree:
+        return False
+    ratio = source.n_spans / target.n_spans
+    return ratio == int(ratio) and int(ratio) & (int(ratio) - 1) == 0
 
 
 def _seed_hybrid(source, target):
