@@ -55,10 +55,9 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
 from .decomposition import decomposition
-from .fairing import _cartesian, _coefficients, project_curve, project_surface
+from .fairing import _cartesian, _coefficients, checked_plan, project_curve, project_surface
 from .geometry import BSplineCurve, BSplineSurface
 from .measures import CurveProbe, SurfaceProbe
-from .schedule import plan_spaces
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
@@ -141,7 +140,7 @@ class _Chain:
 
     def coarse(self, coefficients, n, key=None):
         """Coefficients in ``V_n`` along axis 0 (intermediate spaces cached under ``key``)."""
-        spaces = plan_spaces(self.space, self.target(n), self.schedule)
+        spaces = checked_plan(self.space, self.target(n), self.schedule)
         c = coefficients
         for i, (src, dst) in enumerate(zip(spaces[:-1], spaces[1:])):
             cache_key = (key, dst.key, i)

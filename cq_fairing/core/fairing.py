@@ -327,7 +327,7 @@ def project_surface(surface, target_u, target_v, schedule="auto"):
 # -- public entry points -------------------------------------------------------------------
 def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None,
                target_degree=None, schedule="auto", strategy="guaranteed", order=6,
-               deviation="geometric"):
+               deviation="geometric", method="wavelet"):
     r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
 
     The faired curve is the L2-best approximation of the source in the quasi-uniform
@@ -360,6 +360,10 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
         Spaces visited, see :mod:`cq_fairing.core.schedule`.
     strategy, order, deviation
         Accuracy-control settings used with ``tol``.
+    method : {"wavelet", "energy"}
+        ``"energy"``: Eck-Hadenfeld local energy fairing (:mod:`cq_fairing.core.energy`,
+        derivative ``l = 3``) that keeps the poles and moves none farther than ``tol``
+        (required; ``n`` must be omitted).
 
     Returns
     -------
@@ -386,6 +390,10 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     True
     """
     curve = make_curve(poles, knots, degree, weights)
+    if _energy_method(method, n, tol):
+        from .energy import fair_curve_energy
+
+        return fair_curve_energy(curve, tol)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n (target scale) and tol (tolerance); "
@@ -402,7 +410,7 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
 
 def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=None,
                  weights=None, target_degree=None, schedule="auto",
-                 strategy="guaranteed", deviation="geometric"):
+                 strategy="guaranteed", deviation="geometric", method="wavelet"):
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
 
     .. math:: C_n = A_u\, C\, A_v^T, \qquad
@@ -428,6 +436,11 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     target_degree : int or (int, int), optional
         Default ``min(source degree, 3)`` per direction.
     schedule : {"auto", "direct", "hybrid"}
+    strategy, deviation
+        Accuracy-control settings used with ``tol``.
+    method : {"wavelet", "energy"}
+        ``"energy"``: local thin-plate energy fairing within ``tol`` that keeps the net
+        size (:mod:`cq_fairing.core.energy`; ``tol`` required, ``n`` omitted).
 
     Returns
     -------
@@ -438,6 +451,10 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     InvalidInputError, InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
+    if _energy_method(method, n, tol):
+        from .energy import fair_surface_energy
+
+        return fair_surface_energy(surface, tol)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
@@ -454,6 +471,23 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     target_u = _direction_target(surface.u_space, nu, tdu)
     target_v = _direction_target(surface.v_space, nv, tdv)
     return project_surface(surface, target_u, target_v, schedule)
+
+
+METHODS = ("wavelet", "energy")
+
+
+def _energy_method(method, n, tol):
+    """Validate ``method``; True for energy fairing (which needs ``tol`` and no ``n``)."""
+    if method not in METHODS:
+        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
+    if method == "wavelet":
+        return False
+    if n is not None or tol is None:
+        raise InvalidInputError(
+            "method='energy' keeps the control points and needs tol (the largest "
+            f"distance a point may move) and no n; got n={n!r}, tol={tol!r}."
+        )
+    return True
 
 
 def _split_pair(value, name):
