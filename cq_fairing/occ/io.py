@@ -21,7 +21,7 @@ from OCP.TopoDS import TopoDS_Shape
 from ..errors import FileFormatError, OutputPathError
 from .convert import as_shape, indexed_faces
 
-__all__ = ["read_shape", "write_shape", "READ_SUFFIXES", "WRITE_SUFFIXES"]
+__all__ = ["read_shape", "write_shape", "step_length_unit", "READ_SUFFIXES", "WRITE_SUFFIXES"]
 
 READ_SUFFIXES = {".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges",
                  ".brep": "brep", ".brp": "brep"}
@@ -81,6 +81,39 @@ def _read_step(path):
         )
     reader.TransferRoots()
     return reader.OneShape() if reader.NbShapes() else None
+
+
+_UNIT_NAMES = {"millimetre": "MM", "millimeter": "MM", "metre": "M", "meter": "M",
+               "centimetre": "CM", "centimeter": "CM", "inch": "INCH", "foot": "FT",
+               "micrometre": "UM", "micrometer": "UM", "kilometre": "KM", "kilometer": "KM"}
+
+
+def step_length_unit(path):
+    """The length unit a STEP file declares, as ``write_shape(unit=...)`` expects it.
+
+    OCCT converts STEP coordinates to millimetres on reading; writing with the unit of
+    the input (``write_shape(shape, out, unit=step_length_unit(src))``) gives a file in
+    the same unit as the source.
+
+    Returns
+    -------
+    str or None
+        ``"MM"``, ``"M"``, ``"INCH"``, ... or ``None`` when the file names no known unit.
+
+    Raises
+    ------
+    FileFormatError
+        The file cannot be read as STEP.
+    """
+    from OCP.TColStd import TColStd_SequenceOfAsciiString
+
+    reader = STEPControl_Reader()
+    if reader.ReadFile(str(path)) != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(f"'{path}' is not a readable STEP file.")
+    lengths = TColStd_SequenceOfAsciiString()
+    reader.FileUnits(lengths, TColStd_SequenceOfAsciiString(), TColStd_SequenceOfAsciiString())
+    names = [lengths.Value(i).ToCString().lower() for i in range(1, lengths.Length() + 1)]
+    return next((_UNIT_NAMES[n] for n in names if n in _UNIT_NAMES), None)
 
 
 def _read_iges(path):

@@ -182,3 +182,30 @@ def test_bad_arguments(real):
         fair_face(face, method="nope")
     with pytest.raises(InvalidInputError):
         fair_face(face, boundary="glued")
+
+
+def test_rational_fallback_when_weights_go_non_positive():
+    """A weight spike (100 among 0.01) makes the homogeneous projection undershoot."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+
+    from cq_fairing import make_surface
+    from cq_fairing.occ.convert import to_geom_surface
+
+    x, y = np.meshgrid(np.linspace(0, 10, 20), np.linspace(0, 10, 20), indexing="ij")
+    weights = np.full((20, 20), 0.01)
+    weights[10, 10] = 100.0
+    surface = make_surface(np.stack([x, y, np.sin(x)], 2), weights=weights)
+    face = BRepBuilderAPI_MakeFace(to_geom_surface(surface), 1e-7).Face()
+    report = fair_face(face, n=(5, 5), details=False)
+    assert report.status == "faired"
+    assert "non-rational" in report.message
+    assert report.surface.weights is None and report.poles_after == (8, 8)
+    # the deviation is measured against the original rational face
+    check = sample_face_deviation(face, report.face, density=15)
+    assert check["max"] == pytest.approx(report.max_deviation, rel=0.5)
+    from cq_fairing.core.fairing import target_space
+    from cq_fairing.errors import NumericalError
+    from cq_fairing.occ.search import project
+
+    with pytest.raises(NumericalError, match="non-positive weights"):
+        project(surface, target_space(surface.u_space, 5), target_space(surface.v_space, 5))

@@ -106,3 +106,13 @@ def test_step_unit_setting_is_restored(real, tmp_path):
     assert volume(back) == pytest.approx(volume(real("ring_nurbs.brep")), rel=1e-6, abs=1e-9)
     assert area(back) == pytest.approx(area(real("ring_nurbs.brep")), rel=1e-6)
     assert np.isfinite(area(back))
+
+
+def test_step_unit_is_read_and_kept(real, tmp_path):
+    from cq_fairing.occ.io import step_length_unit
+
+    assert step_length_unit(REAL_DATA / "linkrods.step") == "MM"
+    out = tmp_path / "ring_in_m.step"
+    write_shape(real("ring_nurbs.brep"), out, unit="M")
+    assert step_length_unit(out) == "M"
+    assert "SI_UNIT($,.METRE.)" in out.read_text().replace(" ", "")
