@@ -80,9 +80,12 @@ class ScaleError(NamedTuple):
     scale : float
         Dyadic scale :math:`\\log_2 n` (curves) or of the diagonal index (surfaces).
     deviation : float
-        Maximum deviation at the dense samples.
+        Maximum deviation at the dense samples when ``exact``; otherwise (the
+        guaranteed search only decides pass/fail) a value ``> tol`` that is a lower
+        bound of the maximum, or a value ``<= tol`` that is an upper bound.
     step : int
         Order in which the scale was measured (0 first).
+    exact : bool
     """
 
     n: object
@@ -90,6 +93,7 @@ class ScaleError(NamedTuple):
     scale: float
     deviation: float
     step: int
+    exact: bool = True
 
 
 # -- validation ----------------------------------------------------------------------------------
@@ -153,24 +157,41 @@ class _Chain:
 
 
 class _Measured:
-    """An error function ``e(n)`` with a cache, an evaluation counter and a log."""
+    """An error function ``e(n)`` with a cache, an evaluation counter and a log.
+
+    ``measure(n, tol)`` returns the exact maximum for ``tol=None``; with ``tol`` (set
+    by :meth:`decide_only`) a pass/fail-deciding bound (see :class:`ScaleError`).
+    """
 
     def __init__(self, measure, poles, scale):
         self._measure, self._poles, self._scale = measure, poles, scale
         self.values = {}
+        self.tol = None
+        self.evaluations = 0
+
+    def decide_only(self, tol):
+        """Measure only as far as needed to decide ``e(n) <= tol`` (faster)."""
+        self.tol = tol
+        return self
 
     def __call__(self, n):
         if n not in self.values:
-            self.values[n] = (float(self._measure(n)), len(self.values))
+            self.evaluations += 1
+            self.values[n] = (float(self._measure(n, self.tol)), len(self.values),
+                              self.tol is None)
         return self.values[n][0]
 
-    @property
-    def evaluations(self):
-        return len(self.values)
+    def exact(self, n):
+        """The exact maximum at ``n`` (re-measured if only a bound is known)."""
+        if n not in self.values or not self.values[n][2]:
+            self.evaluations += 1
+            step = self.values[n][1] if n in self.values else len(self.values)
+            self.values[n] = (float(self._measure(n, None)), step, True)
+        return self.values[n][0]
 
     def table(self):
-        rows = [ScaleError(n, self._poles(n), self._scale(n), v, step)
-                for n, (v, step) in self.values.items()]
+        rows = [ScaleError(n, self._poles(n), self._scale(n), v, step, ex)
+                for n, (v, step, ex) in self.values.items()]
         return tuple(sorted(rows, key=lambda r: r.step))
 
 
@@ -183,8 +204,8 @@ def _curve_error(curve, degree, schedule, deviation):
         poles, weights = _cartesian(chain.coarse(coefficients, n), curve.is_rational)
         return BSplineCurve(poles, chain.target(n).knots, degree, weights)
 
-    def measure(n):
-        return probe.max_deviation(geometry(n))[0]
+    def measure(n, tol):
+        return probe.max_deviation(geometry(n), tol)[0]
 
     err = _Measured(measure, lambda n: n + degree, lambda n: float(np.log2(n)))
     return err, chain.n_max
@@ -215,9 +236,9 @@ def _dyadic_bracket(err, n_max, tol, extra_points=0):
 
 
 def _require(err, n_max, tol, what):
-    e = err(n_max)
-    if e > tol:
-        best = min(v for v, _ in err.values.values())
+    if err(n_max) > tol:
+        e = err.exact(n_max)
+        best = min(v[0] for v in err.values.values() if v[2])
         raise ToleranceNotMetError(
             f"no target within tol={tol:g}: even the largest admissible target ({what}) "
             f"deviates by {e:.4g}; raise the tolerance or fair to the source's own degree "
@@ -311,6 +332,7 @@ def _polyfit(err, n_max, tol, order):
 
 def _search_1d(err, n_max, tol, strategy, order):
     if strategy == "guaranteed":
+        err.decide_only(tol)
         return _guaranteed(err, n_max, tol)
     if strategy == "linear":
         return _linear(err, n_max, tol)
@@ -374,7 +396,9 @@ def fair_curve_to_tolerance(curve, tol, *, target_degree=None, schedule="auto",
     n = _search_1d(err, n_max, tol, strategy, order)
     target = SplineSpace.quasi_uniform(n, degree, curve.domain)
     result = project_curve(curve, target, schedule)
-    return result.replace(max_deviation=err(n), evaluations=err.evaluations, table=err.table())
+    deviation_value = err.exact(n)
+    return result.replace(max_deviation=deviation_value, evaluations=err.evaluations,
+                          table=err.table())
 
 
 def _surface_error(surface, degrees, schedule, deviation):
@@ -391,8 +415,8 @@ def _surface_error(surface, degrees, schedule, deviation):
         return BSplineSurface(poles, chain_u.target(nu).knots, chain_v.target(nv).knots,
                               degrees[0], degrees[1], weights)
 
-    def measure(n):
-        return probe.max_deviation(geometry(*n))[0]
+    def measure(n, tol):
+        return probe.max_deviation(geometry(*n), tol)[0]
 
     err = _Measured(measure, lambda n: (n[0] + degrees[0]) * (n[1] + degrees[1]),
                     lambda n: float(np.log2(max(n))))
@@ -418,7 +442,7 @@ def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
     v_err = _Projected(err, lambda k: (U, k))
     u_lo = _guaranteed(u_err, U, tol, window)
     v_lo = _guaranteed(v_err, V, tol, window)
-    best = (U, V)
+    best = _diagonal_start(err, (u_lo, v_lo), (U, V), tol)
     nu = u_lo
     while nu <= U:
         cap = (best[0] + pu) * (best[1] + pv) // (nu + pu) - pv
@@ -431,6 +455,25 @@ def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
             best = (nu, _min_along(err, nu, tol, v_lo - 1, cap, axis=1))
         nu += 1
     return _scan_surface(err, best, tol, window)
+
+
+def _diagonal_start(err, low, high, tol):
+    """Smallest passing net on the segment from ``low`` to ``high`` (bisection)."""
+    steps = max(high[0] - low[0], high[1] - low[1])
+    if steps == 0:
+        return high
+
+    def point(k):
+        return tuple(int(round(a + k * (b - a) / steps)) for a, b in zip(low, high))
+
+    fail, passing = -1, steps
+    while passing - fail > 1:
+        mid = (passing + fail) // 2
+        if err(point(mid)) <= tol:
+            passing = mid
+        else:
+            fail = mid
+    return point(passing)
 
 
 def _scan_surface(err, best, tol, window):
@@ -458,6 +501,9 @@ class _Projected:
 
     def __call__(self, k):
         return self.err(self.mapping(k))
+
+    def exact(self, k):
+        return self.err.exact(self.mapping(k))
 
     @property
     def values(self):
@@ -499,7 +545,7 @@ def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), sched
     if U < 1 or V < 1:
         raise InvalidInputError("the surface has too few poles for the target degrees.")
     if strategy == "guaranteed":
-        n = _guaranteed_surface(err, U, V, pu, pv, tol)
+        n = _guaranteed_surface(err.decide_only(tol), U, V, pu, pv, tol)
     else:
         top = max(U, V)
 
@@ -509,4 +555,6 @@ def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), sched
         k = _search_1d(_Projected(err, diagonal), top, tol, strategy, order)
         n = diagonal(k)
     result = project_surface(surface, chain_u.target(n[0]), chain_v.target(n[1]), schedule)
-    return result.replace(max_deviation=err(n), evaluations=err.evaluations, table=err.table())
+    deviation_value = err.exact(n)
+    return result.replace(max_deviation=deviation_value, evaluations=err.evaluations,
+                          table=err.table())

@@ -78,8 +78,9 @@ def blade_surface(shape=(50, 80), noise=0.02, seed=7, span=100.0, chord=30.0):
 
     Span direction ``u`` (length ``span``), chord direction ``v`` (length ``chord``);
     the section at height :math:`z = \text{span}\,u` is a cambered arc
-    :math:`y = 0.12\,c\,(1 - (2v - 1)^2)` rotated by a twist of
-    :math:`0.6\,u` rad and tapered by :math:`1 - 0.3u`.
+    :math:`y = c\,(0.12 + 0.04\sin 3\pi u)(1 - (2v - 1)^2)\,(1 + 0.5 v)` with chord
+    :math:`c = \text{chord}\,(1 - 0.3u)`, rotated by a twist of :math:`1.2\,u` rad and
+    swept by :math:`x \mathrel{+}= 2\sin(2\pi u)` (lean).
 
     Parameters
     ----------
@@ -96,9 +97,9 @@ def blade_surface(shape=(50, 80), noise=0.02, seed=7, span=100.0, chord=30.0):
     v = np.linspace(0.0, 1.0, shape[1])[None, :]
     c = chord * (1.0 - 0.3 * u)
     x0 = c * (v - 0.5)
-    y0 = 0.12 * c * (1.0 - (2.0 * v - 1.0) ** 2)
-    twist = 0.6 * u
-    x = x0 * np.cos(twist) - y0 * np.sin(twist)
+    y0 = c * (0.12 + 0.04 * np.sin(3 * np.pi * u)) * np.sin(np.pi * v) * (1 + 0.5 * v)
+    twist = 1.2 * u
+    x = x0 * np.cos(twist) - y0 * np.sin(twist) + 2.0 * np.sin(2 * np.pi * u)
     y = x0 * np.sin(twist) + y0 * np.cos(twist)
     z = span * u + 0.0 * v
     clean = np.stack([x, y, z], axis=2)

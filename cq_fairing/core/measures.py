@@ -434,8 +434,22 @@ class SurfaceProbe:
         u0, v0 = _window_start(here, there, i, j, self.u, self.v, window)
         return closest_points_surface(target, here[i, j], u0, v0)[2]
 
-    def max_deviation(self, faired, tol=None):
-        """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid."""
+    def max_deviation(self, faired, tol=None, stride=4):
+        """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid.
+
+        With ``tol``, every ``stride``-th sample per direction is checked first: a miss
+        there is a miss of the dense grid (same samples), found at 1/stride^2 the cost.
+        """
+        if tol is not None and stride > 1 and min(self.points.shape[:2]) > 4 * stride:
+            sub = SurfaceProbe.__new__(SurfaceProbe)
+            sub.source, sub.method = self.source, self.method
+            sub.u, sub.v = self.u[::stride], self.v[::stride]
+            sub.points = self.points[::stride, ::stride]
+            value, k = sub.max_deviation(faired, tol, stride=1)
+            if value > tol:
+                i, j = np.unravel_index(k, sub.points.shape[:2])
+                return value, int(np.ravel_multi_index((i * stride, j * stride),
+                                                       self.points.shape[:2]))
         other, bound = self.bound(faired)
         flat = bound.ravel()
         if self.method == "parametric":
@@ -447,18 +461,30 @@ class SurfaceProbe:
 def _pruned_max(bound, exact, tol):
     """Max of ``exact`` over all samples, evaluating it only where ``bound`` can win.
 
-    ``bound >= exact`` holds sample-wise.  Samples are processed in decreasing order of
-    the bound, in doubling batches, until the next bound cannot beat the running
+    ``bound >= exact`` holds sample-wise.  Candidates (bound above the tolerance, or
+    above the true distance at the 64 largest bounds) are processed in decreasing order
+    of the bound, in doubling batches, until the next bound cannot beat the running
     maximum.  Without ``tol`` the exact maximum is returned.  With ``tol`` the search
     also stops as soon as the maximum exceeds ``tol`` (the value returned is then an
     exact sample distance ``> tol``, a lower bound of the maximum) or once no remaining
     bound exceeds ``tol`` (the value returned is then an upper bound ``<= tol``).
     """
-    order = np.argsort(bound)[::-1]
-    best, best_i, start, batch = -1.0, int(order[0]), 0, 64
+    best, best_i = -1.0, int(np.argmax(bound))
+    if tol is not None:
+        candidates = np.flatnonzero(bound > tol)
+        if candidates.size == 0:
+            return float(bound[best_i]), best_i
+    else:
+        top = np.argpartition(bound, -min(64, bound.size))[-min(64, bound.size):]
+        d = exact(top)
+        k = int(np.argmax(d))
+        best, best_i = float(d[k]), int(top[k])
+        candidates = np.setdiff1d(np.flatnonzero(bound > best), top)
+    order = candidates[np.argsort(bound[candidates])[::-1]]
+    start, batch = 0, 64
     while start < order.size:
         next_bound = float(bound[order[start]])
-        if start > 0 and next_bound <= best:
+        if next_bound <= best:
             break
         if tol is not None and next_bound <= tol:
             return max(best, next_bound), best_i
@@ -471,6 +497,9 @@ def _pruned_max(bound, exact, tol):
             return best, best_i
         start += batch
         batch *= 2
+    if tol is not None and best <= tol:
+        rest = float(bound[order[start]]) if start < order.size else tol
+        return max(best, min(rest, tol)), best_i
     return best, best_i
 
 
