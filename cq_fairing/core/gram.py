@@ -18,10 +18,13 @@ Ji, Xue, Yang, He (2014), eq. (5)-(6): :math:`\langle\Phi_n|\Phi_n\rangle`,
 :math:`\langle\Phi_n|\Phi_m\rangle`.
 """
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError
+from .spaces import basis_functions, find_spans
 
 __all__ = ["gram_matrix", "quadrature_rule"]
 
@@ -39,12 +42,18 @@ def quadrature_rule(breakpoints, points_per_interval):
     -------
     nodes, weights : ndarray, shape (s * points_per_interval,)
     """
-    ref_x, ref_w = np.polynomial.legendre.leggauss(points_per_interval)
+    ref_x, ref_w = _gauss_legendre(points_per_interval)
     a, b = breakpoints[:-1, None], breakpoints[1:, None]
     half = 0.5 * (b - a)
     nodes = (a + b) * 0.5 + half * ref_x[None, :]
     weights = half * ref_w[None, :]
     return nodes.ravel(), weights.ravel()
+
+
+@lru_cache(maxsize=32)
+def _gauss_legendre(points):
+    """Reference nodes and weights on [-1, 1] (cached: numpy recomputes them each call)."""
+    return np.polynomial.legendre.leggauss(points)
 
 
 def gram_matrix(space_a, space_b=None, nu=0):
@@ -82,6 +91,22 @@ def gram_matrix(space_a, space_b=None, nu=0):
     merged[-1] = dom_a[1]
     degree = max(space_a.degree + space_b.degree - 2 * nu, 0)
     nodes, weights = quadrature_rule(merged, degree // 2 + 1)
-    ma = space_a.collocation(nodes, nu)
-    mb = ma if space_b is space_a else space_b.collocation(nodes, nu)
-    return (ma.T @ sp.diags(weights) @ mb).tocsr()
+    rows, values_a = _local_basis(space_a, nodes, nu)
+    cols, values_b = (rows, values_a) if space_b is space_a else _local_basis(space_b, nodes, nu)
+    products = weights[:, None, None] * values_a[:, :, None] * values_b[:, None, :]
+    shape = products.shape
+    coo = sp.coo_matrix(
+        (products.ravel(),
+         (np.broadcast_to(rows[:, :, None], shape).ravel(),
+          np.broadcast_to(cols[:, None, :], shape).ravel())),
+        shape=(space_a.dimension, space_b.dimension),
+    )
+    return coo.tocsr()  # sums the contributions of all quadrature nodes
+
+
+def _local_basis(space, nodes, nu):
+    """Indices and values of the ``p + 1`` basis functions non-zero at each node."""
+    spans = find_spans(space, nodes)
+    values = basis_functions(space, nodes, spans, nu)[nu]
+    index = spans[:, None] - space.degree + np.arange(space.degree + 1)[None, :]
+    return index, values
