@@ -119,13 +119,22 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
                              face_uv_grid(original_face, density), projection)
 
 
-def deviation_on_grid(original_face, faired_face, grid, projection="local"):
-    """:func:`sample_face_deviation` on a precomputed :func:`face_uv_grid` (trusted)."""
+def reference_samples(face, grid):
+    """``(uv, points, normals)`` of ``face`` on a :func:`face_uv_grid` (inside samples)."""
     u, v, inside = grid
     uv = np.array([(a, b) for i, a in enumerate(u) for j, b in enumerate(v) if inside[i, j]])
     if uv.size == 0:
         raise InvalidInputError("no UV sample falls inside the face; raise the density.")
-    points, normals = _points_and_normals(original_face, uv)
+    points, normals = _points_and_normals(face, uv)
+    return uv, points, normals
+
+
+def deviation_on_grid(original_face, faired_face, grid, projection="local", reference=None):
+    """:func:`sample_face_deviation` on a precomputed :func:`face_uv_grid` (trusted).
+
+    ``reference`` may hold :func:`reference_samples` of the original on that grid.
+    """
+    uv, points, normals = reference or reference_samples(original_face, grid)
     faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
     parametric = np.linalg.norm(faired_points - points, axis=1)
     distance, projected = _project(BRep_Tool.Surface_s(faired_face), points, uv,
