@@ -173,12 +173,13 @@ def _grid_points(surface, u, v):
 
 
 # -- closest points ---------------------------------------------------------------------------
-def closest_points_curve(curve, points, u0, iterations=25):
-    r"""Foot points on ``curve`` of ``points`` by clamped Newton iterations.
+def closest_points_curve(curve, points, u0, iterations=30):
+    r"""Foot points on ``curve`` of ``points`` by damped, clamped Newton iterations.
 
     Solves :math:`f(t) = C'(t)\cdot(C(t) - P) = 0` with
     :math:`f' = |C'|^2 + C''\cdot(C - P)` (a gradient step when :math:`f' \le 0`),
-    clamping ``t`` to the domain; keeps the start when Newton does not improve it.
+    clamping ``t`` to the domain and halving a step until the distance decreases, so
+    the distance never grows from the start.
 
     Parameters
     ----------
@@ -196,7 +197,7 @@ def closest_points_curve(curve, points, u0, iterations=25):
     points = np.asarray(points, dtype=float)
     lo, hi = curve.domain
     t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
-    start_d = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
+    dist = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
     active = np.arange(t.size)
     for _ in range(iterations):
         if active.size == 0:
@@ -204,26 +205,56 @@ def closest_points_curve(curve, points, u0, iterations=25):
         c, c1, c2 = curve_derivatives(curve, t[active], 2)
         r = c - points[active]
         f = np.einsum("qd,qd->q", c1, r)
-        speed2 = np.einsum("qd,qd->q", c1, c1)
+        speed2 = np.maximum(np.einsum("qd,qd->q", c1, c1), 1e-300)
         fp = speed2 + np.einsum("qd,qd->q", c2, r)
-        denom = np.where(fp > 1e-14 * np.maximum(speed2, 1e-300), fp, np.maximum(speed2, 1e-300))
-        new = np.clip(t[active] - f / denom, lo, hi)
-        moved = np.abs(new - t[active]) > 1e-14 * (hi - lo)
-        t[active] = new
+        step = -f / np.where(fp > 1e-12 * speed2, fp, speed2)
+        big = np.abs(step) > 1e-13 * (hi - lo)
+        active, step = active[big], step[big]
+        if active.size == 0:
+            break
+
+        def trial(idx, s):
+            new = np.clip(t[idx] + s, lo, hi)
+            return new, np.linalg.norm(curve_derivatives(curve, new, 0)[0] - points[idx], axis=1)
+
+        new, d_new = _damped(trial, active, step, dist)
+        moved = (d_new < dist[active]) & (np.abs(new - t[active]) > 1e-13 * (hi - lo))
+        t[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
-    d = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
-    worse = d > start_d
-    t[worse] = np.clip(np.asarray(u0, dtype=float)[worse], lo, hi)
-    return t, np.minimum(d, start_d)
+    return t, dist
 
 
-def closest_points_surface(surface, points, u0, v0, iterations=25):
-    r"""Foot points on ``surface`` by clamped 2x2 Newton iterations.
+def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2):
+    """Smallest Newton distance from the ``starts`` nearest samples and the same parameter."""
+    _, near = tree.query(points, k=min(starts, sample_u.size))
+    near = near.reshape(points.shape[0], -1)
+    best = closest_points_curve(curve, points, same_u)[1]
+    for column in near.T:
+        best = np.minimum(best, closest_points_curve(curve, points, sample_u[column])[1])
+    return best
+
+
+def _damped(trial, active, step, dist, halvings=6):
+    """Halve steps until the distance does not grow; returns the last trial per point."""
+    new, d_new = trial(active, step)
+    for _ in range(halvings):
+        worse = d_new > dist[active]
+        if not worse.any():
+            break
+        step = np.where(worse.reshape((-1,) + (1,) * (step.ndim - 1)), 0.5 * step, step)
+        sel = np.flatnonzero(worse)
+        n2, d2 = trial(active[sel], step[sel])
+        new[sel], d_new[sel] = n2, d2
+    return new, d_new
+
+
+def closest_points_surface(surface, points, u0, v0, iterations=30):
+    r"""Foot points on ``surface`` by damped, clamped 2x2 Newton iterations.
 
     Solves :math:`g = (S_u\cdot r,\ S_v\cdot r) = 0`, :math:`r = S(u, v) - P`, with the
     Hessian :math:`H = J^T J + [S_{uu}\cdot r,\ S_{uv}\cdot r;\ S_{uv}\cdot r,\ S_{vv}\cdot r]`
     (Gauss-Newton :math:`J^T J` when :math:`H` is not positive definite), clamping to the
-    domain; keeps the start when Newton does not improve it.
+    domain and halving steps until the distance decreases.
 
     Returns
     -------
@@ -231,16 +262,15 @@ def closest_points_surface(surface, points, u0, v0, iterations=25):
     """
     points = np.asarray(points, dtype=float)
     (ulo, uhi), (vlo, vhi) = surface.domain
-    u = np.clip(np.asarray(u0, dtype=float).copy(), ulo, uhi)
-    v = np.clip(np.asarray(v0, dtype=float).copy(), vlo, vhi)
-    u_start, v_start = u.copy(), v.copy()
-    start_d = np.linalg.norm(surface_derivatives(surface, u, v, 0)[(0, 0)] - points, axis=1)
-    active = np.arange(u.size)
+    uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
+                   np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
+    dist = np.linalg.norm(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)] - points, axis=1)
+    active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
     for _ in range(iterations):
         if active.size == 0:
             break
-        s = surface_derivatives(surface, u[active], v[active], 2)
+        s = surface_derivatives(surface, uv[active, 0], uv[active, 1], 2)
         r = s[(0, 0)] - points[active]
         su, sv = s[(1, 0)], s[(0, 1)]
         g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
@@ -251,21 +281,28 @@ def closest_points_surface(surface, points, u0, v0, iterations=25):
         hb = b + np.einsum("qd,qd->q", s[(1, 1)], r)
         hc = c + np.einsum("qd,qd->q", s[(0, 2)], r)
         det = ha * hc - hb * hb
-        bad = (det <= 1e-14 * (a * c + 1e-300)) | (ha <= 0)
+        bad = (det <= 1e-12 * (a * c + 1e-300)) | (ha <= 0)
         ha, hb, hc = np.where(bad, a, ha), np.where(bad, b, hb), np.where(bad, c, hc)
         det = ha * hc - hb * hb
         det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        du = -(hc * g1 - hb * g2) / det
-        dv = -(ha * g2 - hb * g1) / det
-        nu_ = np.clip(u[active] + du, ulo, uhi)
-        nv_ = np.clip(v[active] + dv, vlo, vhi)
-        moved = (np.abs(nu_ - u[active]) + np.abs(nv_ - v[active])) > 1e-14 * scale
-        u[active], v[active] = nu_, nv_
+        step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
+        big = np.abs(step).sum(axis=1) > 1e-13 * scale
+        active, step = active[big], step[big]
+        if active.size == 0:
+            break
+
+        def trial(idx, st):
+            new = uv[idx] + st
+            new[:, 0] = np.clip(new[:, 0], ulo, uhi)
+            new[:, 1] = np.clip(new[:, 1], vlo, vhi)
+            pts = surface_derivatives(surface, new[:, 0], new[:, 1], 0)[(0, 0)]
+            return new, np.linalg.norm(pts - points[idx], axis=1)
+
+        new, d_new = _damped(trial, active, step, dist)
+        moved = (d_new < dist[active]) & (np.abs(new - uv[active]).sum(axis=1) > 1e-13 * scale)
+        uv[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
-    d = np.linalg.norm(surface_derivatives(surface, u, v, 0)[(0, 0)] - points, axis=1)
-    worse = d > start_d
-    u[worse], v[worse] = u_start[worse], v_start[worse]
-    return u, v, np.minimum(d, start_d)
+    return uv[:, 0], uv[:, 1], dist
 
 
 # -- results ---------------------------------------------------------------------------------
@@ -296,7 +333,7 @@ class Deviation:
 
 @dataclass(frozen=True)
 class DeviationMap:
-    """Per-sample deviation of a faired geometry from its source, ready for viewers.
+    r"""Per-sample deviation of a faired geometry from its source, ready for viewers.
 
     Attributes
     ----------
@@ -339,19 +376,32 @@ class CurveProbe:
     ----------
     source : BSplineCurve
     per_span : int
-        Samples per span of the source space (the finer space when fairing).
+        Samples per span of the merged breakpoints of the source and each candidate.
     method : {"geometric", "parametric"}
     u : ndarray, optional
-        Explicit sample parameters (overrides ``per_span``).
+        Explicit, fixed sample parameters (overrides ``per_span``).
     """
 
     def __init__(self, source, per_span=8, method="geometric", u=None):
         _check_method(method)
         self.source = source
         self.method = method
-        self.u = sample_parameters(source.space, per_span=per_span) if u is None else u
-        self.points = curve_derivatives(source, self.u, 0)[0]
+        self.per_span = per_span
+        self._fixed = u is not None
+        self._set_samples(sample_parameters(source.space, per_span=per_span) if u is None else u)
+
+    def _set_samples(self, u):
+        self.u = u
+        self.points = curve_derivatives(self.source, u, 0)[0]
         self._tree = None
+
+    def _adapt(self, faired):
+        """Use ``per_span`` samples per span of the merged breakpoints of both curves."""
+        if self._fixed:
+            return
+        u = sample_parameters(self.source.space, faired.space, per_span=self.per_span)
+        if u.size != self.u.size or not np.array_equal(u, self.u):
+            self._set_samples(u)
 
     @property
     def tree(self):
@@ -366,15 +416,11 @@ class CurveProbe:
 
     def true_distance(self, faired, other, idx):
         """Two-sided true distance at samples ``idx`` (max of both directions)."""
-        tree = cKDTree(other) if idx.size > 0 else None
-        d_fs = np.zeros(idx.size)
-        if idx.size:
-            _, near = tree.query(self.points[idx])
-            _, d_fs = closest_points_curve(faired, self.points[idx], self.u[near])
-            _, near = self.tree.query(other[idx])
-            _, d_sf = closest_points_curve(self.source, other[idx], self.u[near])
-            d_fs = np.maximum(d_fs, d_sf)
-        return d_fs
+        if idx.size == 0:
+            return np.zeros(0)
+        d_fs = _closest_from_starts(faired, self.points[idx], self.u, cKDTree(other), self.u[idx])
+        d_sf = _closest_from_starts(self.source, other[idx], self.u, self.tree, self.u[idx])
+        return np.maximum(d_fs, d_sf)
 
     def max_deviation(self, faired, tol=None):
         """Largest deviation (dense samples); with ``tol`` stop once it is exceeded.
@@ -386,6 +432,7 @@ class CurveProbe:
         index : int
             Sample index where it occurs.
         """
+        self._adapt(faired)
         other, bound = self.bound(faired)
         if self.method == "parametric":
             i = int(np.argmax(bound))
@@ -409,11 +456,26 @@ class SurfaceProbe:
         _check_method(method)
         self.source = source
         self.method = method
+        self.per_span = per_span
+        self._fixed = uv is not None
         if uv is None:
             uv = (sample_parameters(source.u_space, per_span=per_span),
                   sample_parameters(source.v_space, per_span=per_span))
-        self.u, self.v = uv
-        self.points = _grid_points(source, self.u, self.v)
+        self._set_samples(*uv)
+
+    def _set_samples(self, u, v):
+        self.u, self.v = u, v
+        self.points = _grid_points(self.source, u, v)
+
+    def _adapt(self, faired):
+        """Use ``per_span`` samples per span of the merged breakpoints, per direction."""
+        if self._fixed:
+            return
+        u = sample_parameters(self.source.u_space, faired.u_space, per_span=self.per_span)
+        v = sample_parameters(self.source.v_space, faired.v_space, per_span=self.per_span)
+        if (u.size, v.size) != (self.u.size, self.v.size) or not (
+                np.array_equal(u, self.u) and np.array_equal(v, self.v)):
+            self._set_samples(u, v)
 
     def bound(self, faired):
         other = _grid_points(faired, self.u, self.v)
@@ -432,7 +494,8 @@ class SurfaceProbe:
     def _one_way(self, target, here, there, i, j, window):
         """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid)."""
         u0, v0 = _window_start(here, there, i, j, self.u, self.v, window)
-        return closest_points_surface(target, here[i, j], u0, v0)[2]
+        d = closest_points_surface(target, here[i, j], u0, v0)[2]
+        return np.minimum(d, closest_points_surface(target, here[i, j], self.u[i], self.v[j])[2])
 
     def max_deviation(self, faired, tol=None, stride=4):
         """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid.
@@ -441,15 +504,15 @@ class SurfaceProbe:
         there is a miss of the dense grid (same samples), found at 1/stride^2 the cost.
         """
         if tol is not None and stride > 1 and min(self.points.shape[:2]) > 4 * stride:
-            sub = SurfaceProbe.__new__(SurfaceProbe)
-            sub.source, sub.method = self.source, self.method
-            sub.u, sub.v = self.u[::stride], self.v[::stride]
-            sub.points = self.points[::stride, ::stride]
+            self._adapt(faired)
+            sub = SurfaceProbe(self.source, method=self.method,
+                               uv=(self.u[::stride], self.v[::stride]))
             value, k = sub.max_deviation(faired, tol, stride=1)
             if value > tol:
                 i, j = np.unravel_index(k, sub.points.shape[:2])
                 return value, int(np.ravel_multi_index((i * stride, j * stride),
                                                        self.points.shape[:2]))
+        self._adapt(faired)
         other, bound = self.bound(faired)
         flat = bound.ravel()
         if self.method == "parametric":
@@ -481,7 +544,7 @@ def _pruned_max(bound, exact, tol):
         best, best_i = float(d[k]), int(top[k])
         candidates = np.setdiff1d(np.flatnonzero(bound > best), top)
     order = candidates[np.argsort(bound[candidates])[::-1]]
-    start, batch = 0, 64
+    start, batch = 0, 256
     while start < order.size:
         next_bound = float(bound[order[start]])
         if next_bound <= best:
@@ -586,8 +649,11 @@ def deviation_map(source, faired=None, *, method="geometric", per_span=8):
         other = curve_derivatives(faired, u, 0)[0]
         foot = other
         if method == "geometric":
-            _, near = cKDTree(other).query(c[0])
-            t, _ = closest_points_curve(faired, c[0], u[near])
+            t, best = closest_points_curve(faired, c[0], u)
+            _, near = cKDTree(other).query(c[0], k=min(3, u.size))
+            for column in near.reshape(u.size, -1).T:
+                t2, d2 = closest_points_curve(faired, c[0], u[column])
+                t, best = np.where(d2 < best, t2, t), np.minimum(d2, best)
             foot = curve_derivatives(faired, t, 0)[0]
         normal = _principal_normal(c[1], c[2])
         values = np.linalg.norm(foot - c[0], axis=1)

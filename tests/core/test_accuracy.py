@@ -1,0 +1,163 @@
+"""Accuracy control: validation, the guaranteed search against exhaustive search, seed tables."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import cq_fairing as cf
+from cq_fairing.core import measures as M
+from cq_fairing.core.accuracy import dyadic_table, polyfit_scale
+from cq_fairing.core.examples import blade_surface, seed_curve
+from cq_fairing.core.fairing import project_curve, project_surface, target_space
+
+
+@pytest.fixture(scope="module")
+def seed():
+    return seed_curve()
+
+
+def noisy_poles(k, amp, seed_):
+    rng = np.random.default_rng(seed_)
+    t = np.linspace(0, np.pi, k)
+    return np.c_[np.cos(t), np.sin(t), 0.2 * np.sin(3 * t)] + rng.normal(0, amp, (k, 3))
+
+
+def exhaustive_curve(curve, tol):
+    probe = M.CurveProbe(curve)
+    for n in range(1, curve.n_poles - 2):
+        faired = project_curve(curve, target_space(curve.space, n)).curve
+        if probe.max_deviation(faired)[0] <= tol:
+            return n
+    return None
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), "0.1", True, None])
+def test_invalid_tolerance(bad):
+    poles = noisy_poles(20, 0.01, 0)
+    if bad is None:
+        with pytest.raises(cf.InvalidInputError):
+            cf.fair_curve(poles)
+        return
+    with pytest.raises(cf.InvalidToleranceError, match="tol must be a positive"):
+        cf.fair_curve(poles, tol=bad)
+    with pytest.raises(cf.InvalidToleranceError):
+        cf.fair_surface(np.stack([poles, poles + [0, 0, 1]], axis=1).repeat(3, axis=1)[:, :5],
+                        tol=bad)
+
+
+def test_bad_options():
+    poles = noisy_poles(20, 0.01, 0)
+    with pytest.raises(cf.InvalidInputError, match="strategy"):
+        cf.fair_curve(poles, tol=0.1, strategy="magic")
+    with pytest.raises(cf.InvalidInputError, match="order"):
+        cf.fair_curve(poles, tol=0.1, strategy="polyfit", order=9)
+    with pytest.raises(cf.InvalidInputError, match="deviation"):
+        cf.fair_curve(poles, tol=0.1, deviation="hausdorff")
+
+
+def test_tolerance_not_met():
+    poles = noisy_poles(30, 0.05, 1)
+    with pytest.raises(cf.ToleranceNotMetError) as info:
+        cf.fair_curve(poles, tol=1e-9, target_degree=2)
+    assert info.value.tolerance == 1e-9
+    assert info.value.best_deviation > 1e-9
+    assert "raise the tolerance" in str(info.value)
+
+
+@settings(max_examples=12)
+@given(k=st.integers(10, 30), amp=st.floats(1e-3, 3e-2), rel=st.floats(0.3, 3.0),
+       seed_=st.integers(0, 10_000))
+def test_guaranteed_curve_is_within_tol_and_minimal(k, amp, rel, seed_):
+    curve = cf.make_curve(noisy_poles(k, amp, seed_))
+    tol = rel * amp
+    result = cf.fair_curve(curve.poles, tol=tol)
+    truth = M.deviation(curve, result.curve).max
+    assert truth <= tol * (1 + 1e-9)
+    assert result.max_deviation == pytest.approx(truth, rel=1e-9, abs=1e-15)
+    assert result.n == exhaustive_curve(curve, tol)
+    assert len(result.table) <= result.evaluations <= len(result.table) + 1
+
+
+@settings(max_examples=5)
+@given(ku=st.integers(7, 9), kv=st.integers(7, 9), amp=st.floats(2e-3, 2e-2),
+       seed_=st.integers(0, 1000))
+def test_guaranteed_surface_is_within_tol_and_minimal(ku, kv, amp, seed_):
+    rng = np.random.default_rng(seed_)
+    u, v = np.meshgrid(np.linspace(0, 1, ku), np.linspace(0, 1, kv), indexing="ij")
+    net = np.stack([u, v, 0.3 * np.sin(2 * u) * np.cos(3 * v)], axis=2) + rng.normal(0, amp, (ku, kv, 3))
+    surface = cf.make_surface(net)
+    tol = 2 * amp
+    result = cf.fair_surface(net, tol=tol)
+    assert M.deviation(surface, result.surface).max <= tol * (1 + 1e-9)
+    probe = M.SurfaceProbe(surface)
+    best = None
+    for nu in range(1, ku - 2):
+        for nv in range(1, kv - 2):
+            total = (nu + 3) * (nv + 3)
+            if best is not None and total >= best:
+                continue
+            faired = project_surface(surface, target_space(surface.u_space, nu),
+                                     target_space(surface.v_space, nv)).surface
+            if probe.max_deviation(faired)[0] <= tol:
+                best = total
+    assert result.poles.shape[0] * result.poles.shape[1] == best
+
+
+def test_result_deviation_matches_dense_evaluation(seed):
+    result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots)
+    u = np.linspace(0, 1, 200_001)
+    same = np.linalg.norm(seed.curve.evaluate(u) - result.curve.evaluate(u), axis=1).max()
+    assert result.max_deviation <= 0.02
+    assert result.max_deviation <= same + 1e-12
+    assert same <= 0.03
+    assert len(result.curve.poles) == result.n + 3
+
+
+def test_seed_table1_shape(seed):
+    table = dyadic_table(seed.curve, 4, schedule="hybrid")
+    errors = {j: e for j, _, e in table}
+    # Table 1: noise-level errors down to 2^7, then a steep rise; 0.02 crossed in (6, 7)
+    assert all(errors[j] < 0.01 for j in (10, 9, 8, 7))
+    assert errors[6] > 0.02 > errors[7]
+    assert errors[4] > errors[5] > 10 * errors[6]
+    assert 2 < errors[4] < 6
+
+
+def test_seed_table2_linear_iterations(seed):
+    result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
+                           strategy="linear", schedule="hybrid")
+    dyadic = [r for r in result.table if r.n in (1024, 512, 256, 128, 64)]
+    iterations = [r for r in result.table if r.n not in (1024, 512, 256, 128, 64, 1299)]
+    assert len(dyadic) == 5 and 2 <= len(iterations) <= 4
+    assert iterations[0].deviation < 0.02           # first guess from (7, 6) passes
+    assert result.table[-1].n == result.n and result.max_deviation <= 0.02
+    failing = [r.n for r in result.table if r.deviation > 0.02 and r.n < result.n]
+    assert max(failing) == result.n - 1             # stops when the bracket is adjacent
+
+
+def test_seed_table3_polyfit_orders(seed):
+    table = dyadic_table(seed.curve, 4, schedule="hybrid")
+    points = [(j, e) for j, _, e in table]
+    scales = [int(np.ceil(2 ** polyfit_scale(points, 0.02, order, (6, 7)))) for order in range(2, 7)]
+    assert scales == sorted(scales, reverse=True)   # higher order, closer to the objective
+    objective = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
+                              schedule="hybrid").n
+    assert abs(scales[-1] - objective) <= 0.05 * objective
+    assert scales[0] > objective
+    result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
+                           strategy="polyfit", schedule="hybrid")
+    assert result.max_deviation <= 0.02 and result.n >= objective
+
+
+def test_blade_surface_gets_fairer_and_closer_to_truth():
+    blade = blade_surface()
+    result = cf.fair_surface(blade.surface.poles, tol=0.08)
+    noisy_error = M.deviation(blade.truth, blade.surface).max
+    faired_error = M.deviation(blade.truth, result.surface).max
+    summary = M.fairness_summary(result)
+    # recorded: noisy 0.082 -> faired 0.038 from the truth; (17, 6) spans, 180 poles
+    assert faired_error < 0.6 * noisy_error
+    assert result.max_deviation <= 0.08
+    assert summary["bending_energy"]["after"] < 0.05 * summary["bending_energy"]["before"]
+    assert summary["curvature_extrema"]["after"] < 0.5 * summary["curvature_extrema"]["before"]
+    assert summary["inflections"]["after"] < summary["inflections"]["before"]

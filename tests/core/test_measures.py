@@ -1,0 +1,215 @@
+"""Deviation and fairness measures against brute force and closed forms."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.interpolate import BSpline
+from scipy.spatial import cKDTree
+
+import cq_fairing as cf
+from cq_fairing.core import measures as M
+from cq_fairing.core.fairing import project_curve, project_surface, target_space
+
+S2 = np.sqrt(0.5)
+
+
+def rational_circle(radius=2.0):
+    """Exact NURBS circle (9 poles, degree 2)."""
+    square = np.array([[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1], [1, 0]],
+                      float)
+    weights = np.array([1, S2, 1, S2, 1, S2, 1, S2, 1])
+    knots = [0, 0, 0, .25, .25, .5, .5, .75, .75, 1, 1, 1]
+    return cf.make_curve(radius * square, knots, 2, weights), square, weights, knots
+
+
+def rational_sphere(radius=3.0):
+    _, square, wc, kc = rational_circle(1.0)
+    meridian = np.array([[0, -1], [1, -1], [1, 0], [1, 1], [0, 1]], float)
+    wm = np.array([1, S2, 1, S2, 1])
+    poles = np.zeros((5, 9, 3))
+    poles[..., 0] = meridian[:, None, 0] * square[None, :, 0]
+    poles[..., 1] = meridian[:, None, 0] * square[None, :, 1]
+    poles[..., 2] = meridian[:, None, 1]
+    return cf.make_surface(radius * poles, [0, 0, 0, .5, .5, 1, 1, 1], kc, 2, np.outer(wm, wc))
+
+
+def rational_cylinder(radius=1.5, height=4.0):
+    _, square, wc, kc = rational_circle(1.0)
+    poles = np.zeros((2, 9, 3))
+    poles[..., :2] = radius * square[None]
+    poles[1, :, 2] = height
+    return cf.make_surface(poles, [0, 0, 1, 1], kc, (1, 2), np.outer([1, 1], wc))
+
+
+def noisy_curve(k, amplitude, seed):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2 * np.pi, k)
+    return cf.make_curve(np.c_[np.cos(t), np.sin(t), 0.3 * np.sin(2 * t)] + rng.normal(0, amplitude, (k, 3)))
+
+
+def brute_hausdorff_curve(a, b, u, dense=200_001):
+    """Two-sided max distance from the samples u to a dense polyline of the other curve."""
+    x = np.linspace(0, 1, dense)
+    da = cKDTree(b.evaluate(x)).query(a.evaluate(u))[0]
+    db = cKDTree(a.evaluate(x)).query(b.evaluate(u))[0]
+    return max(da.max(), db.max())
+
+
+@settings(max_examples=12)
+@given(k=st.integers(12, 60), ratio=st.floats(0.1, 0.8), amp=st.floats(1e-3, 5e-2),
+       seed=st.integers(0, 1000))
+def test_curve_max_deviation_matches_brute_force(k, ratio, amp, seed):
+    curve = noisy_curve(k, amp, seed)
+    n = max(1, int(ratio * (k - 3)))
+    faired = project_curve(curve, target_space(curve.space, n)).curve
+    probe = M.CurveProbe(curve)
+    value, i = probe.max_deviation(faired)
+    brute = brute_hausdorff_curve(curve, faired, probe.u)
+    # ours: distance to an actual foot point (>= exact); brute: to a 4e5-point polyline
+    assert value <= brute + 1e-9
+    assert value >= brute - 1e-6
+    same = np.linalg.norm(curve.evaluate(probe.u) - faired.evaluate(probe.u), axis=1).max()
+    assert M.CurveProbe(curve, method="parametric").max_deviation(faired)[0] == pytest.approx(same)
+    assert value <= same + 1e-12
+    # the tolerance mode decides the same way
+    for tol in (0.5 * value, 2 * value):
+        decided, _ = probe.max_deviation(faired, tol)
+        assert (decided <= tol) == (value <= tol)
+
+
+def test_sample_parameters_cover_every_span_and_ends():
+    space = cf.SplineSpace.from_knots([0, 0, 0, 0, .1, .5, .55, 1, 1, 1, 1], 3)
+    u = M.sample_parameters(space, per_span=8)
+    assert u[0] == 0 and u[-1] == 1 and u.size == 4 * 8 + 1
+    assert set(space.breakpoints) <= set(u)
+    with pytest.raises(cf.InvalidInputError):
+        M.sample_parameters(space, per_span=0)
+
+
+def test_surface_deviation_matches_brute_force():
+    rng = np.random.default_rng(3)
+    u, v = np.meshgrid(np.linspace(0, 1, 14), np.linspace(0, 1, 11), indexing="ij")
+    pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
+    source = cf.make_surface(pts + rng.normal(0, 0.01, pts.shape))
+    fair = project_surface(source, target_space(source.u_space, 4), target_space(source.v_space, 3))
+    probe = M.SurfaceProbe(source)
+    value, _ = probe.max_deviation(fair.surface)
+    x = np.linspace(0, 1, 700)
+    dense_f = fair.surface.evaluate_grid(x, x).reshape(-1, 3)
+    dense_s = source.evaluate_grid(x, x).reshape(-1, 3)
+    s_pts = probe.points.reshape(-1, 3)
+    f_pts = fair.surface.evaluate_grid(probe.u, probe.v).reshape(-1, 3)
+    brute = max(cKDTree(dense_f).query(s_pts)[0].max(), cKDTree(dense_s).query(f_pts)[0].max())
+    assert brute - 2e-4 <= value <= brute + 1e-9
+    dev = M.deviation(fair)
+    assert dev.max == pytest.approx(value, rel=1e-9)
+    assert 0 < dev.mean <= dev.rms <= dev.max
+    dmap = M.deviation_map(fair)
+    assert dmap.values.shape == dmap.signed.shape == (dmap.parameters[0].size, dmap.parameters[1].size)
+    assert np.allclose(np.abs(dmap.signed), dmap.values)
+
+
+def test_signed_deviation_of_offset_plane():
+    u, v = np.meshgrid(np.linspace(0, 1, 6), np.linspace(0, 1, 5), indexing="ij")
+    plane = np.stack([u, v, 0 * u], axis=2)
+    a = cf.make_surface(plane)
+    b = cf.make_surface(plane + [0, 0, 0.1])
+    c = cf.make_surface(plane - [0, 0, 0.1])
+    for other, sign in ((b, 1), (c, -1)):
+        dmap = M.deviation_map(a, other)
+        assert np.allclose(dmap.values, 0.1) and np.allclose(dmap.signed, sign * 0.1)
+        assert M.deviation(a, other).max == pytest.approx(0.1)
+    with pytest.raises(cf.InvalidInputError):
+        M.deviation(a, rational_circle()[0])
+
+
+def test_circle_curvature_and_energy_closed_forms():
+    circle = rational_circle(2.0)[0]
+    u = np.linspace(0, 1, 101)
+    kappa, tau = M.curve_curvature(circle, u)
+    assert np.allclose(kappa, 0.5, rtol=1e-10) and np.allclose(tau, 0, atol=1e-10)
+    assert M.curvature_derivative_energy(circle) == pytest.approx(0, abs=1e-16)
+    assert M.curve_wiggles(circle)["inflections"] == 0
+
+
+def test_helix_curvature_and_torsion():
+    r, c = 2.0, 0.5
+    t = np.linspace(0, 4 * np.pi, 801)
+    helix = cf.interpolate_points(np.c_[r * np.cos(t), r * np.sin(t), c * t])
+    u = np.linspace(0.2, 0.8, 200)
+    kappa, tau = M.curve_curvature(helix, u)
+    assert np.allclose(kappa, r / (r * r + c * c), rtol=1e-4)
+    assert np.allclose(tau, c / (r * r + c * c), rtol=1e-3)
+
+
+def test_sphere_and_cylinder_curvatures():
+    sphere = rational_sphere(3.0)
+    u, v = np.meshgrid(np.linspace(0.1, 0.9, 9), np.linspace(0, 1, 13), indexing="ij")
+    k = M.surface_curvatures(sphere, u.ravel(), v.ravel())
+    assert np.allclose(np.abs(k["k1"]), 1 / 3, rtol=1e-9) and np.allclose(np.abs(k["k2"]), 1 / 3, rtol=1e-9)
+    assert np.allclose(k["gaussian"], 1 / 9, rtol=1e-9) and np.allclose(np.abs(k["mean"]), 1 / 3, rtol=1e-9)
+    cyl = rational_cylinder(1.5)
+    k = M.surface_curvatures(cyl, u.ravel(), v.ravel())
+    assert np.allclose(k["gaussian"], 0, atol=1e-10)
+    assert np.allclose(np.abs(k["mean"]), 1 / 3, rtol=1e-9)
+    assert np.allclose(np.sort(np.abs([k["k1"], k["k2"]]), axis=0), [[0] * u.size, [1 / 1.5] * u.size],
+                       atol=1e-9)
+
+
+def _naive_curve_energy(curve):
+    spline = BSpline(curve.knots, curve.poles, curve.degree).derivative(2)
+    x, w = np.polynomial.legendre.leggauss(10)
+    b = curve.space.breakpoints
+    total = 0.0
+    for a, c in zip(b[:-1], b[1:]):
+        t = 0.5 * (a + c) + 0.5 * (c - a) * x
+        total += np.sum(0.5 * (c - a) * w * np.sum(spline(t) ** 2, axis=1))
+    return total
+
+
+def test_bending_energy_is_exact():
+    curve = noisy_curve(25, 0.02, 1)
+    assert M.bending_energy(curve) == pytest.approx(_naive_curve_energy(curve), rel=1e-10)
+    circle = rational_circle(1.0)[0]
+    # rational: quadrature; arc-length parametrised approx, compare with dense sum
+    x = np.linspace(0, 1, 200001)
+    d2 = M.curve_derivatives(circle, x, 2)[2]
+    assert M.bending_energy(circle) == pytest.approx(np.trapz(np.sum(d2 ** 2, axis=1), x)
+                                                     if hasattr(np, "trapz") else
+                                                     np.trapezoid(np.sum(d2 ** 2, axis=1), x), rel=1e-6)
+    rng = np.random.default_rng(0)
+    surface = cf.make_surface(rng.normal(size=(7, 6, 3)))
+    x, w = np.polynomial.legendre.leggauss(6)
+    total = 0.0
+    bu, bv = surface.u_space.breakpoints, surface.v_space.breakpoints
+    for a, c in zip(bu[:-1], bu[1:]):
+        for e, f in zip(bv[:-1], bv[1:]):
+            uu, vv = 0.5 * (a + c) + 0.5 * (c - a) * x, 0.5 * (e + f) + 0.5 * (f - e) * x
+            ww = np.outer(0.5 * (c - a) * w, 0.5 * (f - e) * w)
+            dens = sum(coef * np.sum(surface.evaluate_grid(uu, vv, a_, b_) ** 2, axis=2)
+                       for a_, b_, coef in ((2, 0, 1), (1, 1, 2), (0, 2, 1)))
+            total += np.sum(ww * dens)
+    assert M.bending_energy(surface) == pytest.approx(total, rel=1e-10)
+
+
+def test_wiggle_counts_on_a_sine():
+    from scipy.interpolate import make_interp_spline
+
+    x = np.linspace(0.5, 4 * np.pi - 0.5, 400)
+    ends = ([(2, [0.0, -np.sin(x[0])])], [(2, [0.0, -np.sin(x[-1])])])
+    spline = make_interp_spline(x, np.c_[x, np.sin(x)], k=3, bc_type=ends)
+    curve = cf.make_curve(spline.c, spline.t, 3)
+    w = M.curve_wiggles(curve)
+    assert w["inflections"] == 3
+    assert w["curvature_extrema"] == 7
+    assert M.count_sign_changes([1, -1, 1e-20, -1, 2], threshold=1e-12) == 2
+    assert M.count_extrema([0, 1, 0, 1, 2]) == 2
+
+
+def test_fairness_summary_before_after():
+    noisy = noisy_curve(60, 0.01, 2)
+    result = cf.fair_curve(noisy.poles, 12)
+    summary = M.fairness_summary(result)
+    assert summary["bending_energy"]["after"] < summary["bending_energy"]["before"]
+    assert summary["curvature_extrema"]["after"] < summary["curvature_extrema"]["before"]
+    assert set(summary["inflections"]) == {"before", "after"}
