@@ -26,12 +26,22 @@ def timed(call, repeats):
     return result, times[0], warm
 
 
+class _Rows:
+    """Print each markdown row as soon as it is measured."""
+
+    def append(self, row):
+        name, poles, dev, ev, cold, warm = row
+        print(f"| {name} | {poles} | {dev:.4f} | {ev} | {cold:.2f} | {warm:.2f} |", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip-large", action="store_true")
     args = parser.parse_args()
-    rows = []
+    print("| case | poles out | max deviation | evaluations | cold [s] | median warm [s] |")
+    print("|---|---|---|---|---|---|", flush=True)
+    rows = _Rows()
     curve = seed_curve().curve
     for strategy in ("guaranteed", "linear", "polyfit"):
         res, cold, warm = timed(lambda: fair_curve_to_tolerance(curve, 0.02, strategy=strategy),
@@ -48,10 +58,6 @@ def main():
         rows.append((f"blade net {k[0]}x{k[1]}, tol 0.08, guaranteed",
                      f"{res.poles.shape[0]}x{res.poles.shape[1]}", res.max_deviation,
                      res.evaluations, cold, warm))
-    print("| case | poles out | max deviation | evaluations | cold [s] | median warm [s] |")
-    print("|---|---|---|---|---|---|")
-    for name, poles, dev, ev, cold, warm in rows:
-        print(f"| {name} | {poles} | {dev:.4f} | {ev} | {cold:.2f} | {warm:.2f} |")
 
 
 if __name__ == "__main__":

@@ -40,8 +40,9 @@ search can only certify what it has measured.  Three strategies:
     tests); nothing cheaper than measuring every smaller scale can promise more.
 
 Surfaces minimise the total pole count :math:`(n_u + p_u)(n_v + p_v)`.  ``"guaranteed"``
-finds :math:`u_{lo}` (the fewest u-spans with v untouched) and :math:`v_{lo}`, then walks
-:math:`n_u = u_{lo}, u_{lo}+1, \dots`: for each it tests the largest :math:`n_v` that would
+finds :math:`u_{lo}` (the fewest u-spans with v untouched) and :math:`v_{lo}`, takes a
+first answer by bisection on the segment from :math:`(u_{lo}, v_{lo})` to the largest net,
+then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots`: for each it tests the largest :math:`n_v` that would
 beat the best total so far and, if that passes, bisects down to the smallest passing
 :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
 when even :math:`n_v = v_{lo}` could not improve.  The answer is measured within ``tol``

@@ -77,10 +77,10 @@ def blade_surface(shape=(50, 80), noise=0.02, seed=7, span=100.0, chord=30.0):
     r"""Twisted, cambered blade-like surface sampled on a grid, plus noise.
 
     Span direction ``u`` (length ``span``), chord direction ``v`` (length ``chord``);
-    the section at height :math:`z = \text{span}\,u` is a cambered arc
-    :math:`y = c\,(0.12 + 0.04\sin 3\pi u)(1 - (2v - 1)^2)\,(1 + 0.5 v)` with chord
-    :math:`c = \text{chord}\,(1 - 0.3u)`, rotated by a twist of :math:`1.2\,u` rad and
-    swept by :math:`x \mathrel{+}= 2\sin(2\pi u)` (lean).
+    the section at height :math:`z = \text{span}\,u` is the cambered arc
+    :math:`y = c\,(0.12 + 0.04\sin 3\pi u)\,\sin(\pi v)\,(1 + 0.5 v)`,
+    :math:`x = c\,(v - 1/2)` with chord :math:`c = \text{chord}\,(1 - 0.3u)`, rotated by
+    a twist of :math:`1.2\,u` rad and leaned by :math:`x \mathrel{+}= 2\sin(2\pi u)`.
 
     Parameters
     ----------

@@ -208,6 +208,7 @@ def closest_points_curve(curve, points, u0, iterations=30):
         speed2 = np.maximum(np.einsum("qd,qd->q", c1, c1), 1e-300)
         fp = speed2 + np.einsum("qd,qd->q", c2, r)
         step = -f / np.where(fp > 1e-12 * speed2, fp, speed2)
+        step = np.where(((t[active] <= lo) & (step < 0)) | ((t[active] >= hi) & (step > 0)), 0.0, step)
         big = np.abs(step) > 1e-13 * (hi - lo)
         active, step = active[big], step[big]
         if active.size == 0:
@@ -224,17 +225,24 @@ def closest_points_curve(curve, points, u0, iterations=30):
     return t, dist
 
 
-def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2):
-    """Smallest Newton distance from the ``starts`` nearest samples and the same parameter."""
-    _, near = tree.query(points, k=min(starts, sample_u.size))
-    near = near.reshape(points.shape[0], -1)
+def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2, tol=None):
+    """Smallest Newton distance from the same parameter and the ``starts`` nearest samples.
+
+    With ``tol`` the other starts are tried only where the first distance exceeds it.
+    """
     best = closest_points_curve(curve, points, same_u)[1]
+    todo = np.flatnonzero(best > tol) if tol is not None else np.arange(best.size)
+    if todo.size == 0:
+        return best
+    _, near = tree.query(points[todo], k=min(starts, sample_u.size))
+    near = near.reshape(todo.size, -1)
     for column in near.T:
-        best = np.minimum(best, closest_points_curve(curve, points, sample_u[column])[1])
+        best[todo] = np.minimum(best[todo],
+                                closest_points_curve(curve, points[todo], sample_u[column])[1])
     return best
 
 
-def _damped(trial, active, step, dist, halvings=6):
+def _damped(trial, active, step, dist, halvings=5):
     """Halve steps until the distance does not grow; returns the last trial per point."""
     new, d_new = trial(active, step)
     for _ in range(halvings):
@@ -286,6 +294,12 @@ def closest_points_surface(surface, points, u0, v0, iterations=30):
         det = ha * hc - hb * hb
         det = np.where(np.abs(det) > 1e-300, det, 1e-300)
         step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
+        cur = uv[active]
+        blocked_u = ((cur[:, 0] <= ulo) & (step[:, 0] < 0)) | ((cur[:, 0] >= uhi) & (step[:, 0] > 0))
+        blocked_v = ((cur[:, 1] <= vlo) & (step[:, 1] < 0)) | ((cur[:, 1] >= vhi) & (step[:, 1] > 0))
+        # on a boundary: minimise along it (1-D Newton in the free parameter)
+        step[:, 0] = np.where(blocked_u, 0.0, np.where(blocked_v, -g1 / np.maximum(ha, 1e-300), step[:, 0]))
+        step[:, 1] = np.where(blocked_v, 0.0, np.where(blocked_u, -g2 / np.maximum(hc, 1e-300), step[:, 1]))
         big = np.abs(step).sum(axis=1) > 1e-13 * scale
         active, step = active[big], step[big]
         if active.size == 0:
@@ -414,12 +428,17 @@ class CurveProbe:
         other = curve_derivatives(faired, self.u, 0)[0]
         return other, np.linalg.norm(other - self.points, axis=1)
 
-    def true_distance(self, faired, other, idx):
-        """Two-sided true distance at samples ``idx`` (max of both directions)."""
+    def true_distance(self, faired, other, idx, tol=None):
+        """Two-sided true distance at samples ``idx`` (max of both directions).
+
+        With ``tol``, extra Newton starts are only tried where the first exceeds ``tol``.
+        """
         if idx.size == 0:
             return np.zeros(0)
-        d_fs = _closest_from_starts(faired, self.points[idx], self.u, cKDTree(other), self.u[idx])
-        d_sf = _closest_from_starts(self.source, other[idx], self.u, self.tree, self.u[idx])
+        d_fs = _closest_from_starts(faired, self.points[idx], self.u, cKDTree(other),
+                                    self.u[idx], tol=tol)
+        d_sf = _closest_from_starts(self.source, other[idx], self.u, self.tree, self.u[idx],
+                                    tol=tol)
         return np.maximum(d_fs, d_sf)
 
     def max_deviation(self, faired, tol=None):
@@ -437,7 +456,7 @@ class CurveProbe:
         if self.method == "parametric":
             i = int(np.argmax(bound))
             return float(bound[i]), i
-        return _pruned_max(bound, lambda idx: self.true_distance(faired, other, idx), tol)
+        return _pruned_max(bound, lambda idx: self.true_distance(faired, other, idx, tol), tol)
 
 
 class SurfaceProbe:
@@ -481,21 +500,28 @@ class SurfaceProbe:
         other = _grid_points(faired, self.u, self.v)
         return other, np.linalg.norm(other - self.points, axis=2)
 
-    def true_distance(self, faired, other, flat_idx, window=2):
-        """Two-sided true distance at flat grid indices ``flat_idx``."""
+    def true_distance(self, faired, other, flat_idx, window=2, tol=None):
+        """Two-sided true distance at flat grid indices ``flat_idx``.
+
+        With ``tol``, the second Newton start is only tried where the first exceeds ``tol``.
+        """
         if flat_idx.size == 0:
             return np.zeros(0)
         shape = self.points.shape[:2]
         i, j = np.unravel_index(flat_idx, shape)
-        d_fs = self._one_way(faired, self.points, other, i, j, window)
-        d_sf = self._one_way(self.source, other, self.points, i, j, window)
+        d_fs = self._one_way(faired, self.points, other, i, j, window, tol)
+        d_sf = self._one_way(self.source, other, self.points, i, j, window, tol)
         return np.maximum(d_fs, d_sf)
 
-    def _one_way(self, target, here, there, i, j, window):
+    def _one_way(self, target, here, there, i, j, window, tol=None):
         """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid)."""
-        u0, v0 = _window_start(here, there, i, j, self.u, self.v, window)
-        d = closest_points_surface(target, here[i, j], u0, v0)[2]
-        return np.minimum(d, closest_points_surface(target, here[i, j], self.u[i], self.v[j])[2])
+        d = closest_points_surface(target, here[i, j], self.u[i], self.v[j])[2]
+        todo = np.flatnonzero(d > tol) if tol is not None else np.arange(d.size)
+        if todo.size:
+            u0, v0 = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
+            d[todo] = np.minimum(d[todo], closest_points_surface(target, here[i[todo], j[todo]],
+                                                                 u0, v0)[2])
+        return d
 
     def max_deviation(self, faired, tol=None, stride=4):
         """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid.
@@ -518,7 +544,7 @@ class SurfaceProbe:
         if self.method == "parametric":
             k = int(np.argmax(flat))
             return float(flat[k]), k
-        return _pruned_max(flat, lambda idx: self.true_distance(faired, other, idx), tol)
+        return _pruned_max(flat, lambda idx: self.true_distance(faired, other, idx, tol=tol), tol)
 
 
 def _pruned_max(bound, exact, tol):
