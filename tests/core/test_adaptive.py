@@ -1,0 +1,107 @@
+"""Adaptive target spaces (cq_fairing.core.adaptive): tolerance by true distance, fewer poles
+than the uniform search, exact reconstruction, valid knots, errors."""
+
+import numpy as np
+import pytest
+
+import cq_fairing as cf
+from cq_fairing.core import examples
+from cq_fairing.core.adaptive import (equidistributed_space, fair_curve_adaptive,
+                                      fair_surface_adaptive)
+from cq_fairing.core.measures import deviation
+from cq_fairing.errors import (InvalidToleranceError, ToleranceNotMetError,
+                               UnsupportedGeometryError)
+
+
+@pytest.fixture(scope="module")
+def seed():
+    return examples.seed_curve()
+
+
+@pytest.fixture(scope="module")
+def blade():
+    """The blade-like surface (30x30 grid, 50 mm span) with a local bump near one edge:
+    a feature that a uniform target must resolve everywhere."""
+    b = examples.blade_surface((30, 30), noise=0.0, span=50.0, chord=15.0)
+    u = np.linspace(0.0, 1.0, 30)[:, None]
+    v = np.linspace(0.0, 1.0, 30)[None, :]
+    pts = b.clean_points.copy()
+    pts[..., 1] += 1.5 * np.exp(-((u - 0.3) / 0.05) ** 2 - ((v - 0.6) / 0.1) ** 2)
+    return cf.interpolate_grid(pts)
+
+
+@pytest.fixture(scope="module")
+def seed_result(seed):
+    return fair_curve_adaptive(seed.curve, 0.02)
+
+
+def test_seed_curve_meets_tol_by_true_distance(seed, seed_result):
+    assert deviation(seed.curve, seed_result.curve, per_span=16).max <= 0.02
+
+
+def test_seed_curve_needs_fewer_poles_than_uniform(seed, seed_result):
+    uniform = cf.fair_curve(seed.curve.poles, tol=0.02)
+    assert seed_result.poles.shape[0] < uniform.poles.shape[0]
+
+
+def test_seed_curve_closer_to_truth_than_tol(seed, seed_result):
+    assert deviation(seed.truth, seed_result.curve).max < 0.02
+
+
+def test_unpolished_curve_reconstructs_source_exactly(seed):
+    result = fair_curve_adaptive(seed.curve, 0.05, polish=False)
+    assert np.allclose(result.reconstruct(), seed.curve.poles, atol=1e-9)
+
+
+def test_curve_knots_are_valid_and_clamped(seed_result):
+    space = cf.SplineSpace.from_knots(seed_result.knots, seed_result.degree)
+    assert space.dimension == seed_result.poles.shape[0]
+    assert np.all(np.diff(space.breakpoints) > 0)
+
+
+def test_equidistributed_space_equal_mass_per_span():
+    breaks = np.array([0.0, 0.2, 0.5, 1.0])
+    density = np.array([5.0, 1.0, 2.0])
+    space = equidistributed_space(breaks, density, 6, 3)
+    b = space.breakpoints
+    x = np.linspace(0.0, 1.0, 200001)
+    rho = density[np.clip(np.searchsorted(breaks, x, side="right") - 1, 0, 2)]
+    masses = [np.trapezoid(rho[(x >= lo) & (x <= hi)], x[(x >= lo) & (x <= hi)])
+              for lo, hi in zip(b[:-1], b[1:])]
+    assert np.allclose(masses, np.mean(masses), rtol=2e-3)
+    assert space.knots[:4].tolist() == [0.0] * 4 and space.knots[-4:].tolist() == [1.0] * 4
+
+
+def test_uniform_density_gives_quasi_uniform_space():
+    space = equidistributed_space(np.linspace(0, 2, 5), np.ones(4), 7, 3)
+    assert space.same_as(cf.SplineSpace.quasi_uniform(7, 3, (0.0, 2.0)))
+
+
+def test_blade_meets_tol_with_fewer_poles_than_uniform(blade):
+    result = fair_surface_adaptive(blade, 0.02)
+    uniform = cf.fair_surface(blade.poles, tol=0.02)
+    assert deviation(blade, result.surface).max <= 0.02
+    assert np.prod(result.poles.shape[:2]) < np.prod(uniform.poles.shape[:2])
+
+
+def test_unpolished_surface_reconstructs_source(blade):
+    result = fair_surface_adaptive(blade, 0.05, polish=False)
+    assert np.allclose(result.reconstruct(), blade.poles, atol=1e-8)
+    assert deviation(blade, result.surface).max <= 0.05
+
+
+def test_bad_tolerance_is_refused(seed):
+    with pytest.raises(InvalidToleranceError):
+        fair_curve_adaptive(seed.curve, -1.0)
+
+
+def test_unreachable_tolerance_raises(seed):
+    with pytest.raises(ToleranceNotMetError):
+        fair_curve_adaptive(seed.curve, 1e-9, target_degree=1)
+
+
+def test_rational_surface_is_refused():
+    poles = np.random.default_rng(1).normal(size=(6, 6, 3))
+    surface = cf.make_surface(poles, weights=np.full((6, 6), 2.0))
+    with pytest.raises(UnsupportedGeometryError):
+        fair_surface_adaptive(surface, 0.1)
