@@ -119,10 +119,10 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
                              face_uv_grid(original_face, density), projection)
 
 
-def reference_samples(face, grid):
-    """``(uv, points, normals)`` of ``face`` on a :func:`face_uv_grid` (inside samples)."""
-    u, v, inside = grid
-    uv = np.array([(a, b) for i, a in enumerate(u) for j, b in enumerate(v) if inside[i, j]])
+def reference_samples(face, *grids):
+    """``(uv, points, normals)`` of ``face`` on one or more :func:`face_uv_grid` grids."""
+    uv = np.array([(a, b) for u, v, inside in grids for i, a in enumerate(u)
+                   for j, b in enumerate(v) if inside[i, j]])
     if uv.size == 0:
         raise InvalidInputError("no UV sample falls inside the face; raise the density.")
     points, normals = _points_and_normals(face, uv)

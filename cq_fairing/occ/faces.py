@@ -156,7 +156,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
         Default ``min(3, source degree)`` per direction.
     density : int or (int, int), optional
         UV samples per direction for the deviation check; default
-        ``clip(3 k + 1, 30, 120)`` for ``k`` poles in that direction.
+        ``clip(2 k + 1, 20, 80)`` for ``k`` poles in that direction.
     details : bool, optional
         Compute the wavelet details (``report.result``) with the core; ``False`` skips
         them (``result`` is then ``None``) and is faster on large nets.
@@ -202,7 +202,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
 
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, search):
     surface, info = face_to_surface(face)
-    density = density or tuple(int(np.clip(3 * k + 1, 30, 120)) for k in surface.shape)
+    density = density or tuple(int(np.clip(2 * k + 1, 20, 80)) for k in surface.shape)
     degree = _target_degree(surface, target_degree)
     notes = []
     if info.unperiodized:
@@ -227,10 +227,22 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, searc
                               sampler, finish, details, search, notes)
 
 
-def _check_grid(face, grid, trimmed):
-    """The search grid refined by its midpoints: the OCCT check sees between samples."""
+def _check_samples(face, grid, trimmed):
+    """Search grid plus the centres of its cells: the OCCT check sees between samples."""
     u, v, _ = grid
-    return face_uv_grid(face, (2 * u.size - 1, 2 * v.size - 1), classify=trimmed)
+    cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
+    inside = _classify(face, cu, cv) if trimmed else np.ones((cu.size, cv.size), dtype=bool)
+    return reference_samples(face, grid, (cu, cv, inside))
+
+
+def _classify(face, u, v):
+    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
+    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
+    from OCP.gp import gp_Pnt2d
+
+    classifier = BRepTopAdaptor_FClass2d(face, 1e-9)
+    return np.array([[classifier.Perform(gp_Pnt2d(float(a), float(b))) in (TopAbs_IN, TopAbs_ON)
+                      for b in v] for a in u], dtype=bool)
 
 
 def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish, details,
@@ -241,7 +253,7 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
     estimate, or the core's ``fair_surface(tol=...)``), then the local search with the
     parametric distance, an upper bound of the true distance; the searches aim at
     ``MARGIN * tol`` (room for excursions between samples), the last one at ``tol``.
-    The OCCT check runs on the search grid refined by its midpoints.
+    The OCCT check runs on the search grid plus the centres of its cells.
     """
     criteria = [(None, None)] if tol is None else (
         [("core", MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
@@ -260,10 +272,8 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
             return _unchanged(face, info, surface, "the finest admissible target is the "
                               "source space itself; nothing to fair", tol)
         new_face = surface_to_face(faired, face)
-        if check is None:
-            grid = _check_grid(face, sampler.grid, info.trimmed)
-            check = (grid, reference_samples(face, grid))
-        deviation = deviation_on_grid(face, new_face, check[0], reference=check[1])
+        check = check or _check_samples(face, sampler.grid, info.trimmed)
+        deviation = deviation_on_grid(face, new_face, None, reference=check)
         if tol is None or deviation["max"] <= tol:
             if details and result is None:
                 result = _core_fair(source, target, degree)

@@ -51,7 +51,7 @@ def test_iea_blade_faces_degree_3x8_fair_within_tolerance(real):
 def test_terrain_312x323_fairs_within_tolerance(real):
     face, = faces_of(real("terrain.brep"))
     tol = 25.0  # model units; the patch is about 11 600 across
-    report = fair_face(face, tol=tol, details=False)
+    report = fair_face(face, tol=tol, details=False, density=60)
     check_within(report, face, tol)
     assert np.prod(report.poles_after) < 0.5 * 312 * 323
 
@@ -72,11 +72,14 @@ def test_ring_periodic_face_stays_closed(real):
 
 
 def test_rational_trimmed_faces_of_linkrods(real):
+    """One face of each rational net size of linkrods (7 x 81, 7 x 73, 7 x 286, 7 x 275)."""
     shape = real("linkrods.step")
-    done = 0
+    done, seen = 0, set()
     for face, info in zip(faces_of(shape), list_faces(shape)):
-        if not (info.is_bspline and info.rational and info.n_poles_v > 30):
+        if not (info.is_bspline and info.rational and info.n_poles_v > 30) \
+                or info.n_poles_v in seen:
             continue
+        seen.add(info.n_poles_v)
         tol = 2e-3
         report = fair_face(face, tol=tol, details=False)
         check_within(report, face, tol)
@@ -84,7 +87,7 @@ def test_rational_trimmed_faces_of_linkrods(real):
         if report.surface.weights is not None:
             assert report.surface.weights.min() > 0
         done += 1
-    assert done >= 4
+    assert done == 4
 
 
 IMPELLER_SAMPLE = None
