@@ -1,0 +1,302 @@
+"""Hostile files, non-B-spline faces and output paths through the OCP layer (the API side
+of RELIABILITY.md tables 2 and 3).  Every failure is a typed FairingError with one line,
+no output file is left behind and the input's bytes (sha256) never change."""
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_NurbsConvert
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeSphere
+from OCP.Geom import (Geom_BSplineCurve, Geom_BSplineSurface, Geom_CylindricalSurface,
+                      Geom_OffsetSurface, Geom_Plane, Geom_SurfaceOfRevolution)
+from OCP.gp import gp, gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt
+from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
+from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from OCP.TopoDS import TopoDS
+
+from cq_fairing.errors import (FairingError, FileFormatError, OutputPathError,
+                               UnsupportedGeometryError)
+from cq_fairing.occ import face_to_surface, fair_face, fair_shape, read_shape, write_shape
+from cq_fairing.occ.convert import indexed_faces
+
+from .conftest import REAL_DATA, sha256
+
+
+# -- faces built with OCP -------------------------------------------------------------------
+def _array1(values, kind=TColStd_Array1OfReal):
+    arr = kind(1, len(values))
+    for i, value in enumerate(values, start=1):
+        arr.SetValue(i, value)
+    return arr
+
+
+def bspline_surface(nu=12, nv=10, degree=3, wiggle=0.02, seed=0):
+    """A clamped uniform bicubic B-spline surface with a little noise on z."""
+    rng = np.random.default_rng(seed)
+    poles = TColgp_Array2OfPnt(1, nu, 1, nv)
+    for i in range(nu):
+        for j in range(nv):
+            z = 0.3 * np.sin(2 * i / nu) * np.cos(j / nv) + wiggle * rng.normal()
+            poles.SetValue(i + 1, j + 1, gp_Pnt(i / (nu - 1), j / (nv - 1), z))
+
+    def knots(k):
+        spans = k - degree
+        return (_array1([s / spans for s in range(spans + 1)]),
+                _array1([degree + 1] + [1] * (spans - 1) + [degree + 1],
+                        TColStd_Array1OfInteger))
+
+    (ku, mu), (kv, mv) = knots(nu), knots(nv)
+    return Geom_BSplineSurface(poles, ku, kv, mu, mv, degree, degree)
+
+
+def face_of(surface, bounds=None):
+    maker = (BRepBuilderAPI_MakeFace(surface, 1e-7) if bounds is None
+             else BRepBuilderAPI_MakeFace(surface, *bounds, 1e-7))
+    return maker.Face()
+
+
+def plane_face():
+    return face_of(Geom_Plane(gp_Ax3(gp.Origin_s(), gp.DZ_s())), (0, 1, 0, 1))
+
+
+def cylinder_face():
+    return face_of(Geom_CylindricalSurface(gp_Ax3(gp.Origin_s(), gp.DZ_s()), 2.0),
+                   (0, 3, 0, 5))
+
+
+def offset_face():
+    return face_of(Geom_OffsetSurface(bspline_surface(6, 6), 0.1))
+
+
+def revolution_face():
+    pts = _array1([gp_Pnt(1 + 0.1 * np.sin(i), 0, i) for i in range(6)], TColgp_Array1OfPnt)
+    curve = Geom_BSplineCurve(pts, _array1([0.0, 1.0, 2.0]),
+                              _array1([4, 2, 4], TColStd_Array1OfInteger), 3)
+    return face_of(Geom_SurfaceOfRevolution(curve, gp_Ax1(gp.Origin_s(), gp_Dir(0, 0, 1))),
+                   (0, np.pi, 0, 2))
+
+
+ANALYTIC = {"plane": plane_face, "cylinder": cylinder_face, "offset": offset_face,
+            "revolution": revolution_face}
+
+
+@pytest.mark.parametrize("kind", sorted(ANALYTIC))
+def test_non_bspline_faces_are_skipped_with_a_reason(kind):
+    face = ANALYTIC[kind]()
+    report = fair_face(face, tol=1e-3)
+    assert report.status == "skipped-not-bspline"
+    assert "convert=True" in report.message and "\n" not in report.message
+    assert report.face.IsSame(face)
+    with pytest.raises(UnsupportedGeometryError, match="not a B-spline"):
+        face_to_surface(face)
+
+
+@pytest.mark.parametrize("kind", sorted(ANALYTIC))
+def test_non_bspline_faces_convert_and_fair_or_explain(kind):
+    """With convert=True the face is faired within tol, or a typed error says why."""
+    face = ANALYTIC[kind]()
+    try:
+        report = fair_face(face, tol=1e-3, convert=True, details=False)
+    except FairingError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert report.status in ("faired", "unchanged"), report.message
+    assert BRepCheck_Analyzer(report.face).IsValid()
+    assert report.max_deviation <= 1e-3
+
+
+def test_sphere_face_with_collapsed_edges_stays_valid():
+    """A sphere converted to NURBS has a row of coincident poles at each pole (a collapsed
+    edge).  Fairing must keep the face valid: either it fairs (BRepCheck passes) or it
+    explains itself; the degenerated edges must still close."""
+    sphere = BRepPrimAPI_MakeSphere(10.0).Shape()
+    nurbs = BRepBuilderAPI_NurbsConvert(sphere, True).Shape()
+    face = indexed_faces(nurbs)[0]
+    surface, _ = face_to_surface(face)
+    borders = [surface.poles[0], surface.poles[-1], surface.poles[:, 0], surface.poles[:, -1]]
+    assert min(np.ptp(b, axis=0).max() for b in borders) < 1e-9   # a collapsed edge
+    result = fair_shape(nurbs, tol=0.05)
+    assert result.valid
+    for report in result.faces:
+        assert report.status in ("faired", "unchanged", "failed", "tolerance-not-met")
+        assert "\n" not in report.message
+
+
+def test_periodic_and_rational_real_faces_are_handled(real_shape):
+    ring = indexed_faces(real_shape("ring_nurbs.brep"))[0]
+    report = fair_face(ring, tol=0.5, details=False)       # the ring is ~70 across
+    assert report.status in ("faired", "unchanged") and report.info.unperiodized
+    with pytest.raises(FairingError) as info:                  # tight: typed, one line
+        fair_face(ring, tol=1e-6, details=False)
+    assert "\n" not in str(info.value)
+    linkrods = real_shape("linkrods.step")
+    from cq_fairing.occ import list_faces
+
+    rational = [f for f, i in zip(indexed_faces(linkrods), list_faces(linkrods))
+                if i.rational][:2]
+    for face in rational:
+        try:
+            report = fair_face(face, tol=0.01, details=False)
+        except FairingError as exc:
+            assert "\n" not in str(exc)
+            continue
+        assert BRepCheck_Analyzer(report.face).IsValid()
+
+
+def test_one_bad_face_is_isolated_and_the_rest_finish():
+    """A compound of a wiggly bicubic face (fairs) and a quintic face whose detail cannot
+    be represented by cubics within 1e-9 (tolerance not met): the bad face is reported and
+    kept, the other is faired, the result is valid."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    good = face_of(bspline_surface(16, 14, 3, wiggle=0.01))
+    bad = face_of(bspline_surface(9, 9, 5, wiggle=0.2, seed=3))
+    compound = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(compound)
+    builder.Add(compound, good)
+    builder.Add(compound, bad)
+    result = fair_shape(compound, n=(5, 5))
+    statuses = [r.status for r in result.faces]
+    assert statuses[0] == "faired"
+    tight = fair_shape(compound, tol=1e-9)
+    assert [r.status for r in tight.faces][1] in ("tolerance-not-met", "unchanged", "failed")
+    assert all("\n" not in r.message for r in tight.faces)
+    assert tight.valid
+
+
+# -- hostile files --------------------------------------------------------------------------
+def _vertex_only_step(path):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    writer = STEPControl_Writer()
+    writer.Transfer(BRepBuilderAPI_MakeVertex(gp_Pnt(1, 2, 3)).Vertex(), STEPControl_AsIs)
+    writer.Write(str(path))
+
+
+def _huge_garbage(path, megabytes=64):
+    with open(path, "wb") as handle:
+        handle.truncate(megabytes * 2 ** 20)     # sparse file: fast, 64 MiB of zeros
+
+
+def _hostile(tmp_path, kind):
+    path = tmp_path / f"{kind}.step"
+    data = (REAL_DATA / "linkrods.step").read_bytes()
+    if kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "random-bytes":
+        path.write_bytes(np.random.default_rng(0).bytes(200_000))
+    elif kind == "truncated-half":
+        path.write_bytes(data[: len(data) // 2])
+    elif kind == "truncated-header":
+        path.write_bytes(data[:300])
+    elif kind == "no-faces":
+        _vertex_only_step(path)
+    elif kind == "huge-zeros":
+        _huge_garbage(path)
+    elif kind == "text":
+        path.write_text("ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n")
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "missing":
+        pass
+    return path
+
+
+HOSTILE = ["empty", "random-bytes", "truncated-half", "truncated-header", "no-faces",
+           "huge-zeros", "text", "folder", "missing"]
+
+
+@pytest.mark.parametrize("kind", HOSTILE)
+def test_hostile_files_raise_file_format_error(tmp_path, kind):
+    path = _hostile(tmp_path, kind)
+    before = sha256(path) if path.is_file() else None
+    with pytest.raises(FileFormatError) as info:
+        read_shape(path)
+    assert "\n" not in str(info.value) and str(path.name) in str(info.value)
+    if before is not None:
+        assert sha256(path) == before
+
+
+# -- output paths ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def small_shape():
+    return fair_face(face_of(bspline_surface()), n=(4, 4), details=False).face
+
+
+def _no_temp_left(folder):
+    return not any(p.name.startswith(".cq_fairing_") for p in Path(folder).iterdir())
+
+
+def test_existing_output_needs_force(tmp_path, small_shape):
+    out = tmp_path / "out.step"
+    out.write_text("keep me")
+    with pytest.raises(OutputPathError, match="already exists"):
+        write_shape(small_shape, out)
+    assert out.read_text() == "keep me" and _no_temp_left(tmp_path)
+    write_shape(small_shape, out, force=True)
+    assert len(indexed_faces(read_shape(out))) == 1
+
+
+@pytest.mark.parametrize("where", ["missing-folder", "under-a-file", "proc", "folder"])
+def test_unwritable_outputs_raise_output_path_error(tmp_path, small_shape, where):
+    """Tests run as root, so chmod cannot make a folder read-only; a path *under a regular
+    file* and a path in /proc cannot be created even by root."""
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("x")
+    out = {"missing-folder": tmp_path / "nope" / "out.step",
+           "under-a-file": blocker / "out.step",
+           "proc": Path("/proc/cq_fairing_out.step"),
+           "folder": tmp_path}[where]
+    with pytest.raises(OutputPathError) as info:
+        write_shape(small_shape, out)
+    assert "\n" not in str(info.value)
+    assert not out.exists() or out.is_dir()
+    assert _no_temp_left(tmp_path)
+
+
+def test_writing_over_the_input_is_refused(tmp_path, small_shape):
+    src = tmp_path / "in.step"
+    shutil.copy(REAL_DATA / "linkrods.step", src)
+    before = sha256(src)
+    with pytest.raises(OutputPathError, match="input"):
+        write_shape(small_shape, src, input_path=src, force=True)
+    link = tmp_path / "alias.step"
+    os.symlink(src, link)
+    with pytest.raises(OutputPathError, match="input"):
+        write_shape(small_shape, link, input_path=src, force=True)
+    assert sha256(src) == before
+
+
+def test_failed_validation_leaves_no_file(tmp_path, small_shape):
+    """The read-back check refuses a file that does not round-trip; nothing is left."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    compound = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(compound)
+    builder.Add(compound, BRepBuilderAPI_MakeVertex(gp_Pnt(0, 0, 0)).Vertex())
+    out = tmp_path / "vertex.step"
+    with pytest.raises(FairingError):
+        write_shape(compound, out)
+    assert not out.exists() and _no_temp_left(tmp_path)
+
+
+@pytest.fixture(scope="module")
+def real_shape():
+    cache = {}
+
+    def load(name):
+        if name not in cache:
+            cache[name] = read_shape(REAL_DATA / name)
+        return cache[name]
+
+    return load
