@@ -156,7 +156,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
         Default ``min(3, source degree)`` per direction.
     density : int or (int, int), optional
         UV samples per direction for the deviation check; default
-        ``clip(2 k + 1, 20, 80)`` for ``k`` poles in that direction.
+        ``clip(2 k + 1, 20, 400)`` for ``k`` poles in that direction.
     details : bool, optional
         Compute the wavelet details (``report.result``) with the core; ``False`` skips
         them (``result`` is then ``None``) and is faster on large nets.
@@ -202,7 +202,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
 
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, search):
     surface, info = face_to_surface(face)
-    density = density or tuple(int(np.clip(2 * k + 1, 20, 80)) for k in surface.shape)
+    density = density or tuple(int(np.clip(2 * k + 1, 20, 400)) for k in surface.shape)
     degree = _target_degree(surface, target_degree)
     notes = []
     if info.unperiodized:
