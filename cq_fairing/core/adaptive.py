@@ -15,8 +15,8 @@ knots follow the error:
    The first density is that of the source's own breakpoints, :math:`\rho = 1/h_S`, so
    a uniform source starts from uniform targets and the top of the family is the source
    space itself.
-2. **Count.**  Bisection on ``N`` (on the pair ``(N_u, N_v)`` along the diagonal for
-   surfaces) for the smallest count whose measured deviation is within ``tol``.
+2. **Count.**  Doubling from 4 spans, then bisection on ``N`` (on the pair
+   ``(N_u, N_v)`` along the diagonal and per direction for surfaces) for the smallest count whose measured deviation is within ``tol``.
 3. **Redistribution.**  From the per-span maximum deviation :math:`e_j` of the last
    candidate, a span of width :math:`h_j` would meet :math:`\theta\,\mathrm{tol}` at width
    :math:`h_j(\theta\,\mathrm{tol}/e_j)^{1/(p+1)}` (the :math:`O(h^{p+1})` error of a
@@ -143,7 +143,7 @@ def _source_density(space):
     return b, 1.0 / np.diff(b)
 
 
-def _refined(bound, exact, tol, batch=256):
+def _refined(bound, exact, tol, batch=4096):
     """Per-sample deviation: the same-parameter ``bound``, replaced by the true distance
     ``exact(idx)`` where the bound exceeds ``tol``, largest first, until one true
     distance exceeds ``tol`` (the candidate fails; later samples keep their bound).
@@ -222,6 +222,17 @@ def _bisect_count(fails, passes, check):
         else:
             fails = mid
     return passes
+
+
+def _doubling(check, top, start=4):
+    """Bracket ``(fails, passes)`` by doubling the count from ``start`` (cheap small spaces
+    first); ``passes`` is ``None`` when even ``top`` fails."""
+    fails, n = 0, min(start, top)
+    while not check(n):
+        if n == top:
+            return fails, None
+        fails, n = n, min(2 * n, top)
+    return fails, n
 
 
 def _scan_below(n, check, window=3):
@@ -330,12 +341,13 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
         cache[n] = fit.trial(family(n))
         return cache[n][2] <= fit.tol
 
-    if not check(top):
+    fails, n = _doubling(check, top)
+    if n is None:
         raise ToleranceNotMetError(
             f"no adaptive target within tol={tol:g}: the source's own knots at degree "
             f"{degree} deviate by {cache[top][2]:.4g}; raise the tolerance or keep the degree.",
             tolerance=tol, best_deviation=cache[top][2])
-    n = _scan_below(_bisect_count(0, top, check), check) if top > 1 else top
+    n = _scan_below(_bisect_count(fails, n, check), check)
     space, faired, values, e = _reduce(family(n), cache[n], fit.probe.u, fit.tol, degree,
                                        fit.trial)
     lam = 0.0
