@@ -42,7 +42,8 @@ search can only certify what it has measured.  Three strategies:
 Surfaces minimise the total pole count :math:`(n_u + p_u)(n_v + p_v)`.  ``"guaranteed"``
 finds :math:`u_{lo}` (the fewest u-spans with v untouched) and :math:`v_{lo}`, takes a
 first answer by bisection on the segment from :math:`(u_{lo}, v_{lo})` to the largest net,
-then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots`: for each it tests the largest :math:`n_v` that would
+then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots` (in steps of
+:math:`\lfloor (n_{u,\max} - u_{lo})/32 \rfloor` first, then by one around the best): for each it tests the largest :math:`n_v` that would
 beat the best total so far and, if that passes, bisects down to the smallest passing
 :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
 when even :math:`n_v = v_{lo}` could not improve.  The answer is measured within ``tol``
@@ -471,18 +472,26 @@ def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
     u_lo = _guaranteed(u_err, U, tol, window)
     v_lo = _guaranteed(v_err, V, tol, window)
     best = _diagonal_start(err, (u_lo, v_lo), (U, V), tol)
-    nu = u_lo
-    while nu <= U:
-        cap = (best[0] + pu) * (best[1] + pv) // (nu + pu) - pv
-        if (cap + pv) * (nu + pu) >= (best[0] + pu) * (best[1] + pv):
+    step = max(1, (U - u_lo) // 32)
+    best = _walk(err, range(u_lo, U + 1, step), best, v_lo, V, pu, pv, tol)
+    if step > 1:
+        near = range(max(u_lo, best[0] - step + 1), min(U, best[0] + step - 1) + 1)
+        best = _walk(err, near, best, v_lo, V, pu, pv, tol)
+    return _scan_surface(err, best, tol, window)
+
+
+def _walk(err, nus, best, v_lo, V, pu, pv, tol):
+    """For increasing ``n_u``, the smallest passing ``n_v`` that beats ``best`` (if any)."""
+    for nu in nus:
+        total = (best[0] + pu) * (best[1] + pv)
+        cap = min(total // (nu + pu) - pv, V)
+        if (cap + pv) * (nu + pu) >= total:
             cap -= 1
-        cap = min(cap, V)
         if cap < v_lo:
             break
         if err((nu, cap)) <= tol:
             best = (nu, _min_along(err, nu, tol, v_lo - 1, cap, axis=1))
-        nu += 1
-    return _scan_surface(err, best, tol, window)
+    return best
 
 
 def _diagonal_start(err, low, high, tol):
