@@ -250,7 +250,7 @@ def lsq_uniform(case):
             poles = spla.spsolve((a.T @ a).tocsc(), a.T @ case.points)
             return BSplineCurve(np.asarray(poles), space.knots, 3)
 
-        top = len(u) - 3
+        top = len(u) // 2  # well inside Schoenberg-Whitney; higher counts are ill-conditioned
     else:
         u, v = case.params
         nu, nv = case.points.shape[:2]
@@ -267,7 +267,7 @@ def lsq_uniform(case):
             y = np.asarray(y).reshape(sv.dimension, su.dimension, 3)
             return BSplineSurface(np.swapaxes(y, 0, 1), su.knots, sv.knots, 3, 3)
 
-        top = max(nu, nv) - 3
+        top = max(nu, nv) // 2
     cache = {}
 
     def ok(n):
