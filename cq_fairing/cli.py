@@ -1,0 +1,406 @@
+"""The ``cq-fairing`` command line: fair STEP/IGES/BREP models, inspect them, fair point files.
+
+Subcommands
+-----------
+``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5] [--method wavelet|energy]
+[--report r.json|r.html] [--deviation-map m.png|m.vtp] [--curvature-map c.png] [--force]``
+    Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
+``inspect IN``
+    One line per face: type, degrees, poles, rational, periodic, trimmed, in a solid.
+``points IN.xyz -o OUT.step [--tol T] [--grid NU NV]``
+    Interpolate ``x y z`` points (one per line) and fair the curve (or the surface of a
+    grid of ``NU x NV`` points, rows of ``NV`` points).
+
+Exit codes
+----------
+0  success: every requested face met the tolerance
+1  some requested face did not meet the tolerance (the output is still written)
+2  usage error (bad option or value)
+3  input file missing, empty, corrupt or of an unknown format
+4  output path refused (exists without --force, is the input, folder missing/unwritable)
+5  internal error (run with --debug for the traceback)
+130 interrupted (Ctrl-C); no partial output is left behind
+
+Every file is written to a temporary name beside the target, read back and checked,
+then renamed into place; the input file is never modified.
+"""
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from .errors import (FairingError, FileFormatError, InvalidInputError, OutputPathError,
+                     ToleranceNotMetError)
+
+EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
+EXIT_INTERRUPTED = 130
+
+__all__ = ["main", "build_parser"]
+
+
+# -- argument parsing --------------------------------------------------------------------
+def _positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive length, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive finite length, got {text!r}")
+    return value
+
+
+def _face_list(text):
+    """Parse ``1,3-5`` (1-based, as ``inspect`` prints) into 0-based indices."""
+    indices = []
+    try:
+        for part in text.split(","):
+            first, _, last = part.strip().partition("-")
+            lo, hi = int(first), int(last or first)
+            if lo < 1 or hi < lo:
+                raise ValueError
+            indices.extend(range(lo - 1, hi))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected 1-based face numbers like 1,3-5, got {text!r}") from None
+    return sorted(set(indices))
+
+
+def build_parser():
+    """The argparse parser of ``cq-fairing`` (exit codes in the epilog)."""
+    epilog = __doc__[__doc__.index("Exit codes"):__doc__.index("Every file")]
+    parser = argparse.ArgumentParser(
+        prog="cq-fairing", description="Multiresolution (wavelet) and energy fairing of "
+        "B-spline curves and surfaces.", epilog=epilog,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    fair = sub.add_parser("fair", help="fair the B-spline faces of a STEP/IGES/BREP model")
+    fair.add_argument("input", type=Path)
+    fair.add_argument("-o", "--output", type=Path, required=True, help=".step/.stp or .brep")
+    fair.add_argument("--tol", type=_positive_float,
+                      help="largest allowed deviation in model units "
+                           "(default 1e-3 of the model's bounding-box diagonal)")
+    fair.add_argument("--target", type=int, nargs=2, metavar=("NU", "NV"),
+                      help="explicit target poles per direction instead of --tol")
+    fair.add_argument("--faces", type=_face_list, help="faces to fair, 1-based (default: all)")
+    fair.add_argument("--method", choices=("wavelet", "energy"), default="wavelet")
+    fair.add_argument("--boundary", choices=("free", "fixed"), default="free",
+                      help="keep the face borders fixed or let them move within --tol")
+    fair.add_argument("--convert", action="store_true",
+                      help="convert non-B-spline faces to B-splines and fair them too")
+    fair.add_argument("--report", type=Path, help="report file: .json or .html")
+    fair.add_argument("--deviation-map", type=Path, help="deviation map: .png or .vtp")
+    fair.add_argument("--curvature-map", type=Path,
+                      help="curvature before/after of the most deviated faired face: .png")
+    fair.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    fair.add_argument("--progress", action="store_true",
+                      help="show the progress line even when stderr is not a terminal")
+    fair.set_defaults(handler=command_fair)
+
+    inspect = sub.add_parser("inspect", help="list the faces of a model")
+    inspect.add_argument("input", type=Path)
+    inspect.set_defaults(handler=command_inspect)
+
+    points = sub.add_parser("points", help="fair a curve or grid surface through x y z points")
+    points.add_argument("input", type=Path)
+    points.add_argument("-o", "--output", type=Path, required=True, help=".step/.stp or .brep")
+    points.add_argument("--tol", type=_positive_float,
+                        help="largest allowed deviation (default 1e-3 of the points' extent)")
+    points.add_argument("--grid", type=int, nargs=2, metavar=("NU", "NV"),
+                        help="the points form NU rows of NV points: fit a surface")
+    points.add_argument("--parametrization", choices=("uniform", "chord", "centripetal"),
+                        default="uniform")
+    points.add_argument("--force", action="store_true")
+    points.set_defaults(handler=command_points)
+    return parser
+
+
+# -- progress -----------------------------------------------------------------------------
+class _Progress:
+    """A one-line progress bar on stderr (only on a terminal, or when asked)."""
+
+    def __init__(self, enabled):
+        self.enabled = enabled
+        self.start = time.perf_counter()
+
+    def __call__(self, done, total, report=None):
+        if not self.enabled:
+            return
+        width = 30
+        filled = int(width * done / max(total, 1))
+        elapsed = time.perf_counter() - self.start
+        sys.stderr.write(f"\r  faces [{'#' * filled}{'.' * (width - filled)}] "
+                         f"{done}/{total}  {elapsed:6.1f} s")
+        if done >= total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+# -- fair ------------------------------------------------------------------------------------
+def command_fair(args):
+    from .occ import default_tolerance, fair_shape, list_faces, read_shape, write_shape
+    from .report import check_output_path
+
+    outputs = [p for p in (args.output, args.report, args.deviation_map, args.curvature_map) if p]
+    _check_suffixes(args)
+    for path in outputs:
+        check_output_path(path, force=args.force, inputs=(args.input,))
+    if args.tol is not None and args.target is not None:
+        raise InvalidInputError("give --tol or --target, not both.")
+    started = time.perf_counter()
+    shape = read_shape(args.input)
+    infos = list_faces(shape)
+    if args.faces and max(args.faces) >= len(infos):
+        raise InvalidInputError(
+            f"--faces names face {max(args.faces) + 1}, but {args.input} has {len(infos)} faces.")
+    tol = None if args.target else (args.tol or default_tolerance(shape))
+    progress = _Progress(args.progress or sys.stderr.isatty())
+    result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
+                        method=args.method, convert=args.convert, progress=progress,
+                        boundary=args.boundary, details=False)
+    with _quiet_stdout():
+        write_shape(result.shape, args.output, force=args.force, input_path=args.input)
+    report = _build_report(args, result, tol, time.perf_counter() - started)
+    _write_maps(args, result, tol, report)
+    if args.report:
+        from .report import write_report
+        write_report(report, args.report, force=args.force)
+    from .report import summary_table
+    print(summary_table(report))
+    return EXIT_OK if _all_requested_met(args, result) else EXIT_TOLERANCE
+
+
+def _check_suffixes(args):
+    checks = [(args.output, (".step", ".stp", ".brep"), "--output"),
+              (args.report, (".json", ".html", ".htm"), "--report"),
+              (args.deviation_map, (".png", ".vtp"), "--deviation-map"),
+              (args.curvature_map, (".png",), "--curvature-map")]
+    for path, suffixes, option in checks:
+        if path is not None and path.suffix.lower() not in suffixes:
+            raise OutputPathError(
+                f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
+
+
+def _target_scales(target):
+    """--target gives poles per direction; the core wants spans (poles - degree)."""
+    if target is None:
+        return None
+    if min(target) < 4:
+        raise InvalidInputError(f"--target needs at least 4 poles per direction, got {target}.")
+    return tuple(int(k) - 3 for k in target)
+
+
+def _all_requested_met(args, result):
+    requested = set(args.faces) if args.faces else None
+    for index, face in enumerate(result.faces):
+        if face.status in ("tolerance-not-met", "failed"):
+            return False
+        if requested is not None and index in requested and face.status.startswith("skipped"):
+            return False
+    return True
+
+
+_STATUS = {"faired": "ok", "unchanged": "ok", "tolerance-not-met": "tolerance-not-met",
+           "failed": "failed"}
+
+
+def _source_and_box(face):
+    """The original face's core surface and its UV box (for before/after measures)."""
+    from .occ import face_to_surface
+    from .occ.builders import face_uv_box
+
+    return face_to_surface(face.original)[0], face_uv_box(face.original)
+
+
+def _faired(result):
+    return [f for f in result.faces
+            if f.status == "faired" and f.surface is not None and f.original is not None]
+
+
+def _build_report(args, result, tol, seconds):
+    from .report import build_report, face_entry
+    from .viz import fairness_measures
+
+    entries = []
+    for index, face in enumerate(result.faces):
+        before = after = None
+        if face in _faired(result):
+            source, box = _source_and_box(face)
+            before = fairness_measures(source, box)
+            after = fairness_measures(face.surface, box)
+        deviation = face.deviation
+        stats = None if not deviation else {k: deviation.get(k) for k in ("max", "mean", "rms")}
+        entries.append(face_entry(
+            index + 1, surface_type=face.info.surface_type if face.info else None,
+            status=_STATUS.get(face.status, "skipped"), message=face.message,
+            poles_before=face.poles_before, poles_after=face.poles_after,
+            max_deviation=face.max_deviation, tolerance=face.tolerance,
+            fairness_before=before, fairness_after=after, seconds=face.seconds,
+            deviation=stats))
+    return build_report(entries, input_path=args.input, output_path=args.output,
+                        tolerance=tol, method=args.method, max_gap=result.max_gap,
+                        valid=result.valid, seconds=seconds,
+                        command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
+
+
+def _write_maps(args, result, tol, report):
+    faired = _faired(result)
+    maps = {}
+    if args.deviation_map and faired:
+        maps["deviation"] = str(_deviation_map(args, faired, tol))
+    if args.curvature_map and faired:
+        from .viz import render_curvature_maps
+
+        worst = max(faired, key=lambda f: f.max_deviation or 0.0)
+        source, box = _source_and_box(worst)
+        render_curvature_maps(source, worst.surface, args.curvature_map, box=box,
+                              force=args.force, title=f"face {result.faces.index(worst) + 1}")
+        maps["curvature"] = str(args.curvature_map)
+    report["maps"] = {**report.get("maps", {}), **maps}
+
+
+def _deviation_map(args, faired, tol):
+    from .occ import sample_face_deviation
+    from .viz import deviation_mesh, render_deviation_map, save_mesh
+
+    meshes = []
+    for face in faired:
+        samples = face.deviation or sample_face_deviation(face.original, face.face)
+        meshes.append(deviation_mesh(samples, face_index=face.index))
+    if args.deviation_map.suffix.lower() == ".vtp":
+        save_mesh(meshes, args.deviation_map, force=args.force)
+    else:
+        render_deviation_map(meshes, args.deviation_map, tolerance=tol, units="model units",
+                             force=args.force)
+    return args.deviation_map
+
+
+class _quiet_stdout:
+    """Silence OCCT's C++ writers, which print transfer statistics on file descriptor 1."""
+
+    def __enter__(self):
+        import os
+
+        sys.stdout.flush()
+        self._saved = os.dup(1)
+        self._null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(self._null, 1)
+
+    def __exit__(self, *exc):
+        import os
+
+        os.dup2(self._saved, 1)
+        os.close(self._saved)
+        os.close(self._null)
+        return False
+
+
+# -- inspect ---------------------------------------------------------------------------------
+def command_inspect(args):
+    from .occ import list_faces, read_shape
+
+    infos = list_faces(read_shape(args.input))
+    print(f"{'face':>5}  {'type':<14} {'degree':>7} {'poles':>9}  rational periodic trimmed in-solid")
+    for info in infos:
+        degree = f"{info.u_degree}x{info.v_degree}" if info.u_degree else "-"
+        poles = f"{info.n_poles_u}x{info.n_poles_v}" if info.n_poles_u else "-"
+        periodic = "".join(d for d, p in (("u", info.u_periodic), ("v", info.v_periodic)) if p)
+        print(f"{info.index + 1:>5}  {info.surface_type:<14} {degree:>7} {poles:>9}  "
+              f"{_yes(info.rational):<8} {periodic or 'no':<8} {_yes(info.trimmed):<7} "
+              f"{_yes(info.in_solid)}")
+    counts = {}
+    for info in infos:
+        counts[info.surface_type] = counts.get(info.surface_type, 0) + 1
+    print(f"{len(infos)} faces: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    return EXIT_OK
+
+
+def _yes(flag):
+    return "yes" if flag else "no"
+
+
+# -- points ----------------------------------------------------------------------------------
+def command_points(args):
+    import numpy as np
+
+    from . import fair_curve, fair_surface, interpolate_grid, interpolate_points, read_xyz
+    from .report import check_output_path
+
+    if args.output.suffix.lower() not in (".step", ".stp", ".brep"):
+        raise OutputPathError(f"--output must end in .step, .stp or .brep, got {str(args.output)!r}.")
+    check_output_path(args.output, force=args.force, inputs=(args.input,))
+    try:
+        points = read_xyz(args.input)
+    except InvalidInputError as exc:
+        raise FileFormatError(str(exc)) from exc
+    extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    tol = args.tol or 1e-3 * extent
+    if args.grid:
+        nu, nv = args.grid
+        if nu * nv != points.shape[0]:
+            raise InvalidInputError(
+                f"--grid {nu} {nv} needs {nu * nv} points, {args.input} has {points.shape[0]}.")
+        source = interpolate_grid(points.reshape(nu, nv, 3), args.parametrization)
+        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
+                              v_knots=source.v_knots, degree=3)
+        shape = _surface_shape(result.surface)
+        sizes = f"{source.shape[0]}x{source.shape[1]} -> {result.poles.shape[0]}x{result.poles.shape[1]}"
+    else:
+        source = interpolate_points(points, args.parametrization)
+        result = fair_curve(source.poles, tol=tol, knots=source.knots, degree=3)
+        shape = _curve_shape(result.curve)
+        sizes = f"{source.n_poles} -> {result.poles.shape[0]}"
+    from .occ import write_shape
+    from .occ.builders import write_edge
+
+    writer = write_shape if args.grid else write_edge
+    with _quiet_stdout():
+        writer(shape, args.output, force=args.force, input_path=args.input)
+    print(f"{points.shape[0]} points, poles {sizes}, max deviation "
+          f"{result.max_deviation:.4g} (tolerance {tol:.4g}), written to {args.output}")
+    return EXIT_OK
+
+
+def _curve_shape(curve):
+    from .occ.builders import curve_to_edge
+
+    return curve_to_edge(curve)
+
+
+def _surface_shape(surface):
+    from .occ.builders import surface_to_natural_face
+
+    return surface_to_natural_face(surface)
+
+
+# -- entry point -----------------------------------------------------------------------------
+_EXIT_BY_ERROR = ((FileFormatError, EXIT_INPUT), (OutputPathError, EXIT_OUTPUT),
+                  (ToleranceNotMetError, EXIT_TOLERANCE), (InvalidInputError, EXIT_USAGE),
+                  (FairingError, EXIT_INTERNAL))
+
+
+def main(argv=None):
+    """Run ``cq-fairing``; returns (and, as a script, exits with) the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.handler(args)
+    except KeyboardInterrupt:
+        print("cq-fairing: interrupted; no output was written.", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except FairingError as exc:
+        code = next(code for kind, code in _EXIT_BY_ERROR if isinstance(exc, kind))
+        print(f"cq-fairing: error: {exc}", file=sys.stderr)
+        return code
+    except Exception as exc:  # an internal error: one line, the traceback with --debug
+        if args.debug:
+            raise
+        print(f"cq-fairing: internal error: {type(exc).__name__}: {exc} "
+              "(run with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,341 @@
+"""Fairing reports: JSON for scripts and a self-contained HTML page for people.
+
+A report is a plain dict (see :func:`build_report`) with one entry per face:
+control points before -> after, the largest true distance between original and
+faired face against the tolerance, fairness before -> after (bending energy,
+curvature range, wiggle count), the time, and the status (``ok``,
+``tolerance-not-met``, ``skipped`` with the reason).  :func:`write_json` and
+:func:`write_html` write it; the HTML page embeds the PNG maps as base64 so it is
+one file an engineer can mail to a colleague.
+
+Every writer here goes through :func:`atomic_output`: the data is written to a
+temporary file next to the target and renamed over it only when complete, so a
+failure never leaves a half-written file.  This module needs the standard
+library and numpy only.
+"""
+
+import base64
+import datetime
+import html
+import json
+import math
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+from .errors import OutputPathError
+
+__all__ = ["atomic_output", "check_output_path", "build_report", "write_json", "write_html",
+           "write_report", "face_entry", "summary_table"]
+
+#: Face statuses that count as success.
+OK_STATUSES = ("ok",)
+
+
+# -- safe output ----------------------------------------------------------------------------
+def check_output_path(path, *, force=False, inputs=()):
+    """Validate an output path before any work is done.
+
+    Raises
+    ------
+    OutputPathError
+        If ``path`` is one of ``inputs`` (same file), exists and ``force`` is false, is
+        a directory, or its folder does not exist or is not writable.
+    """
+    path = Path(path)
+    for source in inputs:
+        source = Path(source)
+        if source.exists() and path.exists() and os.path.samefile(source, path) \
+                or path.resolve() == source.resolve():
+            raise OutputPathError(
+                f"output {str(path)!r} is the input file; write to a new file "
+                "(the input is never changed)."
+            )
+    if path.is_dir():
+        raise OutputPathError(f"output {str(path)!r} is a directory; give a file name.")
+    if path.exists() and not force:
+        raise OutputPathError(
+            f"output {str(path)!r} already exists; choose another name or pass --force "
+            "(force=True) to overwrite it."
+        )
+    folder = path.resolve().parent
+    if not folder.is_dir():
+        raise OutputPathError(f"folder {str(folder)!r} of output {str(path)!r} does not exist.")
+    if not os.access(folder, os.W_OK):
+        raise OutputPathError(f"folder {str(folder)!r} is not writable; choose another output.")
+    return path
+
+
+@contextmanager
+def atomic_output(path, *, force=False):
+    """Yield a temporary path next to ``path``; rename it onto ``path`` on success.
+
+    The temporary name keeps the suffix of ``path`` (writers that pick the format
+    from the suffix still work).  If the block raises, or writes nothing, the
+    temporary file is removed and ``path`` is untouched.
+
+    Raises
+    ------
+    OutputPathError
+        See :func:`check_output_path`; also if the block produced no file or an empty
+        one, or the rename fails.
+    """
+    path = check_output_path(path, force=force)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}",
+                               dir=path.resolve().parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        if not tmp.exists() or tmp.stat().st_size == 0:
+            raise OutputPathError(f"writing {str(path)!r} produced no data; nothing was written.")
+        if path.exists() and not force:
+            raise OutputPathError(f"output {str(path)!r} appeared while writing; not overwritten.")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise OutputPathError(f"cannot write {str(path)!r}: {exc.strerror or exc}.") from exc
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _write_text(path, text, force):
+    with atomic_output(path, force=force) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+# -- report content -------------------------------------------------------------------------
+def _clean(value):
+    """JSON-safe copy: numpy scalars/arrays to Python, NaN/inf to None, tuples to lists."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if hasattr(value, "tolist"):
+        return _clean(value.tolist())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return value
+
+
+def face_entry(index, *, surface_type=None, status, message="", poles_before=None,
+               poles_after=None, max_deviation=None, tolerance=None, fairness_before=None,
+               fairness_after=None, seconds=None, deviation=None, degree_before=None,
+               degree_after=None):
+    """One face of a report (a dict; ``None`` for what does not apply).
+
+    Parameters
+    ----------
+    index : int
+        1-based face index, as listed by ``cq-fairing inspect``.
+    status : str
+        ``ok``, ``tolerance-not-met``, ``skipped`` or ``failed``.
+    poles_before, poles_after : (int, int)
+        Control net sizes.
+    max_deviation : float
+        Largest true distance (model units) from the original to the faired face.
+    fairness_before, fairness_after : dict
+        See :func:`cq_fairing.viz.fairness_measures`.
+    deviation : dict, optional
+        ``max``, ``mean``, ``rms`` of the dense deviation sample.
+    """
+    within = None
+    if max_deviation is not None and tolerance is not None:
+        within = bool(max_deviation <= tolerance)
+    return _clean({
+        "index": index, "surface_type": surface_type, "status": status, "message": message,
+        "poles_before": poles_before, "poles_after": poles_after,
+        "degree_before": degree_before, "degree_after": degree_after,
+        "max_deviation": max_deviation, "tolerance": tolerance, "within_tolerance": within,
+        "deviation": deviation, "fairness_before": fairness_before,
+        "fairness_after": fairness_after, "seconds": seconds,
+    })
+
+
+def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
+                 method=None, max_gap=None, valid=None, maps=None, seconds=None,
+                 command=None, units="mm"):
+    """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
+
+    Returns
+    -------
+    dict
+        Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
+        ``units``, ``method``, ``faces``, ``summary`` (counts, poles before/after,
+        worst deviation, max gap between faces, validity, time), ``maps`` (name ->
+        PNG/VTP path) and ``skipped`` (index, reason).
+    """
+    from . import __version__
+
+    faces = list(faces)
+    faired = [f for f in faces if f["status"] not in ("skipped", "failed")]
+    deviations = [f["max_deviation"] for f in faired if f["max_deviation"] is not None]
+    summary = {
+        "faces_total": len(faces),
+        "faces_faired": len(faired),
+        "faces_ok": sum(f["status"] in OK_STATUSES for f in faces),
+        "faces_tolerance_not_met": sum(f["status"] == "tolerance-not-met" for f in faces),
+        "faces_skipped": sum(f["status"] == "skipped" for f in faces),
+        "faces_failed": sum(f["status"] == "failed" for f in faces),
+        "poles_before": sum(_count(f["poles_before"]) for f in faired),
+        "poles_after": sum(_count(f["poles_after"]) for f in faired),
+        "worst_deviation": max(deviations) if deviations else None,
+        "max_gap": max_gap, "valid": valid, "seconds": seconds,
+    }
+    return _clean({
+        "tool": f"cq-fairing {__version__}",
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": command, "input": _str(input_path), "output": _str(output_path),
+        "tolerance": tolerance, "units": units, "method": method,
+        "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
+        "skipped": [{"index": f["index"], "reason": f["message"]}
+                    for f in faces if f["status"] in ("skipped", "failed")],
+    })
+
+
+def _str(path):
+    return None if path is None else str(path)
+
+
+def _count(net):
+    return 0 if not net else math.prod(int(k) for k in net)
+
+
+def write_json(report, path, *, force=False):
+    """Write ``report`` as indented JSON, atomically. Returns the path."""
+    return _write_text(path, json.dumps(report, indent=2, allow_nan=False) + "\n", force)
+
+
+# -- text and HTML ----------------------------------------------------------------------------
+def _fmt(value, digits=4):
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    if isinstance(value, (list, tuple)):
+        return "x".join(_fmt(v, digits) for v in value)
+    return str(value)
+
+
+def _range(pair):
+    return "-" if not pair else f"[{_fmt(pair[0], 3)}, {_fmt(pair[1], 3)}]"
+
+
+def _fair(face, key, fmt=_fmt):
+    before = (face.get("fairness_before") or {}).get(key)
+    after = (face.get("fairness_after") or {}).get(key)
+    if before is None and after is None:
+        return "-"
+    return f"{fmt(before)} -> {fmt(after)}"
+
+
+COLUMNS = ("face", "type", "poles", "max dev", "tol", "energy", "wiggles", "time s", "status")
+
+
+def _row(face):
+    return (str(face["index"]), face.get("surface_type") or "-",
+            f"{_fmt(face['poles_before'])} -> {_fmt(face['poles_after'])}"
+            if face["poles_after"] else _fmt(face["poles_before"]),
+            _fmt(face["max_deviation"]), _fmt(face["tolerance"]),
+            _fair(face, "bending_energy", lambda v: _fmt(v, 3)),
+            _fair(face, "wiggles", lambda v: _fmt(v, 3)),
+            _fmt(face["seconds"], 3), face["status"])
+
+
+def summary_table(report):
+    """A fixed-width text table of the faces and a summary line (for the terminal)."""
+    rows = [COLUMNS] + [_row(f) for f in report["faces"]]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(COLUMNS))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    s = report["summary"]
+    lines.append(
+        f"{s['faces_ok']}/{s['faces_total']} faces ok, {s['faces_tolerance_not_met']} over "
+        f"tolerance, {s['faces_skipped']} skipped, {s['faces_failed']} failed; poles "
+        f"{s['poles_before']} -> {s['poles_after']}; worst deviation "
+        f"{_fmt(s['worst_deviation'])} {report['units']} (tolerance {_fmt(report['tolerance'])})"
+    )
+    return "\n".join(lines)
+
+
+_CSS = """
+body{font-family:sans-serif;margin:2em;color:#222}table{border-collapse:collapse;margin:1em 0}
+th,td{border:1px solid #bbb;padding:4px 8px;text-align:right}th{background:#eee}
+td.l{text-align:left}.ok{background:#dfd}.bad{background:#fdd}.skip{background:#eee}
+img{max-width:100%;border:1px solid #ccc;margin:0.5em 0}code{background:#f4f4f4}
+"""
+
+
+def _image(path, caption):
+    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    return (f"<figure><img alt='{html.escape(caption)}' src='data:image/png;base64,{data}'>"
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def _html_table(report):
+    cls = {"ok": "ok", "tolerance-not-met": "bad", "failed": "bad", "skipped": "skip"}
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS + ("curvature H",))
+    body = []
+    for face in report["faces"]:
+        cells = _row(face) + (_fair(face, "mean_curvature_range", _range),)
+        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i in (1, 8)
+                      else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
+        body.append(f"<tr class='{cls.get(face['status'], '')}'>{tds}</tr>")
+    return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+
+
+def render_html(report):
+    """The report as one self-contained HTML page (maps embedded as base64 PNG)."""
+    s = report["summary"]
+    esc = html.escape
+    settings = [("input", report["input"]), ("output", report["output"]),
+                ("tolerance", f"{_fmt(report['tolerance'])} {report['units']}"),
+                ("method", report["method"]), ("command", report["command"]),
+                ("created", report["created"]), ("tool", report["tool"])]
+    summary = [("faces ok / total", f"{s['faces_ok']} / {s['faces_total']}"),
+               ("over tolerance", s["faces_tolerance_not_met"]),
+               ("skipped", s["faces_skipped"]), ("failed", s["faces_failed"]),
+               ("control points", f"{s['poles_before']} -> {s['poles_after']}"),
+               ("worst deviation", f"{_fmt(s['worst_deviation'])} {report['units']}"),
+               ("largest gap between faces", f"{_fmt(s['max_gap'])} {report['units']}"),
+               ("valid shape", s["valid"]), ("time", f"{_fmt(s['seconds'], 3)} s")]
+
+    def kv(rows):
+        return "<table>" + "".join(f"<tr><th>{esc(str(k))}</th><td class='l'>{esc(_fmt(v))}</td></tr>"
+                                   for k, v in rows) + "</table>"
+
+    skipped = "".join(f"<li>face {e['index']}: {esc(e['reason'] or '')}</li>"
+                      for e in report["skipped"]) or "<li>none</li>"
+    images = "".join(_image(p, name) for name, p in report["maps"].items()
+                     if p and str(p).lower().endswith(".png") and Path(p).exists())
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>cq-fairing report"
+            f"</title><style>{_CSS}</style></head><body><h1>Fairing report</h1>"
+            f"<h2>Settings</h2>{kv(settings)}<h2>Summary</h2>{kv(summary)}"
+            f"<h2>Faces</h2><p>max dev: largest true distance from the original face to the "
+            f"faired one; energy: thin-plate bending energy before -> after; wiggles: "
+            f"sign changes of the mean curvature per iso-line.</p>{_html_table(report)}"
+            f"<h2>Skipped or failed</h2><ul>{skipped}</ul><h2>Maps</h2>"
+            f"{images or '<p>no maps</p>'}</body></html>\n")
+
+
+def write_html(report, path, *, force=False):
+    """Write :func:`render_html` atomically. Returns the path."""
+    return _write_text(path, render_html(report), force)
+
+
+def write_report(report, path, *, force=False):
+    """Write ``.json`` or ``.html``/``.htm`` by the suffix of ``path``.
+
+    Raises
+    ------
+    OutputPathError
+        For another suffix, or see :func:`atomic_output`.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix == ".json":
+        return write_json(report, path, force=force)
+    if suffix in (".html", ".htm"):
+        return write_html(report, path, force=force)
+    raise OutputPathError(f"a report must end in .json or .html, got {str(path)!r}.")

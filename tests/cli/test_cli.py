@@ -1,0 +1,174 @@
+"""The real ``cq-fairing`` entry point, run as a subprocess: exit codes, messages, files."""
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.conftest import REAL_DATA, REPO
+
+BLADE = REPO / "examples" / "data" / "IEA_15MW_CFD.stp"
+
+
+def run(*args, cwd):
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    return subprocess.run([sys.executable, "-m", "cq_fairing.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, env=env, timeout=600)
+
+
+def sha(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+@pytest.fixture(scope="module")
+def blade_run(tmp_path_factory):
+    work = tmp_path_factory.mktemp("blade")
+    before = sha(BLADE)
+    proc = run("fair", BLADE, "-o", "blade.step", "--tol", "0.001", "--report", "r.json",
+               "--deviation-map", "m.png", "--curvature-map", "c.png", cwd=work)
+    return work, proc, before
+
+
+def test_fair_blade_writes_a_valid_step_and_report(blade_run):
+    work, proc, before = blade_run
+    assert proc.returncode == 0, proc.stderr
+    assert sha(BLADE) == before
+    from cq_fairing.occ import list_faces, read_shape
+
+    faces = list_faces(read_shape(work / "blade.step"))
+    assert len(faces) == 3 and all(f.surface_type == "BSpline" for f in faces)
+    report = json.loads((work / "r.json").read_text())
+    faired = [f for f in report["faces"] if f["poles_after"] != f["poles_before"]]
+    assert faired, "no face was reduced"
+    for face in report["faces"]:
+        assert face["status"] == "ok"
+        assert face["max_deviation"] <= 0.001
+    assert "3/3 faces ok" in proc.stdout
+    assert "Statistics on Transfer" not in proc.stdout  # OCCT's banner is silenced
+
+
+def _colours(path):
+    from PIL import Image
+
+    image = np.asarray(Image.open(path).convert("RGB")).reshape(-1, 3).astype(int)
+    return image
+
+
+def test_maps_are_non_trivial_images(blade_run):
+    work, proc, _ = blade_run
+    for name in ("m.png", "c.png"):
+        pixels = _colours(work / name)
+        assert pixels.shape[0] > 500 * 500
+        assert len(np.unique(pixels, axis=0)) > 50
+    deviation = _colours(work / "m.png")
+    greenish = (deviation[:, 1] > deviation[:, 0] + 60) & (deviation[:, 1] > deviation[:, 2] + 60)
+    reddish = (deviation[:, 0] > 180) & (deviation[:, 1] < 80) & (deviation[:, 2] < 80)
+    assert greenish.sum() > 1000 and reddish.sum() > 100  # surface and colour bar
+
+
+def test_inspect_lists_every_face_of_linkrods(tmp_path):
+    proc = run("inspect", REAL_DATA / "linkrods.step", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in proc.stdout.splitlines()
+             if line.strip()[:1].isdigit() and "faces:" not in line]
+    assert len(lines) == 37
+    assert sum("BSpline" in line for line in lines) == 18
+    assert "37 faces: 18 BSpline, 4 Cylinder, 6 Plane, 9 Torus" in proc.stdout
+
+
+@pytest.mark.parametrize("content", [b"", os.urandom(4096),
+                                     b"ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(("])
+def test_bad_input_files_give_one_line_errors_and_exit_3(tmp_path, content):
+    bad = tmp_path / "bad.step"
+    bad.write_bytes(content)
+    before = sha(bad)
+    proc = run("fair", bad, "-o", "out.step", "--tol", "0.1", cwd=tmp_path)
+    assert proc.returncode == 3
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("cq-fairing: error:")
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "out.step").exists()
+    assert sha(bad) == before
+
+
+def test_truncated_step_file(tmp_path):
+    truncated = tmp_path / "cut.step"
+    truncated.write_bytes(BLADE.read_bytes()[: 300_000])
+    proc = run("fair", truncated, "-o", "out.step", cwd=tmp_path)
+    assert proc.returncode == 3, proc.stderr
+    assert not (tmp_path / "out.step").exists()
+
+
+def test_missing_input(tmp_path):
+    proc = run("inspect", tmp_path / "nope.step", cwd=tmp_path)
+    assert proc.returncode == 3 and "nope.step" in proc.stderr
+
+
+def test_existing_output_is_not_overwritten_without_force(tmp_path):
+    out = tmp_path / "out.step"
+    out.write_text("keep me")
+    proc = run("fair", BLADE, "-o", out, "--tol", "0.01", cwd=tmp_path)
+    assert proc.returncode == 4 and "--force" in proc.stderr
+    assert out.read_text() == "keep me"
+
+
+def test_output_equal_to_input_is_refused(tmp_path):
+    copy = tmp_path / "blade.stp"
+    copy.write_bytes(BLADE.read_bytes())
+    proc = run("fair", copy, "-o", copy, "--force", cwd=tmp_path)
+    assert proc.returncode == 4 and "input" in proc.stderr
+    assert sha(copy) == sha(BLADE)
+
+
+def test_output_in_a_missing_folder(tmp_path):
+    proc = run("fair", BLADE, "-o", tmp_path / "no" / "out.step", cwd=tmp_path)
+    assert proc.returncode == 4 and "does not exist" in proc.stderr
+
+
+@pytest.mark.parametrize("args", [["--tol", "-1"], ["--tol", "nan"], ["--faces", "0"],
+                                  ["--target", "2", "9"]])
+def test_usage_errors_exit_2(tmp_path, args):
+    proc = run("fair", BLADE, "-o", "out.step", *args, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "out.step").exists()
+
+
+def test_points_to_a_faired_curve(tmp_path):
+    t = np.linspace(0, 2 * np.pi, 400)
+    rng = np.random.default_rng(0)
+    pts = np.c_[50 * np.cos(t), 50 * np.sin(t), 5 * np.sin(3 * t)] + rng.normal(0, 0.01, (400, 3))
+    np.savetxt(tmp_path / "p.xyz", pts)
+    proc = run("points", "p.xyz", "-o", "curve.step", "--tol", "0.05", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "402 ->" in proc.stdout
+    from OCP.STEPControl import STEPControl_Reader
+
+    reader = STEPControl_Reader()
+    reader.ReadFile(str(tmp_path / "curve.step"))
+    assert reader.TransferRoots() >= 1
+
+
+def test_points_grid_to_a_faired_surface(tmp_path):
+    u, v = np.meshgrid(np.linspace(0, 1, 30), np.linspace(0, 1, 40), indexing="ij")
+    grid = np.stack([100 * u, 100 * v, 10 * np.sin(3 * u) * np.cos(2 * v)], -1)
+    grid += np.random.default_rng(1).normal(0, 0.01, grid.shape)
+    np.savetxt(tmp_path / "g.xyz", grid.reshape(-1, 3))
+    proc = run("points", "g.xyz", "-o", "surf.step", "--tol", "0.05", "--grid", "30", "40",
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    from cq_fairing.occ import list_faces, read_shape
+
+    (face,) = list_faces(read_shape(tmp_path / "surf.step"))
+    assert face.surface_type == "BSpline" and face.n_poles_u < 32 and face.n_poles_v < 42
+
+
+def test_help_documents_exit_codes():
+    proc = subprocess.run(["cq-fairing", "--help"], capture_output=True, text=True)
+    assert proc.returncode == 0
+    for code in ("0 ", "1 ", "2 ", "3 ", "4 ", "5 ", "130"):
+        assert code in proc.stdout
