@@ -22,7 +22,8 @@ from cq_fairing.occ import fair_shape, read_shape, write_shape
 source, target = sys.argv[1], sys.argv[2]
 shape = read_shape(source)
 print("read", flush=True)
-options = dict(n=int(sys.argv[3][2:])) if sys.argv[3].startswith("n=") else dict(tol=float(sys.argv[3]))
+mode = sys.argv[3]
+options = dict(n=int(mode[2:])) if mode.startswith("n=") else dict(tol=float(mode))
 result = fair_shape(shape, **options)
 print("faired", flush=True)
 write_shape(result.shape, target, input_path=source)

@@ -16,7 +16,6 @@ from OCP.Geom import (Geom_BSplineCurve, Geom_BSplineSurface, Geom_CylindricalSu
 from OCP.gp import gp, gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt
 from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
-from OCP.TopoDS import TopoDS
 
 from cq_fairing.errors import (FairingError, FileFormatError, OutputPathError,
                                UnsupportedGeometryError)
@@ -148,9 +147,9 @@ def test_periodic_and_rational_real_faces_are_handled(real_shape):
 
 
 def test_one_bad_face_is_isolated_and_the_rest_finish():
-    """A compound of a wiggly bicubic face (fairs) and a quintic face whose detail cannot
-    be represented by cubics within 1e-9 (tolerance not met): the bad face is reported and
-    kept, the other is faired, the result is valid."""
+    """A compound of a wiggly bicubic face (fairs) and a quintic 9 x 9 face that no cubic
+    target represents within 2e-3 (best 0.011): the bad face is reported and kept, the
+    other is faired within tol, the result is valid."""
     from OCP.BRep import BRep_Builder
     from OCP.TopoDS import TopoDS_Compound
 
@@ -161,13 +160,13 @@ def test_one_bad_face_is_isolated_and_the_rest_finish():
     builder.MakeCompound(compound)
     builder.Add(compound, good)
     builder.Add(compound, bad)
-    result = fair_shape(compound, n=(5, 5))
-    statuses = [r.status for r in result.faces]
-    assert statuses[0] == "faired"
-    tight = fair_shape(compound, tol=1e-9)
-    assert [r.status for r in tight.faces][1] in ("tolerance-not-met", "unchanged", "failed")
-    assert all("\n" not in r.message for r in tight.faces)
-    assert tight.valid
+    result = fair_shape(compound, tol=2e-3)
+    assert [r.status for r in result.faces] == ["faired", "tolerance-not-met"]
+    assert result.faces[0].max_deviation <= 2e-3
+    message = result.faces[1].message
+    assert "\n" not in message and "best found" in message
+    assert result.faces[1].face.IsSame(bad) or result.faces[1].original.IsSame(bad)
+    assert result.valid
 
 
 # -- hostile files --------------------------------------------------------------------------
