@@ -360,6 +360,11 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
         lam = lam / 10.0 if lam > 1e-8 else 0.0
         faired = fit.geometry(space, fit.project(space, lam))
         e = check_probe.max_deviation(faired)[0]
+    if e > tol:
+        raise ToleranceNotMetError(
+            f"the adaptive target ({space.dimension} poles) passed the search samples but "
+            f"deviates by {e:.4g} > tol={tol:g} on the denser check; raise per_span.",
+            tolerance=tol, best_deviation=e)
     step = decomposition(curve.space, space)
     return FairResult(curve, faired, (top, space.n_spans), space.n_spans, "adaptive",
                       (step,), max_deviation=e, evaluations=fit.evaluations,
@@ -553,6 +558,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_
         return fair_surface_adaptive(surface, tol, target_degree=target_degree, polish=polish,
                                      per_span=per_span, max_samples=max_samples,
                                      _safety=_safety * tol / e - 0.005)
+    if e > tol:
+        raise ToleranceNotMetError(
+            f"the adaptive target {spaces[0].dimension}x{spaces[1].dimension} passed the "
+            f"search samples but deviates by {e:.4g} > tol={tol:g} on the denser check; "
+            "raise per_span or use fair_surface.", tolerance=tol, best_deviation=e)
     step = (_step(surface.u_space, spaces[0]), _step(surface.v_space, spaces[1]))
     n = (spaces[0].n_spans, spaces[1].n_spans)
     return SurfaceFairResult(surface, faired, (tuple(tops), n), n, "adaptive", (step,),
