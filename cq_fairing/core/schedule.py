@@ -71,8 +71,8 @@ def _ladder(source, target):
     levels = [target]
     while True:
         above = SplineSpace.quasi_uniform(2 * levels[-1].n_spans, target.degree, target.domain)
-        if above.same_as(source):
-            break
+        if above.same_as(source) or above.n_spans >= source_spans:
+            break  # the source itself, or one that equals it up to rounding of its knots
         if not on_ladder and above.n_spans > MAX_FIRST_STEP_RATIO * source_spans:
             break
         levels.append(above)

@@ -140,6 +140,22 @@ def test_plans():
         [1024, 512, 256, 128, 64]
 
 
+def test_ladder_terminates_for_a_target_equal_to_the_source_up_to_rounding():
+    """Knots that went through a file differ in the last bit: V_48 -> V_48 is one step.
+
+    (Before the fix the ladder doubled forever from ratio 1 and exhausted memory when
+    FreeCAD recomputed a reopened document.)
+    """
+    knots = SplineSpace.quasi_uniform(48).knots.copy()
+    knots[10] = np.nextafter(knots[10], 1.0)
+    rounded = SplineSpace.from_knots(knots, 3)
+    target = SplineSpace.quasi_uniform(48)
+    assert not rounded.same_as(target) and rounded.is_quasi_uniform
+    assert [s.n_spans for s in plan_spaces(rounded, target, "auto")] == [48, 48]
+    poles = np.random.default_rng(0).normal(size=(51, 3))
+    assert np.allclose(cf.fair_curve(poles, 48, knots=knots).poles, poles, atol=1e-9)
+
+
 def test_hybrid_differs_from_the_l2_best_only_slightly_on_smooth_data():
     t = np.linspace(0, 1, 1300)
     pts = np.c_[np.cos(6 * t), np.sin(6 * t), 0.2 * t]

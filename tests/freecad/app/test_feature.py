@@ -248,17 +248,18 @@ def test_trimmed_rational_face_keeps_its_trim(doc):
     assert fixtures.sample_distance(faired, face, 8) <= obj.MaxDeviation.Value * 1.05 + 1e-9
 
 
-def test_energy_method_is_passed_or_refused_clearly(noisy):
+def test_energy_method_needs_a_tolerance_and_keeps_the_poles(noisy):
+    """Energy fairing keeps the control points: with a tolerance it runs, with a target
+    pole count it is refused in plain words."""
     face = noisy.Shape.Faces[0]
-    import inspect
     import cq_fairing as cf
 
-    if "method" in inspect.signature(cf.fair_surface).parameters:
-        result = make.fair_face(face, target=(18, 26), method="energy")
-        assert result.shape.isValid()
-    else:
-        with pytest.raises(cf.InvalidInputError, match="no energy fairing"):
-            make.fair_face(face, target=(18, 26), method="energy")
+    result = make.fair_face(face, tolerance=0.05, method="energy")
+    assert result.shape.isValid()
+    surface = result.shape.Faces[0].Surface
+    assert (surface.NbUPoles, surface.NbVPoles) == (face.Surface.NbUPoles, face.Surface.NbVPoles)
+    with pytest.raises(cf.InvalidInputError, match="needs tol"):
+        make.fair_face(face, target=(18, 26), method="energy")
 
 
 def _gap(face_a, face_b, shared):
