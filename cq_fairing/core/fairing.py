@@ -266,7 +266,11 @@ def target_space(source, n, degree=None):
         If ``n`` is not an integer, below 1, or gives at least as many poles as the
         source has.
     """
-    degree = _default_target_degree(source.degree) if degree is None else degree
+    if degree is None:
+        degree = _default_target_degree(source.degree)
+    elif isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
+        raise InvalidInputError(
+            f"target_degree must be an integer >= 1, got {degree!r}; e.g. target_degree=3.")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise InvalidTargetError(f"target scale n must be an integer, got {n!r}.")
     k = source.dimension

@@ -186,10 +186,20 @@ def _binom(n, k):
 
 def as_poles(poles, name="poles", ndim=2):
     """Validate a pole array: float, finite, of ``ndim`` axes, last axis 1..4 coordinates."""
+    numeric = f"{name} must be a numeric array, got {type(poles).__name__}."
     try:
-        arr = np.asarray(poles, dtype=float)
+        raw = np.asarray(poles)
     except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be a numeric array, got {type(poles).__name__}.") from exc
+        raise InvalidInputError(numeric) from exc
+    if raw.dtype.kind == "c":
+        raise InvalidInputError(
+            f"{name} must be real coordinates, got complex numbers; pass the real part "
+            "explicitly if that is what you mean."
+        )
+    try:
+        arr = raw.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(numeric) from exc
     if arr.ndim != ndim:
         expected = "(k, d)" if ndim == 2 else "(k_u, k_v, d)"
         raise InvalidInputError(
@@ -214,18 +224,27 @@ def _as_weights(weights, shape):
     w = np.asarray(weights, dtype=float)
     if w.shape != tuple(shape):
         raise InvalidInputError(f"weights must have shape {tuple(shape)}, got {w.shape}.")
-    if not np.all(np.isfinite(w)) or np.any(w <= 0):
+    bad = np.argwhere(~np.isfinite(w) | (w <= 0))
+    if bad.size:
+        index = tuple(int(i) for i in bad[0])
         raise InvalidInputError(
-            "weights must be finite and positive; got "
-            f"min {np.nanmin(w)!r}. Zero or negative weights do not define a valid NURBS."
+            f"weights must be finite and positive; weight {index} is {float(w[index])!r}. "
+            "NaN, inf, zero or negative weights do not define a valid NURBS."
         )
     return None if np.all(w == 1.0) else w
 
 
-def _default_knots(k, degree):
+def _check_degree(degree, name="degree"):
+    """An integer >= 1, else :class:`InvalidInputError` naming the argument."""
+    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
+        raise InvalidInputError(f"{name} must be an integer >= 1, got {degree!r}; e.g. {name}=3.")
+    return int(degree)
+
+
+def _default_knots(k, degree, what="curve"):
     if k < degree + 1:
         raise InvalidInputError(
-            f"a degree-{degree} curve needs at least {degree + 1} poles, got {k}; "
+            f"a degree-{degree} {what} needs at least {degree + 1} poles, got {k}; "
             "pass more points or a lower degree."
         )
     return SplineSpace.quasi_uniform(k - degree, degree).knots
@@ -240,7 +259,7 @@ def make_curve(poles, knots=None, degree=None, weights=None):
         On a wrong shape, NaN/inf, too few poles, bad knots or bad weights.
     """
     P = as_poles(poles, "poles", 2)
-    degree = 3 if degree is None else degree
+    degree = 3 if degree is None else _check_degree(degree)
     if knots is None:
         space = SplineSpace.from_knots(_default_knots(P.shape[0], degree), degree)
     else:
@@ -266,7 +285,8 @@ def make_surface(poles, u_knots=None, v_knots=None, degree=None, weights=None):
         (degree, degree) if np.ndim(degree) == 0 else tuple(degree))
     spaces = []
     for knots, k, d, name in ((u_knots, P.shape[0], du, "u"), (v_knots, P.shape[1], dv, "v")):
-        t = _default_knots(k, d) if knots is None else knots
+        d = _check_degree(d)
+        t = _default_knots(k, d, f"surface (direction {name})") if knots is None else knots
         space = SplineSpace.from_knots(t, d)
         if space.dimension != k:
             raise InvalidInputError(

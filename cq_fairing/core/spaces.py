@@ -85,7 +85,8 @@ class SplineSpace:
             raise InvalidInputError(
                 f"knots must be clamped (first and last knot repeated degree + 1 = "
                 f"{degree + 1} times); got {t[: degree + 1]} ... {t[-degree - 1:]}. "
-                "Unclamp periodic data first (see cq_fairing.core.periodic)."
+                "Convert periodic knots to clamped ones first (the OCP adapter and the "
+                "FreeCAD workbench do this for faces)."
             )
         interior = t[degree + 1: -degree - 1]
         if interior.size and (interior[0] <= t[0] or interior[-1] >= t[-1]):

@@ -139,29 +139,20 @@ CASES = [
     # a tolerance that cannot be met: a quintic source, cubic target, tiny tol
     ("tol unreachable", lambda: cf.fair_curve(P, tol=1e-9, degree=5), ToleranceNotMetError,
      "no target within tol"),
-    # defects (RELIABILITY.md D2-D6)
-    pytest.param("complex poles", lambda: cf.fair_curve(P + 1j, 5), InvalidInputError,
-                 "complex|real", marks=_defect("D2: complex poles are cast to real "
-                                               "(ComplexWarning, imaginary part dropped)")),
-    pytest.param("degree=-1", lambda: cf.fair_curve(P, 1, degree=-1), InvalidInputError,
-                 "degree", marks=_defect("D3: numpy ValueError 'negative dimensions'")),
-    pytest.param("degree=2.5", lambda: cf.fair_curve(P, 1, degree=2.5), InvalidInputError,
-                 "degree", marks=_defect("D3: reported as 'scale n must be an integer'")),
-    pytest.param("target_degree=0", lambda: cf.fair_curve(P, 3, target_degree=0),
-                 InvalidInputError, "target_degree", marks=_defect(
-                     "D4: accepted, gives a degree-0 (piecewise constant) curve")),
-    pytest.param("target_degree='x'", lambda: cf.fair_curve(P, 3, target_degree="x"),
-                 InvalidInputError, "target_degree",
-                 marks=_defect("D4: bare TypeError from int + str")),
-    pytest.param("NaN weight", lambda: cf.fair_curve(P, 5, weights=_with(np.ones(20), 2, np.nan)),
-                 InvalidInputError, "(?i)nan", marks=_defect(
-                     "D5: message says 'got min np.float64(1.0)' (nanmin skips the NaN)")),
-    pytest.param("inf weight", lambda: cf.fair_curve(P, 5, weights=_with(np.ones(20), 2, np.inf)),
-                 InvalidInputError, "inf", marks=_defect(
-                     "D5: message says 'got min np.float64(1.0)'")),
-    pytest.param("net 1xN names the direction", lambda: cf.fair_surface(NET[:1], (1, 3)),
-                 InvalidInputError, r"surface|\bu\b", marks=_defect(
-                     "D6: a surface net is reported as 'a degree-3 curve'")),
+    # fixed defects (RELIABILITY.md D2-D6), kept as regular cases
+    ("complex poles", lambda: cf.fair_curve(P + 1j, 5), InvalidInputError, "complex|real"),
+    ("degree=-1", lambda: cf.fair_curve(P, 1, degree=-1), InvalidInputError, "degree"),
+    ("degree=2.5", lambda: cf.fair_curve(P, 1, degree=2.5), InvalidInputError, "degree"),
+    ("target_degree=0", lambda: cf.fair_curve(P, 3, target_degree=0), InvalidInputError,
+     "target_degree"),
+    ("target_degree='x'", lambda: cf.fair_curve(P, 3, target_degree="x"), InvalidInputError,
+     "target_degree"),
+    ("NaN weight", lambda: cf.fair_curve(P, 5, weights=_with(np.ones(20), 2, np.nan)),
+     InvalidInputError, "(?i)nan"),
+    ("inf weight", lambda: cf.fair_curve(P, 5, weights=_with(np.ones(20), 2, np.inf)),
+     InvalidInputError, "inf"),
+    ("net 1xN names the direction", lambda: cf.fair_surface(NET[:1], (1, 3)),
+     InvalidInputError, r"surface|\bu\b"),
 ]
 
 
@@ -188,8 +179,6 @@ def test_unreachable_tolerance_reports_best_deviation():
     assert np.isfinite(info.value.best_deviation) and info.value.best_deviation > 1e-9
 
 
-@pytest.mark.xfail(strict=True, reason="D5b: message points to cq_fairing.core.periodic, "
-                   "a module that does not exist")
 def test_messages_only_name_modules_that_exist():
     with pytest.raises(InvalidInputError) as info:
         cf.fair_curve(P, 5, knots=np.arange(24.0))
