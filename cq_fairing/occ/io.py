@@ -71,16 +71,20 @@ def read_shape(path):
     return shape
 
 
-def _read_step(path):
-    reader = STEPControl_Reader()
+def _read_with(reader, kind, path):
+    """Read and transfer all roots with an OCCT XSControl reader; None when it holds no shape."""
     status = reader.ReadFile(str(path))
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(
-            f"'{path}' is not a readable STEP file (reader status {status.name}); "
+            f"'{path}' is not a readable {kind} file (reader status {status.name}); "
             "it may be corrupt or truncated."
         )
     reader.TransferRoots()
     return reader.OneShape() if reader.NbShapes() else None
+
+
+def _read_step(path):
+    return _read_with(STEPControl_Reader(), "STEP", path)
 
 
 _UNIT_NAMES = {"millimetre": "MM", "millimeter": "MM", "metre": "M", "meter": "M",
@@ -117,15 +121,7 @@ def step_length_unit(path):
 
 
 def _read_iges(path):
-    reader = IGESControl_Reader()
-    status = reader.ReadFile(str(path))
-    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(
-            f"'{path}' is not a readable IGES file (reader status {status.name}); "
-            "it may be corrupt or truncated."
-        )
-    reader.TransferRoots()
-    return reader.OneShape() if reader.NbShapes() else None
+    return _read_with(IGESControl_Reader(), "IGES", path)
 
 
 def _read_brep(path):
