@@ -405,15 +405,61 @@ class _Sampler:
 
 
 def _finisher(surface, periodic, boundary):
-    """Post-processing of every candidate: tie periodic seams, keep border rows."""
+    r"""Post-processing of every candidate: keep the source's closed and collapsed borders.
+
+    * a **periodic** direction, or one whose first and last pole rows coincide in the
+      source (a closed, non-periodic seam), gets its first and last rows tied to their
+      mean (:func:`_tie_rows`), so the seam edge stays shared;
+    * a **collapsed** border row (all its poles at one point :math:`c`, the pole of a
+      sphere: a degenerated edge) is set back to :math:`c` in the faired net
+      (:func:`_collapse_rows`), so the degenerated edge and its vertex stay exact.
+
+    Rows count as coincident or collapsed within ``1e-9`` of the net's size.
+    ``boundary="fixed"`` first restores all the source's border rows.
+    """
+    tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or _seam_closed(surface, axis)]
+    collapsed = _collapsed_rows(surface)
+
     def finish(faired):
         if boundary == "fixed":
             faired = _fix_border(surface, faired)
-        for axis in (0, 1):
-            if "uv"[axis] in periodic:
-                faired = _tie_rows(faired, axis)
-        return faired
+        for axis in tied:
+            faired = _tie_rows(faired, axis)
+        return _collapse_rows(faired, collapsed)
     return finish
+
+
+def _net_size(surface):
+    return float(np.linalg.norm(np.ptp(surface.poles.reshape(-1, surface.poles.shape[-1]),
+                                       axis=0)))
+
+
+def _seam_closed(surface, axis):
+    """True when the first and last pole rows along ``axis`` coincide (a closed seam)."""
+    rows = np.moveaxis(surface.poles, axis, 0)
+    return bool(np.abs(rows[0] - rows[-1]).max() <= 1e-9 * _net_size(surface))
+
+
+def _collapsed_rows(surface):
+    """``[(axis, end, point)]`` of the border rows whose poles all lie at one point."""
+    size = _net_size(surface)
+    out = []
+    for axis in (0, 1):
+        rows = np.moveaxis(surface.poles, axis, 0)
+        for end in (0, -1):
+            if np.ptp(rows[end], axis=0).max() <= 1e-9 * size:
+                out.append((axis, end, rows[end].mean(axis=0)))
+    return out
+
+
+def _collapse_rows(surface, collapsed):
+    """Put every border row of ``collapsed`` back onto its point (weights unchanged)."""
+    if not collapsed:
+        return surface
+    poles = surface.poles.copy()
+    for axis, end, point in collapsed:
+        np.moveaxis(poles, axis, 0)[end] = point
+    return replace(surface, poles=poles)
 
 
 def _tie_rows(surface, axis):

@@ -203,10 +203,11 @@ class _Job:
                 report.face = target
         emap = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(copy, TopAbs_EDGE, TopAbs_FACE, emap)
-        free = [e for e in touched if emap.FindFromKey(e).Size() == 1
-                and not BRep_Tool.IsClosed_s(e, TopoDS.Face_s(emap.FindFromKey(e).First()))]
-        shared = [e for e in touched if emap.FindFromKey(e).Size() != 1
-                  or BRep_Tool.IsClosed_s(e, TopoDS.Face_s(emap.FindFromKey(e).First()))]
+        # an edge of one face only (a free border, or a seam whose rows fairing tied)
+        # lies on that face alone: its 3-D curve is rebuilt on the new surface
+        alone = [_single_face(emap.FindFromKey(e)) for e in touched]
+        free = [e for e, single in zip(touched, alone) if single]
+        shared = [e for e, single in zip(touched, alone) if not single]
         finish_edges(free, rebuild_3d=True)
         finish_edges(shared)
         BRepLib.UpdateTolerances_s(copy, False)
@@ -263,6 +264,13 @@ def _one_face(index, face, selected, options):
         report = FaceFairReport(face, status, str(exc), original=face)
     report.index = index
     return report
+
+
+def _single_face(faces):
+    """True when every entry of the ``TopTools_ListOfShape`` is the same face (a seam
+    edge lists its face twice)."""
+    first = faces.First()
+    return all(face.IsSame(first) for face in faces)
 
 
 def free_edge_count(shape):

@@ -125,6 +125,77 @@ def test_sphere_face_with_collapsed_edges_stays_valid():
         assert "\n" not in report.message
 
 
+def bumpy_ball(nu=24, nv=18, bumps=0.02, seed=0):
+    """A closed solid bounded by one bicubic B-spline face shaped like a scanned ball
+    (radius 10 with 2 % bumps): the first and last u rows coincide (a closed seam, not
+    periodic) and each v border row is collapsed to a point (the poles: degenerated
+    edges), as in a sphere."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Shell, TopoDS_Solid
+
+    rng = np.random.default_rng(seed)
+    noise = 1 + bumps * rng.normal(size=(nu, nv))
+    noise[-1], noise[:, 0], noise[:, -1] = noise[0], 1.0, 1.0
+    theta, phi = np.linspace(0, 2 * np.pi, nu), np.linspace(0, np.pi, nv)
+    poles = TColgp_Array2OfPnt(1, nu, 1, nv)
+    for i in range(nu):
+        for j in range(nv):
+            r = 10 * noise[i, j]
+            poles.SetValue(i + 1, j + 1, gp_Pnt(r * np.sin(phi[j]) * np.cos(theta[i]),
+                                                r * np.sin(phi[j]) * np.sin(theta[i]),
+                                                r * np.cos(phi[j])))
+
+    def knots(k):
+        spans = k - 3
+        return (_array1([s / spans for s in range(spans + 1)]),
+                _array1([4] + [1] * (spans - 1) + [4], TColStd_Array1OfInteger))
+
+    (ku, mu), (kv, mv) = knots(nu), knots(nv)
+    face = face_of(Geom_BSplineSurface(poles, ku, kv, mu, mv, 3, 3))
+    builder, shell, solid = BRep_Builder(), TopoDS_Shell(), TopoDS_Solid()
+    builder.MakeShell(shell)
+    builder.Add(shell, face)
+    shell.Closed(True)
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    return solid
+
+
+def _max_tolerance(shape, kind):
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    cast, tool = {"edge": (TopAbs_EDGE, TopoDS.Edge_s),
+                  "vertex": (TopAbs_VERTEX, TopoDS.Vertex_s)}[kind], BRep_Tool.Tolerance_s
+    explorer, worst = TopExp_Explorer(shape, cast[0]), 0.0
+    while explorer.More():
+        worst = max(worst, tool(cast[1](explorer.Current())))
+        explorer.Next()
+    return worst
+
+
+def test_collapsed_and_closed_borders_stay_closed_in_a_solid():
+    """G5: the ball's collapsed border rows (degenerated edges at its poles) stay
+    collapsed after fairing and its seam rows stay equal, so the solid stays closed with
+    its original edge and vertex tolerances (no gap papered over by raising them)."""
+    solid = bumpy_ball()
+    assert BRepCheck_Analyzer(solid).IsValid()
+    result = fair_shape(solid, tol=0.3)
+    (report,) = result.faces
+    assert report.status == "faired" and report.max_deviation <= 0.3
+    assert report.poles_after[0] * report.poles_after[1] < 24 * 18
+    poles = report.surface.poles
+    assert np.ptp(poles[:, 0], axis=0).max() <= 1e-9 * 20
+    assert np.ptp(poles[:, -1], axis=0).max() <= 1e-9 * 20
+    assert np.abs(poles[0] - poles[-1]).max() <= 1e-9 * 20
+    assert result.valid and result.free_edges_after == 0
+    assert result.max_gap <= 1e-9
+    assert _max_tolerance(result.shape, "edge") <= 1e-6
+    assert _max_tolerance(result.shape, "vertex") <= 1e-6
+
+
 def test_periodic_and_rational_real_faces_are_handled(real_shape):
     ring = indexed_faces(real_shape("ring_nurbs.brep"))[0]
     report = fair_face(ring, tol=0.5, details=False)       # the ring is ~70 across
