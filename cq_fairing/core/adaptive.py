@@ -62,6 +62,8 @@ from .accuracy import check_tolerance
 from .decomposition import decomposition
 from .energy import surface_energy_matrix
 from .fairing import FairResult, SurfaceFairResult
+from .fidelity import (curve_residual_variance, extent, noise_level,
+                       surface_residual_variance, within_noise)
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
 from .measures import CurveProbe, SurfaceProbe, sample_parameters
@@ -74,6 +76,7 @@ THETA = 0.9          # redistribution aims at THETA * tol
 SAFETY = 1.0        # the search works to SAFETY * tol; a denser final check uses tol
 ROUNDS = 4           # redistribution rounds per count
 FLOOR = 0.25         # density floor, fraction of the mean density
+OBJECTIVES = ("compact", "faithful")
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -293,11 +296,13 @@ def _polish(trial_lam, tol, start, lo=-8.0, hi=3.0, steps=10):
     return best, best_lam
 
 
-def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span=8):
-    r"""Fair ``curve`` into an adaptive (non-uniform) target with the fewest poles within ``tol``.
+def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", polish=True,
+                        per_span=8):
+    r"""Fair ``curve`` into an adaptive (non-uniform) target within ``tol``.
 
     See the module documentation for the algorithm (knot family, count bisection,
-    error-driven redistribution, energy polish).
+    error-driven redistribution, energy polish) and :mod:`cq_fairing.core.fidelity`
+    for the ``"faithful"`` objective.
 
     Parameters
     ----------
@@ -307,8 +312,14 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
         Largest allowed true (closest-point, two-sided) deviation, model units, ``> 0``.
     target_degree : int, optional
         Default ``min(3, curve.degree)``.
+    objective : {"compact", "faithful"}
+        ``"compact"``: the fewest poles within ``tol``, the rest of the budget spent on
+        fairness (polish).  ``"faithful"``: the fewest poles whose residual is down to
+        the source's noise level (discrepancy principle), or more if ``tol`` needs
+        them; no polish (it would add bias).  Removes the noise and keeps the shape.
     polish : bool
-        Spend the remaining tolerance on the ``G^{(3)}`` energy (polynomial curves only).
+        Spend the remaining tolerance on the ``G^{(3)}`` energy (polynomial curves,
+        ``"compact"`` only).
     per_span : int
         Deviation samples per source span.
 
@@ -316,17 +327,21 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
     -------
     FairResult
         ``curve`` on the adaptive knots; ``max_deviation`` measured; ``evaluations`` the
-        number of projections measured; ``table`` ``(("lambda", value),)``;
+        number of projections measured; ``table`` ``(("lambda", value), ("noise", sigma))``
+        (``sigma`` the estimated noise level, ``"faithful"`` only);
         ``details``/``reconstruct`` as for the uniform fairing (direct step).
 
     Raises
     ------
     InvalidToleranceError
         ``tol`` not positive and finite.
+    InvalidInputError
+        Unknown ``objective`` or bad ``target_degree``.
     ToleranceNotMetError
         Even the source's own space at the target degree exceeds ``tol``.
     """
     tol = check_tolerance(tol)
+    faithful = _objective(objective) == "faithful"
     degree = _degree(target_degree, curve.degree)
     fit = _CurveFit(curve, SAFETY * tol, degree, per_span)
     b0, rho0 = _source_density(curve.space)
@@ -341,19 +356,64 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
         cache[n] = fit.trial(family(n))
         return cache[n][2] <= fit.tol
 
-    fails, n = _doubling(check, top)
+    table = ()
+    start = 4
+    if faithful:
+        start, sigma = _faithful_count(fit, family, top)
+        table = (("noise", sigma),)
+    if faithful and check(start):
+        space, (faired, values, e), lam = family(start), cache[start], 0.0
+    else:
+        space, faired, values, e = _compact_curve(fit, family, check, cache, top, start, tol)
+        lam = 0.0
+        if polish and not curve.is_rational and degree >= 3:
+            (faired, values, e), lam = _polish(lambda x: fit.trial(space, x), fit.tol,
+                                               (faired, values, e))
+    faired, e, lam = _final_curve_check(curve, fit, space, faired, lam, per_span, tol)
+    step = decomposition(curve.space, space)
+    return FairResult(curve, faired, (top, space.n_spans), space.n_spans, "adaptive",
+                      (step,), max_deviation=e, evaluations=fit.evaluations,
+                      table=(("lambda", lam),) + table)
+
+
+def _objective(value):
+    if value not in OBJECTIVES:
+        raise InvalidInputError(
+            f"objective must be one of {OBJECTIVES}, got {value!r}: 'compact' for the fewest "
+            "poles within tol, 'faithful' to stop where the residual reaches the noise.")
+    return value
+
+
+def _faithful_count(fit, family, top):
+    """Smallest count whose residual variance is within the noise level, and that level."""
+    def variance(n):
+        space = family(n)
+        return curve_residual_variance(fit.curve, fit.geometry(space, fit.project(space)))
+
+    sigma = noise_level(lambda fraction: variance(max(1, int(round(fraction * top)))),
+                        extent(fit.curve.poles))
+
+    def quiet(n):
+        return within_noise(variance(n), sigma)
+
+    fails, n = _doubling(quiet, top)
+    return (top if n is None else _bisect_count(fails, n, quiet)), sigma
+
+
+def _compact_curve(fit, family, check, cache, top, start, tol):
+    """Fewest spans within tol: doubling from ``start``, bisection, error-driven reduction."""
+    fails, n = _doubling(check, top, start)
     if n is None:
         raise ToleranceNotMetError(
             f"no adaptive target within tol={tol:g}: the source's own knots at degree "
-            f"{degree} deviate by {cache[top][2]:.4g}; raise the tolerance or keep the degree.",
-            tolerance=tol, best_deviation=cache[top][2])
+            f"{fit.degree} deviate by {cache[top][2]:.4g}; raise the tolerance or keep the "
+            "degree.", tolerance=tol, best_deviation=cache[top][2])
     n = _scan_below(_bisect_count(fails, n, check), check)
-    space, faired, values, e = _reduce(family(n), cache[n], fit.probe.u, fit.tol, degree,
-                                       fit.trial)
-    lam = 0.0
-    if polish and not curve.is_rational and degree >= 3:
-        (faired, values, e), lam = _polish(lambda x: fit.trial(space, x), fit.tol,
-                                           (faired, values, e))
+    return _reduce(family(n), cache[n], fit.probe.u, fit.tol, fit.degree, fit.trial)
+
+
+def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
+    """Check on twice the samples; back the polish off until ``tol`` holds."""
     check_probe = CurveProbe(curve, per_span=2 * per_span)
     e = check_probe.max_deviation(faired)[0]
     while e > tol and lam > 0.0:
@@ -365,10 +425,7 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, polish=True, per_span
             f"the adaptive target ({space.dimension} poles) passed the search samples but "
             f"deviates by {e:.4g} > tol={tol:g} on the denser check; raise per_span.",
             tolerance=tol, best_deviation=e)
-    step = decomposition(curve.space, space)
-    return FairResult(curve, faired, (top, space.n_spans), space.n_spans, "adaptive",
-                      (step,), max_deviation=e, evaluations=fit.evaluations,
-                      table=(("lambda", lam),))
+    return faired, e, lam
 
 
 def _degree(value, source_degree):
@@ -477,16 +534,19 @@ def _reduce_surface(fit, spaces, result, tol, rounds=ROUNDS):
     return spaces, result
 
 
-def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_span=8,
-                          max_samples=400_000, _safety=SAFETY):
+def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compact", polish=True,
+                          per_span=8, max_samples=400_000, _safety=SAFETY):
     r"""Fair ``surface`` into adaptive (non-uniform) u and v targets within ``tol``.
 
-    The knot families start from the source's breakpoint densities.  Three starts are
-    bisected: along the diagonal :math:`N = \lceil t\, n_S\rceil`, u first (v at the
-    source) then v, and v first then u.  From each, each direction is lowered one span at
-    a time with knots redistributed by the marginal error density (the largest deviation
-    over the other direction), the larger net direction first; the smallest net wins.
-    See the module documentation.
+    ``"compact"``: the knot families start from the source's breakpoint densities.
+    Three starts are bisected: along the diagonal :math:`N = \lceil t\, n_S\rceil`, u
+    first (v at the source) then v, and v first then u.  From each, each direction is
+    lowered one span at a time with knots redistributed by the marginal error density
+    (the largest deviation over the other direction), the larger net direction first;
+    the smallest net wins.  See the module documentation.  ``"faithful"``: the diagonal
+    and then each direction are bisected for the smallest net whose residual is down to
+    the noise level (:mod:`cq_fairing.core.fidelity`); if that net exceeds ``tol`` the
+    compact search takes over.
 
     Parameters
     ----------
@@ -496,8 +556,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_
         Largest allowed true (two-sided, closest-point) deviation, ``> 0``.
     target_degree : int or (int, int), optional
         Default ``min(3, source degree)`` per direction.
+    objective : {"compact", "faithful"}
+        As for :func:`fair_curve_adaptive`.
     polish : bool
-        Spend the remaining tolerance on the thin-plate energy (penalised projection).
+        Spend the remaining tolerance on the thin-plate energy (penalised projection;
+        ``"compact"`` only).
     per_span : int
         Deviation samples per source span (lowered until the grid has at most
         ``max_samples`` points).  The result is checked on a grid twice as dense; if
@@ -507,46 +570,36 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_
     Returns
     -------
     SurfaceFairResult
-        ``max_deviation``, ``evaluations`` and ``table`` ``(("lambda", value),)`` filled;
-        one direct decomposition step, so ``details``/``reconstruct`` work.
+        ``max_deviation``, ``evaluations`` and ``table`` ``(("lambda", value), ...)``
+        filled (``("noise", sigma)`` too for ``"faithful"``); one direct decomposition
+        step, so ``details``/``reconstruct`` work.
 
     Raises
     ------
-    InvalidToleranceError, ToleranceNotMetError, UnsupportedGeometryError (rational)
+    InvalidToleranceError, InvalidInputError, ToleranceNotMetError,
+    UnsupportedGeometryError (rational)
     """
     tol = check_tolerance(tol)
+    faithful = _objective(objective) == "faithful"
     tdu, tdv = target_degree if isinstance(target_degree, (tuple, list)) else (target_degree,) * 2
     degrees = (_degree(tdu, surface.u_degree), _degree(tdv, surface.v_degree))
     fit = _SurfaceFit(surface, _safety * tol, degrees, per_span, max_samples)
-    sources = (surface.u_space, surface.v_space)
-    dens = [_source_density(s) for s in sources]
-    tops = [s.n_spans for s in sources]
+    dens = [_source_density(s) for s in (surface.u_space, surface.v_space)]
+    tops = [surface.u_space.n_spans, surface.v_space.n_spans]
 
     def family(t):
         return [equidistributed_space(b, r, max(1, int(np.ceil(t * top - 1e-9))), p)
                 for (b, r), top, p in zip(dens, tops, degrees)]
 
-    steps = max(tops)
-    full = family(1.0)
-    top_result = fit.trial(*full)
-    if top_result[2] > fit.tol:
-        raise ToleranceNotMetError(
-            f"no adaptive target within tol={tol:g}: the source's own knots at degrees "
-            f"{degrees} deviate by {top_result[2]:.4g}; raise the tolerance.",
-            tolerance=tol, best_deviation=top_result[2])
-    starts = [_diagonal_start(fit, family, steps, top_result),
-              _axis_start(fit, full, top_result, dens, tops, degrees, (0, 1)),
-              _axis_start(fit, full, top_result, dens, tops, degrees, (1, 0))]
-    best = None
-    for spaces, result in starts:
-        spaces, result = _reduce_surface(fit, spaces, result, fit.tol)
-        if best is None or _net_size(spaces) < _net_size(best[0]):
-            best = (spaces, result)
-    spaces, result = best
-    lam = 0.0
-    if polish and min(degrees) >= 2:
-        result, lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol, result, steps=8)
-    faired = result[0]
+    table, found = (), None
+    if faithful:
+        spaces, sigma = _faithful_net(fit, family, dens, tops)
+        table = (("noise", sigma),)
+        trial = fit.trial(*spaces)
+        found = (spaces, trial, 0.0) if trial[2] <= fit.tol else None
+    if found is None:
+        found = _compact_surface(fit, family, dens, tops, polish, tol)
+    spaces, (faired, _, _), lam = found
     check_probe = _final_probe(surface, 2 * per_span, 4 * max_samples)
     e = check_probe.max_deviation(faired)[0]
     while e > tol and lam > 0.0:
@@ -555,9 +608,9 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_
                                 *degrees)
         e = check_probe.max_deviation(faired)[0]
     if e > tol and _safety > 0.9:
-        return fair_surface_adaptive(surface, tol, target_degree=target_degree, polish=polish,
-                                     per_span=per_span, max_samples=max_samples,
-                                     _safety=_safety * tol / e - 0.005)
+        return fair_surface_adaptive(surface, tol, target_degree=target_degree,
+                                     objective=objective, polish=polish, per_span=per_span,
+                                     max_samples=max_samples, _safety=_safety * tol / e - 0.005)
     if e > tol:
         raise ToleranceNotMetError(
             f"the adaptive target {spaces[0].dimension}x{spaces[1].dimension} passed the "
@@ -567,7 +620,58 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, polish=True, per_
     n = (spaces[0].n_spans, spaces[1].n_spans)
     return SurfaceFairResult(surface, faired, (tuple(tops), n), n, "adaptive", (step,),
                              max_deviation=e, evaluations=fit.evaluations,
-                             table=(("lambda", lam),))
+                             table=(("lambda", lam),) + table)
+
+
+def _compact_surface(fit, family, dens, tops, polish, tol):
+    """Smallest net within tol from three starts, then the polish: ``(spaces, trial, lambda)``."""
+    steps = max(tops)
+    full = family(1.0)
+    top_result = fit.trial(*full)
+    if top_result[2] > fit.tol:
+        raise ToleranceNotMetError(
+            f"no adaptive target within tol={tol:g}: the source's own knots at degrees "
+            f"{fit.degrees} deviate by {top_result[2]:.4g}; raise the tolerance.",
+            tolerance=tol, best_deviation=top_result[2])
+    starts = [_diagonal_start(fit, family, steps, top_result),
+              _axis_start(fit, full, top_result, dens, tops, fit.degrees, (0, 1)),
+              _axis_start(fit, full, top_result, dens, tops, fit.degrees, (1, 0))]
+    best = None
+    for spaces, result in starts:
+        spaces, result = _reduce_surface(fit, spaces, result, fit.tol)
+        if best is None or _net_size(spaces) < _net_size(best[0]):
+            best = (spaces, result)
+    spaces, result = best
+    lam = 0.0
+    if polish and min(fit.degrees) >= 2:
+        result, lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol, result, steps=8)
+    return spaces, result, lam
+
+
+def _faithful_net(fit, family, dens, tops):
+    """Smallest net whose residual is within the noise level: the diagonal, then each
+    direction (the larger first) bisected with the other held; and the noise level."""
+    def variance(spaces):
+        net = fit.project(*spaces)
+        faired = BSplineSurface(net, spaces[0].knots, spaces[1].knots, *fit.degrees)
+        return surface_residual_variance(fit.surface, faired)
+
+    sigma = noise_level(lambda fraction: variance(family(fraction)), extent(fit.surface.poles))
+    steps = max(tops)
+    k = _bisect_count(0, steps, lambda k: within_noise(variance(family(k / steps)), sigma))
+    spaces = family(k / steps)
+    for axis in np.argsort([-s.dimension for s in spaces]):
+        b, rho = dens[axis]
+
+        def with_count(n, axis=axis, b=b, rho=rho):
+            pair = list(spaces)
+            pair[axis] = equidistributed_space(b, rho, n, fit.degrees[axis])
+            return pair
+
+        n = _bisect_count(0, spaces[axis].n_spans,
+                          lambda n: within_noise(variance(with_count(n)), sigma))
+        spaces = with_count(n)
+    return spaces, sigma
 
 
 def _net_size(spaces):
