@@ -184,6 +184,8 @@ def _is_trimmed(face):
     while ex.More():
         edge = TopoDS.Edge_s(ex.Current())
         curve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if curve is None:        # no UV curve: the edge cannot be shown to be a border
+            return True
         a, b = BRep_Tool.Range_s(edge, face)
         for t in np.linspace(a, b, 5):
             p = curve.Value(float(t))

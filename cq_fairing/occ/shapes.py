@@ -31,10 +31,12 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
-from .convert import as_shape, indexed_faces, replace_surface, to_geom_surface, finish_edges
+from .convert import (as_shape, finish_edges, indexed_faces, replace_surface, surface_to_face,
+                      to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
+from .parallel import FacePool
 
-__all__ = ["fair_shape", "ShapeFairResult", "edge_gaps", "free_edge_count"]
+__all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
 
 
 @dataclass(eq=False)
@@ -92,7 +94,7 @@ def _selection(faces, count):
 
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert=False,
                progress=None, boundary="free", target_degree=None, density=None,
-               details=False, max_gap=None):
+               details=False, max_gap=None, jobs=1, face_timeout=None):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -121,6 +123,14 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
         larger gap are faired again with half their tolerance (up to three times), and
         a face still next to a too-large gap gets its original surface back (status
         ``'unchanged'``, the message says why).  Not applied with explicit ``n``.
+    jobs : int, optional
+        Faces faired at once, each in its own worker process
+        (:mod:`cq_fairing.occ.parallel`); the result is the same as with ``jobs=1``.
+    face_timeout : float, optional
+        Seconds one face may take (each attempt, in a worker process even with
+        ``jobs=1``); a face over the limit is reported ``'failed'`` ("time limit S s
+        exceeded; kept the original"), keeps its original surface, and its worker is
+        killed.  Default: no limit.
 
     Returns
     -------
@@ -129,8 +139,11 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
     Raises
     ------
     InvalidInputError, InvalidToleranceError
-        Bad arguments.  Per-face failures (a tolerance that cannot be met...) do not
-        raise: the face is kept and its report says why.
+        Bad arguments.  Per-face failures (a tolerance that cannot be met, an OCCT
+        ``Standard_Failure`` or a ``numpy.linalg.LinAlgError`` inside one face, a time
+        limit, a crashed worker) do not raise: the face is kept and its report says why.
+    FairingError
+        A worker process could not start.
     """
     start = time.perf_counter()
     shape = as_shape(shape)
@@ -142,40 +155,94 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
     if max_gap is not None:
         check_options(max_gap, None, method, boundary)
     max_gap = tol if max_gap is None else float(max_gap)
+    _check_workers(jobs, face_timeout)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
-    job = _Job(source, originals, dict(method=method, boundary=boundary,
-                                       target_degree=target_degree, density=density,
-                                       details=details))
-    for index in range(len(originals)):
-        job.fair(index, selected, tol, n)
-        if progress is not None:
-            progress(index + 1, len(originals), job.reports[index])
-    copy, gaps = job.build()
-    if tol is not None:
-        copy, gaps = job.close_gaps(copy, gaps, max_gap)
+    options = dict(method=method, boundary=boundary, target_degree=target_degree,
+                   density=density, details=details)
+    pool = None if jobs == 1 and face_timeout is None else FacePool(jobs, face_timeout)
+    try:
+        job = _Job(source, originals, options, pool)
+        job.fair_first(selected, tol, n, progress)
+        copy, gaps = job.build()
+        if tol is not None:
+            copy, gaps = job.close_gaps(copy, gaps, max_gap)
+    finally:
+        if pool is not None:
+            pool.close()
     return ShapeFairResult(
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
         tol, free_edge_count(shape), free_edge_count(copy), time.perf_counter() - start, gaps)
+
+
+def _check_workers(jobs, face_timeout):
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise InvalidInputError(f"jobs must be an integer >= 1 (worker processes), got {jobs!r}.")
+    if face_timeout is not None and (
+            isinstance(face_timeout, bool)
+            or not isinstance(face_timeout, (int, float, np.integer, np.floating))
+            or not np.isfinite(face_timeout) or face_timeout <= 0):
+        raise InvalidInputError(
+            f"face_timeout must be a positive number of seconds or None, got {face_timeout!r}.")
 
 
 class _Job:
     """The faces of the source, what was done to each, and the rebuilt copy.
 
     Every build starts from a fresh ``BRepBuilderAPI_Copy`` of the source and puts each
-    faired surface in once, so a face faired again never stacks replacements.
+    faired surface in once, so a face faired again never stacks replacements.  With a
+    :class:`~cq_fairing.occ.parallel.FacePool` the faces are faired in its workers.
     """
 
-    def __init__(self, source, originals, options):
+    def __init__(self, source, originals, options, pool=None):
         self.source, self.originals, self.options = source, originals, options
+        self.pool = pool
         self.reports = [None] * len(originals)
         self.tol = {}
 
-    def fair(self, index, selected, tol, n):
-        self.tol[index] = tol
-        self.reports[index] = _one_face(index, self.originals[index], selected,
-                                        dict(self.options, tol=tol, n=n))
+    def fair_first(self, selected, tol, n, progress):
+        """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
+        total, count = len(self.originals), 0
+
+        def report(index, face_report):
+            nonlocal count
+            self.reports[index] = face_report
+            count += 1
+            if progress is not None:
+                progress(count, total, face_report)
+
+        for index in range(total):
+            if index not in selected:
+                original = self.originals[index]
+                report(index, FaceFairReport(original, "skipped-not-selected", info=None,
+                                             original=original, index=index))
+        self.fair([i for i in range(total) if i in selected], tol, n, report)
+
+    def fair(self, indices, tol, n, report=None):
+        """Fair the faces ``indices`` (serially, or in the pool's workers)."""
+        report = report or self.reports.__setitem__
+        for index in indices:
+            self.tol[index] = tol
+        options = dict(self.options, tol=tol, n=n)
+        if self.pool is None:
+            for index in indices:
+                report(index, fair_one_face(index, self.originals[index], options))
+            return
+        self.pool.run([(index, self.originals[index], options) for index in indices],
+                      lambda index, outcome: report(index, self._from_worker(index, outcome)))
+
+    def _from_worker(self, index, outcome):
+        """A :class:`FaceFairReport` from a worker's outcome (the face built here)."""
+        kind, payload = outcome
+        original = self.originals[index]
+        if kind == "failed":
+            return FaceFairReport(original, "failed", payload, original=original, index=index,
+                                  tolerance=self.tol[index])
+        report = FaceFairReport(original, original=original, **payload)
+        if report.faired:
+            report.face = surface_to_face(report.surface, original)
+        return report
 
     def build(self):
         """A fresh copy with every faired surface in place, and its edge gaps.
@@ -222,7 +289,7 @@ class _Job:
             if not culprits:
                 return copy, gaps
             for index in culprits:
-                self.fair(index, {index}, 0.5 * self.tol[index], None)
+                self.fair([index], 0.5 * self.tol[index], None)
             copy, gaps = self.build()
         culprits = self._culprits(copy, gaps, max_gap)
         if not culprits:
@@ -253,17 +320,43 @@ class _Job:
             original=original, index=index)
 
 
-def _one_face(index, face, selected, options):
-    if index not in selected:
-        return FaceFairReport(face, "skipped-not-selected", info=None, original=face,
-                              index=index)
+def fair_one_face(index, face, options):
+    """``fair_face(face, **options)`` with the face's failures turned into its report.
+
+    A :class:`~cq_fairing.errors.FairingError`, an OCCT exception
+    (``Standard_Failure`` and its kinds, see :func:`is_occt_error`) or a
+    ``numpy.linalg.LinAlgError`` gives status ``'tolerance-not-met'`` (for
+    :class:`~cq_fairing.errors.ToleranceNotMetError`) or ``'failed'`` with a one-line
+    message; the face is kept.  Any other exception is a bug and propagates.
+    """
     try:
         report = fair_face(face, **options)
-    except FairingError as exc:
+    except Exception as exc:
+        if not isinstance(exc, (FairingError, np.linalg.LinAlgError)) and not is_occt_error(exc):
+            raise
         status = "tolerance-not-met" if isinstance(exc, ToleranceNotMetError) else "failed"
-        report = FaceFairReport(face, status, str(exc), original=face)
+        report = FaceFairReport(face, status, _one_line(exc), original=face,
+                                tolerance=options.get("tol"))
     report.index = index
     return report
+
+
+def is_occt_error(exc):
+    """True for an exception raised by OCCT.
+
+    OCP binds ``Standard_Failure`` and each of its kinds (``Standard_DomainError``,
+    ``StdFail_NotDone``, ...) as separate Python classes that do not inherit from one
+    another, so they are recognised by their module (``OCP.*``).
+    """
+    return type(exc).__module__.split(".")[0] == "OCP"
+
+
+def _one_line(exc):
+    text = " ".join(str(exc).split())
+    if isinstance(exc, FairingError):
+        return text
+    where = "OCCT" if is_occt_error(exc) else "linear algebra"
+    return f"{where} error {type(exc).__name__} ({text or 'no message'}); kept the original"
 
 
 def _single_face(faces):

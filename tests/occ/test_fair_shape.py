@@ -119,3 +119,74 @@ def test_impeller_subset_keeps_a_valid_compound(real):
         if report.faired:
             assert report.max_deviation <= 0.05
     assert sum(r.faired for r in result.faces) >= 10
+
+
+# -- worker processes: jobs and a per-face time limit (G2) ---------------------------------
+def _compound(*faces):
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    compound, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(compound)
+    for face in faces:
+        builder.Add(compound, face)
+    return compound
+
+
+def _wiggly(seed, nu=16, nv=14):
+    from tests.reliability.test_occ_inputs import bspline_surface, face_of
+
+    return face_of(bspline_surface(nu, nv, wiggle=0.01, seed=seed))
+
+
+def test_two_jobs_give_the_same_result_as_one(real):
+    """Four faces (a rational trimmed face of linkrods among them) faired serially and in
+    two worker processes: the same statuses, bit-identical nets, the same gaps."""
+    from cq_fairing.occ.convert import indexed_faces
+
+    rational = indexed_faces(real("linkrods.step"))[9]
+    shape = _compound(_wiggly(0), rational, _wiggly(1), _wiggly(2))
+    serial = fair_shape(shape, tol=5e-3)
+    calls = []
+    parallel = fair_shape(shape, tol=5e-3, jobs=2,
+                          progress=lambda done, total, rep: calls.append((done, total)))
+    assert sum(r.faired for r in serial.faces) >= 3
+    assert [r.status for r in parallel.faces] == [r.status for r in serial.faces]
+    for one, two in zip(serial.faces, parallel.faces):
+        assert one.message == two.message and one.poles_after == two.poles_after
+        if one.faired:
+            assert np.array_equal(one.surface.poles, two.surface.poles)
+            assert one.max_deviation == two.max_deviation
+            assert BRepCheck_Analyzer(two.face).IsValid()
+    assert parallel.max_gap == serial.max_gap and parallel.valid == serial.valid
+    assert sorted(calls) == [(k, 4) for k in range(1, 5)]
+
+
+def test_a_face_over_the_time_limit_is_kept_and_its_worker_killed(real):
+    """The 312 x 323 terrain face takes far longer than 3 s; next to it two small faces
+    finish.  The terrain face is reported failed and kept, its worker is gone."""
+    import multiprocessing
+    import time
+
+    from cq_fairing.occ.convert import indexed_faces
+
+    terrain = indexed_faces(real("terrain.brep"))[0]
+    shape = _compound(_wiggly(0), terrain, _wiggly(1))
+    start = time.perf_counter()
+    result = fair_shape(shape, tol=2.0, jobs=2, face_timeout=3.0)
+    assert time.perf_counter() - start < 60
+    first, slow, last = result.faces
+    assert first.status == last.status == "faired"
+    assert slow.status == "failed"
+    assert slow.message == "time limit 3 s exceeded; kept the original"
+    assert slow.original.IsSame(terrain) and slow.face.IsSame(terrain)
+    assert result.valid and result.n_faired == 2
+    assert multiprocessing.active_children() == []
+
+
+@pytest.mark.parametrize("options", [dict(jobs=0), dict(jobs=1.5), dict(jobs=True),
+                                     dict(face_timeout=0), dict(face_timeout=float("nan")),
+                                     dict(face_timeout="10")])
+def test_bad_jobs_and_time_limits_are_refused(options):
+    with pytest.raises(InvalidInputError, match="jobs|face_timeout"):
+        fair_shape(_wiggly(0), **options)

@@ -240,6 +240,32 @@ def test_one_bad_face_is_isolated_and_the_rest_finish():
     assert result.valid
 
 
+def test_an_occt_failure_in_one_face_is_isolated():
+    """G3: an edge of the second face lost its UV curve (pcurve), so OCCT raises
+    ``Standard_DomainError`` while the faired surface is put under it.  That face is
+    reported failed with one line and kept; the first face is faired."""
+    from OCP.BRep import BRep_Builder
+    from OCP.ShapeBuild import ShapeBuild_Edge
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS, TopoDS_Compound
+
+    good = face_of(bspline_surface(16, 14, 3, wiggle=0.01))
+    broken = face_of(bspline_surface(14, 12, 3, wiggle=0.01, seed=1))
+    ShapeBuild_Edge().RemovePCurve(TopoDS.Edge_s(TopExp_Explorer(broken, TopAbs_EDGE).Current()),
+                                   broken)
+    compound, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(compound)
+    builder.Add(compound, good)
+    builder.Add(compound, broken)
+    result = fair_shape(compound, tol=2e-3)
+    assert [r.status for r in result.faces] == ["faired", "failed"]
+    message = result.faces[1].message
+    assert message.startswith("OCCT error Standard_DomainError (") and "\n" not in message
+    assert message.endswith("kept the original")
+    assert result.faces[1].face.IsSame(broken)
+
+
 # -- hostile files --------------------------------------------------------------------------
 def _vertex_only_step(path):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
