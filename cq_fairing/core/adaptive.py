@@ -146,7 +146,7 @@ def _source_density(space):
     return b, 1.0 / np.diff(b)
 
 
-def _refined(bound, exact, tol, batch=4096):
+def _refined(bound, exact, tol, batch=256):
     """Per-sample deviation: the same-parameter ``bound``, replaced by the true distance
     ``exact(idx)`` where the bound exceeds ``tol``, largest first, until one true
     distance exceeds ``tol`` (the candidate fails; later samples keep their bound).
@@ -200,8 +200,8 @@ class _CurveFit:
         """Per-sample deviation: true distance where the bound exceeds part of tol."""
         self.evaluations += 1
         other, bound = self.probe.bound(faired)
-        return _refined(bound, lambda idx: self.probe.true_distance(faired, other, idx),
-                        self.tol)
+        return _refined(bound, lambda idx: self.probe.true_distance(faired, other, idx,
+                                                                     tol=self.tol), self.tol)
 
     def trial(self, space, lam=0.0):
         faired = self.geometry(space, self.project(space, lam))
@@ -491,7 +491,8 @@ class _SurfaceFit:
         """Per-sample deviation grid: true distance where the bound exceeds part of tol."""
         self.evaluations += 1
         other, bound = self.probe.bound(faired)
-        flat = _refined(bound.ravel(), lambda idx: self.probe.true_distance(faired, other, idx),
+        flat = _refined(bound.ravel(),
+                        lambda idx: self.probe.true_distance(faired, other, idx, tol=self.tol),
                         self.tol)
         return flat.reshape(bound.shape)
 

@@ -173,7 +173,7 @@ def _grid_points(surface, u, v):
 
 
 # -- closest points ---------------------------------------------------------------------------
-def closest_points_curve(curve, points, u0, iterations=30):
+def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     r"""Foot points on ``curve`` of ``points`` by damped, clamped Newton iterations.
 
     Solves :math:`f(t) = C'(t)\cdot(C(t) - P) = 0` with
@@ -187,6 +187,9 @@ def closest_points_curve(curve, points, u0, iterations=30):
     points : ndarray, shape (q, d)
     u0 : ndarray, shape (q,)
         Start parameters (e.g. the nearest sample).
+    stop_below : float, optional
+        Stop iterating a point once its distance is at most this (a tolerance check
+        needs no more: the distance to an actual curve point bounds the true one).
 
     Returns
     -------
@@ -200,6 +203,7 @@ def closest_points_curve(curve, points, u0, iterations=30):
     dist = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
     active = np.arange(t.size)
     for _ in range(iterations):
+        active = _above(active, dist, stop_below)
         if active.size == 0:
             break
         c, c1, c2 = curve_derivatives(curve, t[active], 2)
@@ -225,20 +229,26 @@ def closest_points_curve(curve, points, u0, iterations=30):
     return t, dist
 
 
+def _above(active, dist, stop_below):
+    """The ``active`` points whose distance still exceeds ``stop_below`` (all if ``None``)."""
+    return active if stop_below is None else active[dist[active] > stop_below]
+
+
 def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2, tol=None):
     """Smallest Newton distance from the same parameter and the ``starts`` nearest samples.
 
-    With ``tol`` the other starts are tried only where the first distance exceeds it.
+    With ``tol`` the other starts are tried only where the first distance exceeds it,
+    and every Newton iteration stops once below it.
     """
-    best = closest_points_curve(curve, points, same_u)[1]
+    best = closest_points_curve(curve, points, same_u, stop_below=tol)[1]
     todo = np.flatnonzero(best > tol) if tol is not None else np.arange(best.size)
     if todo.size == 0:
         return best
     _, near = tree.query(points[todo], k=min(starts, sample_u.size))
     near = near.reshape(todo.size, -1)
     for column in near.T:
-        best[todo] = np.minimum(best[todo],
-                                closest_points_curve(curve, points[todo], sample_u[column])[1])
+        best[todo] = np.minimum(best[todo], closest_points_curve(
+            curve, points[todo], sample_u[column], stop_below=tol)[1])
     return best
 
 
@@ -256,17 +266,19 @@ def _damped(trial, active, step, dist, halvings=5):
     return new, d_new
 
 
-def closest_points_surface(surface, points, u0, v0, iterations=30):
+def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=None):
     r"""Foot points on ``surface`` by damped, clamped 2x2 Newton iterations.
 
     Solves :math:`g = (S_u\cdot r,\ S_v\cdot r) = 0`, :math:`r = S(u, v) - P`, with the
     Hessian :math:`H = J^T J + [S_{uu}\cdot r,\ S_{uv}\cdot r;\ S_{uv}\cdot r,\ S_{vv}\cdot r]`
     (Gauss-Newton :math:`J^T J` when :math:`H` is not positive definite), clamping to the
-    domain and halving steps until the distance decreases.
+    domain and halving steps until the distance decreases.  With ``stop_below`` a point
+    stops once its distance is at most that value (as :func:`closest_points_curve`).
 
     Returns
     -------
     u, v, distance : ndarray, shape (q,)
+        ``distance`` is that of an actual surface point: never below the exact one.
     """
     points = np.asarray(points, dtype=float)
     (ulo, uhi), (vlo, vhi) = surface.domain
@@ -276,6 +288,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30):
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
     for _ in range(iterations):
+        active = _above(active, dist, stop_below)
         if active.size == 0:
             break
         s = surface_derivatives(surface, uv[active, 0], uv[active, 1], 2)
@@ -431,7 +444,8 @@ class CurveProbe:
     def true_distance(self, faired, other, idx, tol=None):
         """Two-sided true distance at samples ``idx`` (max of both directions).
 
-        With ``tol``, extra Newton starts are only tried where the first exceeds ``tol``.
+        With ``tol``, extra Newton starts are only tried where the first exceeds ``tol``,
+        and values ``<= tol`` are upper bounds (the iterations stop there).
         """
         if idx.size == 0:
             return np.zeros(0)
@@ -503,7 +517,8 @@ class SurfaceProbe:
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
         """Two-sided true distance at flat grid indices ``flat_idx``.
 
-        With ``tol``, the second Newton start is only tried where the first exceeds ``tol``.
+        With ``tol``, the second Newton start is only tried where the first exceeds
+        ``tol``, and values ``<= tol`` are upper bounds (the iterations stop there).
         """
         if flat_idx.size == 0:
             return np.zeros(0)
@@ -515,12 +530,12 @@ class SurfaceProbe:
 
     def _one_way(self, target, here, there, i, j, window, tol=None):
         """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid)."""
-        d = closest_points_surface(target, here[i, j], self.u[i], self.v[j])[2]
+        d = closest_points_surface(target, here[i, j], self.u[i], self.v[j], stop_below=tol)[2]
         todo = np.flatnonzero(d > tol) if tol is not None else np.arange(d.size)
         if todo.size:
             u0, v0 = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
-            d[todo] = np.minimum(d[todo], closest_points_surface(target, here[i[todo], j[todo]],
-                                                                 u0, v0)[2])
+            d[todo] = np.minimum(d[todo], closest_points_surface(
+                target, here[i[todo], j[todo]], u0, v0, stop_below=tol)[2])
         return d
 
     def max_deviation(self, faired, tol=None, stride=4):
