@@ -10,8 +10,15 @@ one file an engineer can mail to a colleague.
 
 Every writer here goes through :func:`atomic_output`: the data is written to a
 temporary file next to the target and renamed over it only when complete, so a
-failure never leaves a half-written file.  This module needs the standard
-library and numpy only.
+failure never leaves a half-written file.  The renamed file gets the mode a plain
+``open(path, "w")`` would give it (the old file's mode when overwriting, else
+``0o666`` minus the umask), not the ``0o600`` of :func:`tempfile.mkstemp`.
+
+Temporaries are named ``.cq_fairing_*``.  A process killed with SIGKILL cannot
+remove its own; the next write into the same folder removes those left behind:
+regular files of this naming pattern, owned by the current user and untouched for
+:data:`STALE_SECONDS` (a day; a live writer updates its temporary within seconds).
+This module needs the standard library and numpy only.
 """
 
 import base64
@@ -20,14 +27,22 @@ import html
 import json
 import math
 import os
+import stat
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import OutputPathError
 
 __all__ = ["atomic_output", "check_output_path", "build_report", "write_json", "write_html",
-           "write_report", "face_entry", "summary_table"]
+           "write_report", "face_entry", "summary_table", "folder_error", "temporary_beside",
+           "publish", "remove_stale_temporaries", "TEMP_PREFIX", "STALE_SECONDS"]
+
+#: Name prefix of every temporary file the writers create next to their target.
+TEMP_PREFIX = ".cq_fairing_"
+#: Age (seconds since the last change) after which a ``.cq_fairing_*`` file is stale.
+STALE_SECONDS = 24 * 3600.0
 
 #: Face statuses that count as success.
 OK_STATUSES = ("ok",)
@@ -60,8 +75,9 @@ def check_output_path(path, *, force=False, inputs=()):
             "(force=True) to overwrite it."
         )
     folder = path.resolve().parent
-    if not folder.is_dir():
-        raise OutputPathError(f"folder {str(folder)!r} of output {str(path)!r} does not exist.")
+    problem = folder_error(folder)
+    if problem:
+        raise OutputPathError(f"cannot write output {str(path)!r}: {problem}.")
     if not os.access(folder, os.W_OK):
         raise OutputPathError(f"folder {str(folder)!r} is not writable; choose another output.")
     return path
@@ -82,22 +98,103 @@ def atomic_output(path, *, force=False):
         one, or the rename fails.
     """
     path = check_output_path(path, force=force)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}",
-                               dir=path.resolve().parent)
-    os.close(fd)
-    tmp = Path(tmp)
+    try:
+        tmp = temporary_beside(path)
+    except OSError as exc:
+        raise OutputPathError(f"cannot write {str(path)!r}: {exc.strerror or exc}.") from exc
     try:
         yield tmp
         if not tmp.exists() or tmp.stat().st_size == 0:
             raise OutputPathError(f"writing {str(path)!r} produced no data; nothing was written.")
         if path.exists() and not force:
             raise OutputPathError(f"output {str(path)!r} appeared while writing; not overwritten.")
-        os.replace(tmp, path)
+        publish(tmp, path)
     except OSError as exc:
         raise OutputPathError(f"cannot write {str(path)!r}: {exc.strerror or exc}.") from exc
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def folder_error(folder):
+    """Why ``folder`` cannot hold a new file, or ``None`` when it is an existing folder.
+
+    Returns
+    -------
+    str or None
+        ``"'x' is a file, not a folder"`` when ``folder`` or one of its parents is a
+        regular file, ``"folder 'x' does not exist"`` otherwise.
+    """
+    folder = Path(folder)
+    if folder.is_dir():
+        return None
+    for part in (folder, *folder.parents):
+        if part.exists() and not part.is_dir():
+            return f"{str(part)!r} is a file, not a folder"
+        if part.exists():
+            break
+    return f"folder {str(folder)!r} does not exist"
+
+
+def temporary_beside(path):
+    """An empty temporary file ``.cq_fairing_*<suffix>`` in the folder of ``path``.
+
+    Stale temporaries of killed writers in that folder are removed first
+    (:func:`remove_stale_temporaries`).
+
+    Raises
+    ------
+    OSError
+        The folder does not accept a new file.
+    """
+    folder = Path(path).resolve().parent
+    remove_stale_temporaries(folder)
+    fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=Path(path).suffix, dir=folder)
+    os.close(fd)
+    return Path(tmp)
+
+
+def remove_stale_temporaries(folder, max_age=STALE_SECONDS):
+    """Remove ``.cq_fairing_*`` regular files of this user untouched for ``max_age`` s.
+
+    Returns
+    -------
+    list of Path
+        The files removed.  Files that vanish or cannot be removed meanwhile are skipped.
+    """
+    removed, now = [], time.time()
+    for entry in Path(folder).glob(TEMP_PREFIX + "*"):
+        try:
+            info = entry.lstat()
+            if (stat.S_ISREG(info.st_mode) and info.st_uid == os.getuid()
+                    and now - info.st_mtime > max_age):
+                entry.unlink()
+                removed.append(entry)
+        except OSError:
+            continue
+    return removed
+
+
+def publish(tmp, path):
+    """Rename the finished ``tmp`` onto ``path`` with the mode a plain write would give.
+
+    That is the mode of the file being replaced, or ``0o666`` minus the process umask
+    for a new file (``mkstemp`` creates ``0o600``).
+    """
+    path = Path(path)
+    try:
+        mode = stat.S_IMODE(path.stat().st_mode)
+    except FileNotFoundError:
+        mode = 0o666 & ~_umask()
+    os.chmod(tmp, mode)
+    os.replace(tmp, path)
+
+
+def _umask():
+    """The process umask (read by setting it and putting it back at once)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _write_text(path, text, force):

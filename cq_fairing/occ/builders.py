@@ -85,10 +85,11 @@ def write_edge(edge, path, *, force=False, input_path=None):
     from OCP.TopoDS import TopoDS_Shape
 
     from ..report import atomic_output, check_output_path
+    from .io import quiet_occt
 
     check_output_path(path, force=force, inputs=() if input_path is None else (input_path,))
     step = str(path).lower().endswith((".step", ".stp"))
-    with atomic_output(path, force=force) as tmp:
+    with atomic_output(path, force=force) as tmp, quiet_occt():
         if step:
             writer = STEPControl_Writer()
             writer.Transfer(edge, STEPControl_AsIs)

@@ -1,12 +1,21 @@
 """Model files in and out: STEP, IGES and BREP through OCCT's own readers and writers.
 
-Writing is atomic: the shape goes to a temporary file in the destination folder, that
-file is read back, checked (``BRepCheck_Analyzer``, same number of faces) and only then
-renamed over the destination with :func:`os.replace`.  A failed write leaves nothing.
+Writing is atomic: OCCT writes the model into memory, Python writes those bytes to a
+temporary file ``.cq_fairing_*`` in the destination folder (so a full disk or a file
+size limit is an ordinary ``OSError`` whose reason is reported), that file is read
+back, checked (``BRepCheck_Analyzer``, same number of faces) and only then renamed
+over the destination (:func:`cq_fairing.report.publish`: the mode of a plainly written
+file, not ``mkstemp``'s ``0o600``).  A failed write leaves nothing; temporaries that a
+killed process left behind are removed by a later write into the same folder
+(:func:`cq_fairing.report.remove_stale_temporaries`).
+
+OCCT's transfer banners and statistics (printed by its default messenger on standard
+output) are silenced during every read and write (:func:`quiet_occt`).
 """
 
+import io
 import os
-import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from OCP.BRep import BRep_Builder
@@ -15,13 +24,16 @@ from OCP.BRepTools import BRepTools
 from OCP.IFSelect import IFSelect_ReturnStatus
 from OCP.IGESControl import IGESControl_Reader
 from OCP.Interface import Interface_Static
+from OCP.Message import Message
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
 from OCP.TopoDS import TopoDS_Shape
 
 from ..errors import FileFormatError, OutputPathError
+from ..report import folder_error, publish, temporary_beside
 from .convert import as_shape, indexed_faces
 
-__all__ = ["read_shape", "write_shape", "step_length_unit", "READ_SUFFIXES", "WRITE_SUFFIXES"]
+__all__ = ["read_shape", "write_shape", "step_length_unit", "quiet_occt", "READ_SUFFIXES",
+           "WRITE_SUFFIXES"]
 
 READ_SUFFIXES = {".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges",
                  ".brep": "brep", ".brp": "brep"}
@@ -71,15 +83,36 @@ def read_shape(path):
     return shape
 
 
+@contextmanager
+def quiet_occt():
+    """Detach the printers of OCCT's default messenger for the block, then restore them.
+
+    OCCT's data exchange prints banners and transfer statistics through
+    ``Message::DefaultMessenger()`` to standard output; inside the block they go
+    nowhere.  The messenger is left as it was found, also when the block raises.
+    """
+    messenger = Message.DefaultMessenger_s()
+    printers = messenger.Printers()
+    saved = [printers.Value(i) for i in range(1, printers.Size() + 1)]
+    for printer in saved:
+        messenger.RemovePrinter(printer)
+    try:
+        yield
+    finally:
+        for printer in saved:
+            messenger.AddPrinter(printer)
+
+
 def _read_with(reader, kind, path):
     """Read and transfer all roots with an OCCT XSControl reader; None when it holds no shape."""
-    status = reader.ReadFile(str(path))
-    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(
-            f"'{path}' is not a readable {kind} file (reader status {status.name}); "
-            "it may be corrupt or truncated."
-        )
-    reader.TransferRoots()
+    with quiet_occt():
+        status = reader.ReadFile(str(path))
+        if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise FileFormatError(
+                f"'{path}' is not a readable {kind} file (reader status {status.name}); "
+                "it may be corrupt or truncated."
+            )
+        reader.TransferRoots()
     return reader.OneShape() if reader.NbShapes() else None
 
 
@@ -112,7 +145,9 @@ def step_length_unit(path):
     from OCP.TColStd import TColStd_SequenceOfAsciiString
 
     reader = STEPControl_Reader()
-    if reader.ReadFile(str(path)) != IFSelect_ReturnStatus.IFSelect_RetDone:
+    with quiet_occt():
+        status = reader.ReadFile(str(path))
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(f"'{path}' is not a readable STEP file.")
     lengths = TColStd_SequenceOfAsciiString()
     reader.FileUnits(lengths, TColStd_SequenceOfAsciiString(), TColStd_SequenceOfAsciiString())
@@ -138,8 +173,9 @@ def _check_output(path, force):
         raise OutputPathError(f"cannot write '{path}': it is a folder; give a file name.")
     kind = _kind(path, WRITE_SUFFIXES, "write")
     folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise OutputPathError(f"cannot write '{path}': folder '{folder}' does not exist.")
+    problem = folder_error(folder)
+    if problem:
+        raise OutputPathError(f"cannot write '{path}': {problem}.")
     if path.exists() and not force:
         raise OutputPathError(
             f"'{path}' already exists; choose another name or pass force=True to overwrite."
@@ -171,6 +207,8 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
     OutputPathError
         The path exists (without ``force``), is the input, is a folder, its folder is
         missing or not writable.
+        Also when the bytes do not fit (a full disk, a file size limit): the message
+        names the reason (``strerror``), the bytes written and the free space.
     FileFormatError
         Unknown suffix, or the written file does not read back as a valid shape with the
         same number of faces.
@@ -183,23 +221,55 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
         )
     kind = _check_output(path, force)
     n_faces = len(indexed_faces(shape))
+    with quiet_occt():
+        data = _step_bytes(shape, unit) if kind == "step" else _brep_bytes(shape)
     try:
-        fd, tmp = tempfile.mkstemp(suffix=path.suffix, prefix=".cq_fairing_", dir=path.parent)
+        tmp = temporary_beside(path)
     except OSError as exc:
         raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
-    os.close(fd)
     try:
-        (_write_step if kind == "step" else _write_brep)(shape, tmp, unit)
+        _write_bytes(tmp, data, path)
         _verify_written(tmp, n_faces)
-        os.replace(tmp, path)
+        publish(tmp, path)
     except OSError as exc:
         raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
     finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        if tmp.exists():
+            tmp.unlink()
 
 
-def _write_step(shape, tmp, unit):
+def _write_bytes(tmp, data, path):
+    """Write ``data`` to ``tmp`` and flush it to disk; a failure names the reason."""
+    try:
+        with open(tmp, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+    except OSError as exc:
+        raise OutputPathError(
+            f"cannot write '{path}': {exc.strerror or os.strerror(exc.errno)} after "
+            f"{_size(tmp)} of {len(data)} bytes ({_free_space(tmp)}); nothing was written."
+        ) from exc
+
+
+def _size(path):
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
+
+
+def _free_space(path):
+    """``"N MB free on the device"`` of the folder of ``path``."""
+    try:
+        info = os.statvfs(os.path.dirname(os.path.abspath(path)))
+    except OSError:
+        return "free space unknown"
+    return f"{info.f_bavail * info.f_frsize / 1e6:.1f} MB free on the device"
+
+
+def _step_bytes(shape, unit):
+    """The STEP file of ``shape`` as bytes (OCCT's writer, into memory)."""
     previous = Interface_Static.CVal_s("write.step.unit")
     writer = STEPControl_Writer()
     try:
@@ -210,14 +280,21 @@ def _write_step(shape, tmp, unit):
         Interface_Static.SetCVal_s("write.step.unit", previous)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(f"STEP transfer of the shape failed (status {status.name}).")
-    status = writer.Write(str(tmp))
+    stream = io.BytesIO()
+    status = writer.WriteStream(stream)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(f"writing the STEP file failed (status {status.name}).")
+        raise FileFormatError(f"writing the STEP data failed (status {status.name}).")
+    return stream.getvalue()
 
 
-def _write_brep(shape, tmp, unit):
-    if not BRepTools.Write_s(shape, str(tmp)):
-        raise FileFormatError("writing the BREP file failed.")
+def _brep_bytes(shape):
+    """The BREP (text) file of ``shape`` as bytes."""
+    stream = io.BytesIO()
+    BRepTools.Write_s(shape, stream)
+    data = stream.getvalue()
+    if not data:
+        raise FileFormatError("writing the BREP data failed.")
+    return data
 
 
 def _verify_written(tmp, n_faces):

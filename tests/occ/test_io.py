@@ -2,6 +2,8 @@
 
 import hashlib
 import os
+import stat
+import time
 
 import numpy as np
 import pytest
@@ -116,3 +118,92 @@ def test_step_unit_is_read_and_kept(real, tmp_path):
     write_shape(real("ring_nurbs.brep"), out, unit="M")
     assert step_length_unit(out) == "M"
     assert "SI_UNIT($,.METRE.)" in out.read_text().replace(" ", "")
+
+
+# -- G4, G6, G8 and file modes -------------------------------------------------------------
+QUIET = """
+import sys
+from cq_fairing.occ import read_shape, write_shape
+shape = read_shape(sys.argv[1])
+write_shape(shape, sys.argv[2])
+read_shape(sys.argv[2])
+"""
+
+
+def test_reading_and_writing_print_nothing(tmp_path):
+    """G4: OCCT's transfer banner and statistics are silenced in occ/io.py itself (a
+    script using the API sees an empty stdout), and OCCT's messenger is restored."""
+    import subprocess
+    import sys
+
+    from OCP.Message import Message
+
+    from tests.conftest import REAL_DATA, REPO
+
+    proc = subprocess.run([sys.executable, "-c", QUIET, str(REAL_DATA / "IEA_15MW_CFD.stp"),
+                           str(tmp_path / "out.step")], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(REPO)), timeout=120)
+    assert proc.returncode == 0, proc.stderr[-800:]
+    assert proc.stdout == ""
+    before = Message.DefaultMessenger_s().Printers().Size()
+    read_shape(REAL_DATA / "IEA_15MW_CFD.stp")
+    assert Message.DefaultMessenger_s().Printers().Size() == before >= 1
+
+
+def test_written_files_get_the_mode_of_a_plain_write(real, tmp_path):
+    """mkstemp creates 0600; a new output gets 0666 minus the umask, an overwritten one
+    keeps its mode, for models and for reports alike."""
+    from cq_fairing.report import build_report, write_report
+
+    shape = real("ring_nurbs.brep")
+    old = os.umask(0o027)
+    try:
+        write_shape(shape, tmp_path / "new.step")
+        write_report(build_report([]), tmp_path / "r.json")
+        kept = tmp_path / "kept.brep"
+        kept.write_text("old")
+        os.chmod(kept, 0o604)
+        write_shape(shape, kept, force=True)
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "new.step").stat().st_mode) == 0o640
+    assert stat.S_IMODE((tmp_path / "r.json").stat().st_mode) == 0o640
+    assert stat.S_IMODE(kept.stat().st_mode) == 0o604
+
+
+def test_stale_temporaries_of_killed_writers_are_removed(real, tmp_path):
+    """G6: `.cq_fairing_*` files a SIGKILLed writer left (planted here, two days old) are
+    removed by the next write into the folder; a fresh one (a live writer's), one of
+    another user and unrelated hidden files stay."""
+    from cq_fairing.report import STALE_SECONDS
+
+    def plant(name, age, uid=None):
+        path = tmp_path / name
+        path.write_text("partial")
+        stamp = time.time() - age
+        os.utime(path, (stamp, stamp))
+        if uid is not None:
+            os.chown(path, uid, -1)
+        return path
+
+    stale = plant(".cq_fairing_k1l2m3.step", 2 * STALE_SECONDS)
+    stale_report = plant(".cq_fairing_q9w8.json", 2 * STALE_SECONDS)
+    fresh = plant(".cq_fairing_live.step", 60)
+    foreign = plant(".cq_fairing_other.step", 2 * STALE_SECONDS, uid=os.getuid() + 4242)
+    unrelated = plant(".hidden.step", 2 * STALE_SECONDS)
+    write_shape(real("ring_nurbs.brep"), tmp_path / "out.brep")
+    assert not stale.exists() and not stale_report.exists()
+    assert fresh.exists() and foreign.exists() and unrelated.exists()
+
+
+def test_an_output_under_a_regular_file_is_named_as_a_file(real, tmp_path):
+    """G8: 'x' is a file, not a folder (API and report writers)."""
+    from cq_fairing.report import check_output_path
+
+    blocker = tmp_path / "afile"
+    blocker.write_text("x")
+    for target in (blocker / "out.step", blocker / "deeper" / "out.step"):
+        with pytest.raises(OutputPathError, match="afile' is a file, not a folder"):
+            write_shape(real("ring_nurbs.brep"), target)
+        with pytest.raises(OutputPathError, match="afile' is a file, not a folder"):
+            check_output_path(target)

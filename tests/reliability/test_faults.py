@@ -1,7 +1,8 @@
 """Faults injected into real processes: Ctrl-C (SIGINT) and SIGKILL during a long fairing,
 and a write that runs out of room (RLIMIT_FSIZE, as on a full disk).  After each fault:
-no output file under the final name, no temporary file left (except after SIGKILL, which
-cannot be cleaned up: see RELIABILITY.md), the input byte-identical (sha256)."""
+no output file under the final name, no temporary file left (a SIGKILLed writer cannot
+clean up; the next write into the folder removes its stale temporary, G6), the input
+byte-identical (sha256)."""
 
 import os
 import signal
@@ -79,6 +80,45 @@ def test_sigkill_never_leaves_a_partial_file_under_the_final_name(tmp_path):
     assert not out.exists()                       # a hidden .cq_fairing_* temp may remain
 
 
+def test_the_next_write_removes_what_a_killed_writer_left(tmp_path):
+    """G6: a writer killed with SIGKILL while its temporary exists (stopped right after
+    creating it, then killed); once that temporary is older than STALE_SECONDS (aged
+    here with utime), the next write into the folder removes it."""
+    from cq_fairing.report import STALE_SECONDS
+
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    proc = subprocess.Popen([sys.executable, "-c", STOPPED_WRITER, str(REAL_DATA / "ring_nurbs.brep"),
+                             str(tmp_path / "killed.brep")], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+    _wait_for(proc, "temporary")
+    proc.kill()
+    proc.communicate(timeout=60)
+    (left,) = _leftovers(tmp_path)
+    stamp = time.time() - 2 * STALE_SECONDS
+    os.utime(tmp_path / left, (stamp, stamp))
+    from cq_fairing.occ import read_shape, write_shape
+
+    write_shape(read_shape(REAL_DATA / "ring_nurbs.brep"), tmp_path / "next.brep")
+    assert _leftovers(tmp_path) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["next.brep"]
+
+
+STOPPED_WRITER = """
+import os, signal, sys
+import cq_fairing.report as report
+from cq_fairing.occ import read_shape, write_shape
+beside = report.temporary_beside
+def stop_after(path):
+    tmp = beside(path)
+    print("temporary", tmp, flush=True)
+    os.kill(os.getpid(), signal.SIGSTOP)
+    return tmp
+import cq_fairing.occ.io as occ_io
+occ_io.temporary_beside = stop_after
+write_shape(read_shape(sys.argv[1]), sys.argv[2])
+"""
+
+
 FSIZE = """
 import resource, signal, sys
 from cq_fairing.errors import FairingError
@@ -103,6 +143,7 @@ def test_write_that_runs_out_of_room_leaves_nothing(tmp_path):
                            str(out)],
                           capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 3, proc.stderr[-800:]
-    last = proc.stdout.strip().splitlines()[-1]     # OCCT prints its own lines first (G4)
-    assert last.startswith(("FileFormatError", "OutputPathError"))
+    (line,) = proc.stdout.strip().splitlines()      # OCCT prints nothing of its own (G4)
+    assert line.startswith("OutputPathError cannot write")
+    assert "File too large after 200000 of" in line and "MB free on the device" in line
     assert not out.exists() and _leftovers(tmp_path) == []
