@@ -3,8 +3,11 @@
 Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5] [--method wavelet|energy]
-[--report r.json|r.html] [--deviation-map m.png|m.vtp] [--curvature-map c.png] [--force]``
+[--jobs N] [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
+[--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
+    ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
+    up on a face after S seconds (reported failed, kept unchanged).
 ``inspect IN``
     One line per face: type, degrees, poles, rational, periodic, trimmed, in a solid.
 ``points IN.xyz -o OUT.step [--tol T] [--grid NU NV]``
@@ -15,7 +18,7 @@ Exit codes
 ----------
 0  success: every requested face met the tolerance
 1  some requested face did not meet the tolerance (the output is still written)
-2  usage error (bad option or value)
+2  usage error (bad option or value): one line, then see cq-fairing fair --help
 3  input file missing, empty, corrupt or of an unknown format
 4  output path refused (exists without --force, is the input, folder missing/unwritable)
 5  internal error (run with --debug for the traceback)
@@ -40,6 +43,34 @@ __all__ = ["main", "build_parser"]
 
 
 # -- argument parsing --------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line usage errors: the problem and where to read more (exit 2)."""
+
+    def error(self, message):
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
+def _jobs(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected a number of worker processes >= 1, got {text!r}")
+    return value
+
+
+def _seconds(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
 def _positive_float(text):
     try:
         value = float(text)
@@ -69,7 +100,7 @@ def _face_list(text):
 def build_parser():
     """The argparse parser of ``cq-fairing`` (exit codes in the epilog)."""
     epilog = __doc__[__doc__.index("Exit codes"):__doc__.index("Every file")]
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="cq-fairing", description="Multiresolution (wavelet) and energy fairing of "
         "B-spline curves and surfaces.", epilog=epilog,
         formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -94,6 +125,12 @@ def build_parser():
     fair.add_argument("--deviation-map", type=Path, help="deviation map: .png or .vtp")
     fair.add_argument("--curvature-map", type=Path,
                       help="curvature before/after of the most deviated faired face: .png")
+    fair.add_argument("--jobs", type=_jobs, default=1, metavar="N",
+                      help="fair N faces at once, each in a worker process (default 1); "
+                           "the result is the same for any N")
+    fair.add_argument("--face-timeout", type=_seconds, metavar="S",
+                      help="give up on a face after S seconds: it is reported failed and "
+                           "kept unchanged, the others go on (default: no limit)")
     fair.add_argument("--force", action="store_true", help="overwrite existing outputs")
     fair.add_argument("--progress", action="store_true",
                       help="show the progress line even when stderr is not a terminal")
@@ -159,9 +196,9 @@ def command_fair(args):
     progress = _Progress(args.progress or sys.stderr.isatty())
     result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
                         method=args.method, convert=args.convert, progress=progress,
-                        boundary=args.boundary, details=False)
-    with _quiet_stdout():
-        write_shape(result.shape, args.output, force=args.force, input_path=args.input)
+                        boundary=args.boundary, details=False, jobs=args.jobs,
+                        face_timeout=args.face_timeout)
+    write_shape(result.shape, args.output, force=args.force, input_path=args.input)
     report = _build_report(args, result, tol, time.perf_counter() - started)
     _write_maps(args, result, tol, report)
     if args.report:
@@ -277,26 +314,6 @@ def _deviation_map(args, faired, tol):
     return args.deviation_map
 
 
-class _quiet_stdout:
-    """Silence OCCT's C++ writers, which print transfer statistics on file descriptor 1."""
-
-    def __enter__(self):
-        import os
-
-        sys.stdout.flush()
-        self._saved = os.dup(1)
-        self._null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(self._null, 1)
-
-    def __exit__(self, *exc):
-        import os
-
-        os.dup2(self._saved, 1)
-        os.close(self._saved)
-        os.close(self._null)
-        return False
-
-
 # -- inspect ---------------------------------------------------------------------------------
 def command_inspect(args):
     from .occ import list_faces, read_shape
@@ -356,8 +373,7 @@ def command_points(args):
     from .occ.builders import write_edge
 
     writer = write_shape if args.grid else write_edge
-    with _quiet_stdout():
-        writer(shape, args.output, force=args.force, input_path=args.input)
+    writer(shape, args.output, force=args.force, input_path=args.input)
     print(f"{points.shape[0]} points, poles {sizes}, max deviation "
           f"{result.max_deviation:.4g} (tolerance {tol:.4g}), written to {args.output}")
     return EXIT_OK
