@@ -122,6 +122,18 @@ def hybrid_rows():
     return out
 
 
+def near_m_rows():
+    """Details close to the source (P1): V_1000 -> V_997 and V_2000 -> V_1990, cold."""
+    rows = []
+    for m, n in ((1000, 997), (2000, 1990)):
+        poles = np.random.default_rng(m).normal(size=(m + 3, 3))
+        details = median_time(lambda: cf.fair_curve(poles, n).details, repeats=3, cold=True)
+        result = cf.fair_curve(poles, n)
+        error = np.abs(result.reconstruct() - poles).max() / np.abs(poles).max()
+        rows.append((m, n, details, error))
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
@@ -143,6 +155,10 @@ def main():
     for n, gap, lad, t, hs, ls in hybrid_rows():
         lines.append(f"| {n} | {gap:.2e} | {lad:.1e} | {t['direct']*1e3:.1f} | {t['auto']*1e3:.1f} | "
                      f"{t['hybrid']*1e3:.1f} | {'>'.join(map(str, hs))} | {'>'.join(map(str, ls))} |")
+    lines += ["", "| details close to the source | cold + details (s) | reconstruction error |",
+              "|---|---|---|"]
+    for m, n, details, error in near_m_rows():
+        lines.append(f"| {m} -> {n} | {details:.3f} | {error:.1e} |")
     text = "\n".join(lines)
     print(text)
     if args.out:

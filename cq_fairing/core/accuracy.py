@@ -62,7 +62,8 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
 from .decomposition import decomposition
-from .fairing import _cartesian, _coefficients, checked_plan, project_curve, project_surface
+from .fairing import (_cartesian, _coefficients, largest_resolved_scale, project_curve,
+                      project_surface, resolved_plan)
 from .geometry import BSplineCurve, BSplineSurface
 from .measures import CurveProbe, SurfaceProbe, sample_parameters
 from .spaces import SplineSpace
@@ -139,19 +140,28 @@ def _check_degree(value, source_degree, name):
 
 # -- measured error functions ------------------------------------------------------------------
 class _Chain:
-    """Coarse coefficients of one direction per target scale, cached along the schedule."""
+    """Coarse coefficients of one direction per target scale, cached along the schedule.
+
+    Admissible scales are those the source resolves
+    (:func:`~cq_fairing.core.fairing.resolved_plan`); ``n_max`` is the largest of them.
+    """
 
     def __init__(self, space, degree, schedule):
         self.space, self.degree, self.schedule = space, degree, schedule
-        self.n_max = space.dimension - degree
+        self.n_max = largest_resolved_scale(space, degree, schedule, space.dimension - degree)
         self._cache = {}
 
     def target(self, n):
         return SplineSpace.quasi_uniform(int(n), self.degree, self.space.domain)
 
     def coarse(self, coefficients, n, key=None):
-        """Coefficients in ``V_n`` along axis 0 (intermediate spaces cached under ``key``)."""
-        spaces = checked_plan(self.space, self.target(n), self.schedule)
+        """Coefficients in ``V_n`` along axis 0 (intermediate spaces cached under ``key``).
+
+        ``None`` when the source does not resolve ``V_n`` (an inadmissible scale).
+        """
+        spaces = resolved_plan(self.space, self.target(n), self.schedule)
+        if spaces is None:
+            return None
         c = coefficients
         for i, (src, dst) in enumerate(zip(spaces[:-1], spaces[1:])):
             cache_key = (key, dst.key, i)
@@ -210,15 +220,23 @@ def _curve_error(curve, degree, schedule, deviation):
     coefficients = _coefficients(curve)
 
     def geometry(n):
-        poles, weights = _cartesian(chain.coarse(coefficients, n), curve.is_rational)
+        coarse = chain.coarse(coefficients, n)
+        if coarse is None:
+            return None
+        poles, weights = _cartesian(coarse, curve.is_rational)
         return BSplineCurve(poles, chain.target(n).knots, degree, weights)
 
     def measure(n, tol):
-        return probe.max_deviation(geometry(n), tol)[0]
+        return _deviation(probe, geometry(n), tol)
 
     err = _Measured(measure, lambda n: n + degree, lambda n: float(np.log2(n)),
-                    lambda n: strict.max_deviation(geometry(n))[0])
+                    lambda n: _deviation(strict, geometry(n)))
     return err, chain.n_max
+
+
+def _deviation(probe, faired, tol=None):
+    """``probe``'s maximum deviation of ``faired``; ``inf`` for an inadmissible scale (None)."""
+    return float("inf") if faired is None else probe.max_deviation(faired, tol)[0]
 
 
 # -- one-dimensional searches ---------------------------------------------------------------------
@@ -288,7 +306,10 @@ def _linear_iterations(err, tol, fail, passing, max_iter=64):
             break
         x1, a = np.log2(passing), _lg(err(passing))
         x2, b = np.log2(fail), _lg(err(fail))
-        j = (x2 - x1) / (b - a) * target + (b * x1 - a * x2) / (b - a) if b != a else 0.5 * (x1 + x2)
+        if np.isfinite(b) and b != a:                 # b = inf at an inadmissible scale
+            j = (x2 - x1) / (b - a) * target + (b * x1 - a * x2) / (b - a)
+        else:
+            j = 0.5 * (x1 + x2)
         n = int(np.clip(np.round(2.0 ** j), fail + 1, passing - 1))
         if err(n) <= tol:
             passing = n
@@ -315,6 +336,9 @@ def polyfit_scale(points, tol, order, bracket):
     bracket : (float, float)
         ``(j_fail, j_pass)``; the largest real root inside is returned, ``None`` if none.
     """
+    points = [p for p in points if np.isfinite(p[1])]      # inadmissible scales: inf
+    if len(points) < 2:
+        return None
     x = np.array([p[0] for p in points], dtype=float)
     y = np.array([_lg(p[1]) for p in points])
     coef = np.polyfit(x, y, min(order, x.size - 1))
@@ -437,18 +461,21 @@ def _surface_error(surface, degrees, schedule, deviation):
 
     def geometry(nu, nv):
         upper = chain_u.coarse(net, nu, key="u")
-        moved = np.swapaxes(upper, 0, 1)
-        coarse = np.swapaxes(chain_v.coarse(moved, nv, key=("v", nu)), 0, 1)
-        poles, weights = _cartesian(coarse, surface.is_rational)
+        if upper is None:
+            return None
+        coarse = chain_v.coarse(np.swapaxes(upper, 0, 1), nv, key=("v", nu))
+        if coarse is None:
+            return None
+        poles, weights = _cartesian(np.swapaxes(coarse, 0, 1), surface.is_rational)
         return BSplineSurface(poles, chain_u.target(nu).knots, chain_v.target(nv).knots,
                               degrees[0], degrees[1], weights)
 
     def measure(n, tol):
-        return probe.max_deviation(geometry(*n), tol)[0]
+        return _deviation(probe, geometry(*n), tol)
 
     err = _Measured(measure, lambda n: (n[0] + degrees[0]) * (n[1] + degrees[1]),
                     lambda n: float(np.log2(max(n))),
-                    lambda n: strict.max_deviation(geometry(*n))[0])
+                    lambda n: _deviation(strict, geometry(*n)))
     return err, chain_u, chain_v
 
 

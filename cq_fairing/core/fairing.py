@@ -6,6 +6,14 @@ wavelet details, so the source is recovered exactly (Ji et al. 2014, eq. 5-14).
 Surfaces apply the curve operators along u and then v (tensor product), which yields
 the coarse net and the three detail nets u, v and uv (Ji et al., null-space paper,
 Fig. 10).  Rational input is faired in homogeneous coordinates :math:`(w x, w)`.
+
+Coordinates are centred first: the poles are translated by the centre :math:`c` of
+their bounding box (:class:`~cq_fairing.core.robustness.LocalFrame`; homogeneous
+:math:`(w (x - c), w)` for rational input), faired and translated back.  This is exact
+in exact arithmetic because the rows of the projection sum to one, and in floating point
+it keeps a part's accuracy relative to its own size rather than to its distance from
+the origin.  Details are stored in the centred coordinates (for polynomial input they
+do not depend on the translation at all, since wavelets are orthogonal to constants).
 """
 
 from dataclasses import dataclass, field
@@ -17,11 +25,13 @@ import numpy as np
 from ..errors import InvalidInputError, InvalidTargetError, NumericalError
 from .decomposition import decomposition
 from .geometry import BSplineCurve, BSplineSurface, make_curve, make_surface
+from .robustness import LocalFrame
 from .schedule import plan_spaces
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult",
-           "SurfaceDetails", "target_space", "project_curve", "project_surface"]
+           "SurfaceDetails", "target_space", "project_curve", "project_surface",
+           "checked_plan", "resolved_plan", "largest_resolved_scale"]
 
 
 class SurfaceDetails(NamedTuple):
@@ -81,6 +91,8 @@ class FairResult:
     schedule : str
     max_deviation, evaluations, table, fairness
         Filled by accuracy control and the measures (``None`` when not computed).
+    centre : ndarray, shape (d,), optional
+        Translation :math:`c` of the coordinates the steps work in (``None``: origin).
     """
 
     source: BSplineCurve
@@ -93,11 +105,12 @@ class FairResult:
     evaluations: int = None
     table: tuple = None
     fairness: dict = None
+    centre: np.ndarray = field(repr=False, default=None)
 
     @cached_property
     def details(self):
         """Detail coefficients per level, finest first (computed on first access)."""
-        coefficients = _coefficients(self.source)
+        coefficients = _centred_coefficients(self.source, self.centre)
         details = []
         for step in self.steps:
             details.append(step.detail(coefficients))
@@ -134,10 +147,10 @@ class FairResult:
         -------
         ndarray, shape (k, d)
         """
-        coefficients = _coefficients(self.curve)
+        coefficients = _centred_coefficients(self.curve, self.centre)
         for step, detail in zip(reversed(self.steps), reversed(self.details)):
             coefficients = step.reconstruct(coefficients, detail_weight * detail)
-        return _cartesian(coefficients, self.source.is_rational)[0]
+        return _uncentred(_cartesian(coefficients, self.source.is_rational)[0], self.centre)
 
     def replace(self, **changes):
         """A copy with some fields changed (used by accuracy control)."""
@@ -159,6 +172,8 @@ class SurfaceFairResult:
     scales : tuple of (int, int)
         Spans (u, v) of every level visited, source first.
     n : (int, int)
+    centre : ndarray, shape (d,), optional
+        Translation :math:`c` of the coordinates the steps work in (``None``: origin).
     """
 
     source: BSplineSurface
@@ -171,11 +186,12 @@ class SurfaceFairResult:
     evaluations: int = None
     table: tuple = None
     fairness: dict = None
+    centre: np.ndarray = field(repr=False, default=None)
 
     @cached_property
     def details(self):
         """:class:`SurfaceDetails` per level, finest first (computed on first access)."""
-        net = _coefficients(self.source)
+        net = _centred_coefficients(self.source, self.centre)
         details = []
         for step_u, step_v in self.steps:
             upper, lower = step_u.coarse(net), step_u.detail(net)
@@ -215,13 +231,13 @@ class SurfaceFairResult:
         -------
         ndarray, shape (k_u, k_v, d)
         """
-        net = _coefficients(self.surface)
+        net = _centred_coefficients(self.surface, self.centre)
         for (step_u, step_v), det in zip(reversed(self.steps), reversed(self.details)):
             w = detail_weight
             upper = _along_v(step_v.reconstruct, net, w * det.v)
             lower = _along_v(step_v.reconstruct, w * det.u, w * det.uv)
             net = step_u.reconstruct(upper, lower)
-        return _cartesian(net, self.source.is_rational)[0]
+        return _uncentred(_cartesian(net, self.source.is_rational)[0], self.centre)
 
     def replace(self, **changes):
         from dataclasses import replace
@@ -232,6 +248,31 @@ class SurfaceFairResult:
 # -- helpers ----------------------------------------------------------------------------
 def _coefficients(geometry):
     return geometry.homogeneous() if geometry.is_rational else geometry.poles
+
+
+def _centre(geometry):
+    """Bounding-box centre of the poles, shape (d,) (the translation of :class:`LocalFrame`)."""
+    return LocalFrame.around(geometry.poles).centre
+
+
+def _centred_coefficients(geometry, centre):
+    r"""Coefficients of the geometry translated by :math:`-c`.
+
+    :math:`P - c` for polynomial geometry, :math:`(w (P - c), w)` for rational; ``centre``
+    ``None`` means :math:`c = 0`.
+    """
+    if centre is None:
+        return _coefficients(geometry)
+    moved = geometry.poles - centre
+    if not geometry.is_rational:
+        return moved
+    w = geometry.weights[..., None]
+    return np.concatenate([moved * w, w], axis=-1)
+
+
+def _uncentred(poles, centre):
+    """Cartesian poles translated back by :math:`+c`."""
+    return poles if centre is None else poles + centre
 
 
 def _cartesian(coefficients, rational):
@@ -282,50 +323,121 @@ def target_space(source, n, degree=None):
     return SplineSpace.quasi_uniform(int(n), degree, source.domain)
 
 
-def checked_plan(source, target, schedule):
+def resolved_plan(source, target, schedule):
     """:func:`plan_spaces`, dropping top ladder levels the source cannot resolve.
 
     A non-uniform source can be locally coarser than the first uniform level of the
     ladder (its ``<Phi|Phi_S>`` is then rank deficient); the next lower level is tried,
-    down to the direct step, which raises if even the target is not resolved.
+    down to the direct step.
+
+    Returns
+    -------
+    list of SplineSpace or None
+        ``None`` when some step, even the direct one, is not resolved.
     """
+    spaces = _reduced_plan(source, target, schedule)
+    return None if _unresolved_step(spaces) else spaces
+
+
+def checked_plan(source, target, schedule):
+    """:func:`resolved_plan`, refusing a target the source does not resolve.
+
+    Raises
+    ------
+    InvalidTargetError
+        If ``<Phi_n|Phi_S>`` of a step lacks full row rank (the target is locally finer
+        than the source, e.g. at clustered or repeated source knots): no details or
+        exact reconstruction exist for it.
+    """
+    spaces = _reduced_plan(source, target, schedule)
+    step = _unresolved_step(spaces)
+    if step:
+        raise InvalidTargetError(_unresolved_message(source, target, schedule, step))
+    return spaces
+
+
+def _reduced_plan(source, target, schedule):
     spaces = plan_spaces(source, target, schedule)
-    while len(spaces) > 2 and not decomposition(spaces[0], spaces[1]).resolves_target:
+    while len(spaces) > 2 and not _resolves(spaces[0], spaces[1]):
         spaces = [spaces[0]] + spaces[2:]
     return spaces
 
 
+def largest_resolved_scale(source, degree, schedule, below):
+    """Largest ``n <= below`` whose ``V_n`` (of ``degree``) the source resolves; 0 if none."""
+    for n in range(int(below), 0, -1):
+        target = SplineSpace.quasi_uniform(n, degree, source.domain)
+        if resolved_plan(source, target, schedule) is not None:
+            return n
+    return 0
+
+
+def _resolves(source, target):
+    return source.same_as(target) or decomposition(source, target).resolves_target
+
+
+def _unresolved_step(spaces):
+    """The first step ``(a, b)`` of a plan whose ``a`` does not resolve ``b``, else None."""
+    for a, b in zip(spaces[:-1], spaces[1:]):
+        if not _resolves(a, b):
+            return a, b
+    return None
+
+
+def _unresolved_message(source, target, schedule, step):
+    rank = decomposition(*step).matched_rank
+    n = target.n_spans
+    best = largest_resolved_scale(source, target.degree, schedule, n - 1)
+    advice = (f"choose n <= {best}, the largest below {n} it resolves" if best else
+              "no smaller target is resolved either")
+    return (f"target n={n} ({target.dimension} poles of degree {target.degree}) is not "
+            f"resolved by the source ({source.dimension} poles of degree {source.degree}): "
+            f"<Phi|Phi_S> of the step to {step[1].n_spans} spans has rank {rank} < "
+            f"{step[1].dimension} because the source's knots "
+            "are locally sparser than the target's (clustered or repeated knots), so no "
+            f"details or exact reconstruction exist; {advice}, or pass tol= to let accuracy "
+            "control choose.")
+
+
 def project_curve(curve, target, schedule="auto"):
-    """Fair ``curve`` into ``target`` space (trusted inputs). Returns :class:`FairResult`."""
+    """Fair ``curve`` into ``target`` space (trusted inputs). Returns :class:`FairResult`.
+
+    The poles are centred on their bounding box before fairing (module notes).
+    """
     spaces = checked_plan(curve.space, target, schedule)
-    coefficients = _coefficients(curve)
+    centre = _centre(curve)
+    coefficients = _centred_coefficients(curve, centre)
     steps = [_step(a, b) for a, b in zip(spaces[:-1], spaces[1:])]
     for step in steps:
         coefficients = step.coarse(coefficients)
     poles, weights = _cartesian(coefficients, curve.is_rational)
-    faired = BSplineCurve(poles, target.knots, target.degree, weights)
+    faired = BSplineCurve(_uncentred(poles, centre), target.knots, target.degree, weights)
     return FairResult(curve, faired, tuple(s.n_spans for s in spaces),
-                      target.n_spans, schedule, tuple(steps))
+                      target.n_spans, schedule, tuple(steps), centre=centre)
 
 
 def project_surface(surface, target_u, target_v, schedule="auto"):
-    """Fair ``surface`` into ``target_u x target_v`` (trusted). Returns :class:`SurfaceFairResult`."""
+    """Fair ``surface`` into ``target_u x target_v`` (trusted). Returns :class:`SurfaceFairResult`.
+
+    The poles are centred on their bounding box before fairing (module notes).
+    """
     plan_u = checked_plan(surface.u_space, target_u, schedule)
     plan_v = checked_plan(surface.v_space, target_v, schedule)
     levels = max(len(plan_u), len(plan_v)) - 1
     plan_u += [plan_u[-1]] * (levels + 1 - len(plan_u))
     plan_v += [plan_v[-1]] * (levels + 1 - len(plan_v))
-    net = _coefficients(surface)
+    centre = _centre(surface)
+    net = _centred_coefficients(surface, centre)
     steps = [(_step(plan_u[i], plan_u[i + 1]), _step(plan_v[i], plan_v[i + 1]))
              for i in range(levels)]
     for step_u, step_v in steps:
         net = _along_v(step_v.coarse, step_u.coarse(net))
     poles, weights = _cartesian(net, surface.is_rational)
-    faired = BSplineSurface(poles, target_u.knots, target_v.knots, target_u.degree,
-                            target_v.degree, weights)
+    faired = BSplineSurface(_uncentred(poles, centre), target_u.knots, target_v.knots,
+                            target_u.degree, target_v.degree, weights)
     scales = tuple((a.n_spans, b.n_spans) for a, b in zip(plan_u, plan_v))
-    return SurfaceFairResult(surface, faired, scales,
-                             (target_u.n_spans, target_v.n_spans), schedule, tuple(steps))
+    return SurfaceFairResult(surface, faired, scales, (target_u.n_spans, target_v.n_spans),
+                             schedule, tuple(steps), centre=centre)
 
 
 # -- public entry points -------------------------------------------------------------------
