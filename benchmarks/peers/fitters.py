@@ -289,12 +289,13 @@ def wavelet_uniform(case):
     return r.surface, f"n={r.n}"
 
 
-def wavelet_adaptive(case, degree=None):
-    if case.kind == "curve":
-        r = fair_curve_adaptive(case.source, case.tol, target_degree=degree)
-        return r.curve, f"n={r.n} lambda={r.table[0][1]:.2g}"
-    r = fair_surface_adaptive(case.source, case.tol, target_degree=degree)
-    return r.surface, f"n={r.n} lambda={r.table[0][1]:.2g}"
+def wavelet_adaptive(case, degree=None, objective="compact"):
+    fair = fair_curve_adaptive if case.kind == "curve" else fair_surface_adaptive
+    r = fair(case.source, case.tol, target_degree=degree, objective=objective)
+    table = dict(r.table)
+    noise = f" noise={table['noise']:.2g}" if "noise" in table else ""
+    return (r.curve if case.kind == "curve" else r.surface,
+            f"n={r.n} lambda={table['lambda']:.2g}{noise}")
 
 
 def energy(case):
@@ -318,4 +319,6 @@ METHODS = {
     "ours wavelet uniform": wavelet_uniform,
     "ours wavelet adaptive": wavelet_adaptive,
     "ours wavelet adaptive p5": lambda case: wavelet_adaptive(case, degree=5),
+    "ours wavelet faithful p5": lambda case: wavelet_adaptive(case, 5, "faithful"),
+    "ours wavelet faithful p7": lambda case: wavelet_adaptive(case, 7, "faithful"),
 }

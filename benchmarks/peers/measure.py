@@ -35,15 +35,25 @@ def surface_grid(surface, shape):
     return u, v, surface.evaluate_grid(u, v)
 
 
-def points_to_surface(surface, points, density=None):
-    """Closest-point distance of each point (q, 3) to ``surface``, shape (q,)."""
+def points_to_surface(surface, points, density=None, starts=None):
+    """Closest-point distance of each point (q, 3) to ``surface``, shape (q,).
+
+    Newton from the nearest of a dense grid of samples and, when ``starts = (u, v)`` is
+    given (the parameters the points were sampled at on the other surface), from there
+    too; the smaller distance wins (both are distances to actual surface points).  The
+    second start matters where a thin part folds back (a blade tip): the nearest sample
+    can lie on the far side and lead to a local minimum there.
+    """
     ku, kv = surface.poles.shape[:2]
     nu = density or int(np.clip(6 * ku, 150, 900))
     nv = density or int(np.clip(6 * kv, 150, 900))
     u, v, grid = surface_grid(surface, (nu, nv))
     _, near = cKDTree(grid.reshape(-1, 3)).query(points)
     i, j = np.unravel_index(near, (nu, nv))
-    return closest_points_surface(surface, points, u[i], v[j])[2]
+    d = closest_points_surface(surface, points, u[i], v[j])[2]
+    if starts is not None:
+        d = np.minimum(d, closest_points_surface(surface, points, *starts)[2])
+    return d
 
 
 def two_sided(source, result, kind, samples):
@@ -53,9 +63,18 @@ def two_sided(source, result, kind, samples):
         _, b = curve_samples(result, samples)
         return max(points_to_curve(result, a).max(), points_to_curve(source, b).max())
     n = int(np.sqrt(samples))
-    a = surface_grid(source, (n, n))[2].reshape(-1, 3)
+    u, v, a = surface_grid(source, (n, n))
     b = surface_grid(result, (n, n))[2].reshape(-1, 3)
-    return max(points_to_surface(result, a).max(), points_to_surface(source, b).max())
+    uu, vv = (x.ravel() for x in np.meshgrid(u, v, indexing="ij"))
+    return max(points_to_surface(result, a.reshape(-1, 3),
+                                 starts=_mapped((uu, vv), source, result)).max(),
+               points_to_surface(source, b, starts=_mapped((uu, vv), source, source)).max())
+
+
+def _mapped(uv, source, target):
+    """Parameters ``uv`` of ``source`` mapped affinely onto ``target``'s domain."""
+    return tuple(t0 + (x - s0) * (t1 - t0) / (s1 - s0)
+                 for x, (s0, s1), (t0, t1) in zip(uv, source.domain, target.domain))
 
 
 def to_truth(truth, result, kind, samples):
