@@ -443,7 +443,7 @@ def project_surface(surface, target_u, target_v, schedule="auto"):
 # -- public entry points -------------------------------------------------------------------
 def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None,
                target_degree=None, schedule="auto", strategy="guaranteed", order=6,
-               deviation="geometric", method="wavelet"):
+               deviation="geometric", method="wavelet", objective="compact"):
     r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
 
     The faired curve is the L2-best approximation of the source in the quasi-uniform
@@ -476,10 +476,18 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
         Spaces visited, see :mod:`cq_fairing.core.schedule`.
     strategy, order, deviation
         Accuracy-control settings used with ``tol``.
-    method : {"wavelet", "energy"}
-        ``"energy"``: Eck-Hadenfeld local energy fairing (:mod:`cq_fairing.core.energy`,
-        derivative ``l = 3``) that keeps the poles and moves none farther than ``tol``
-        (required; ``n`` must be omitted).
+    method : {"wavelet", "adaptive", "energy"}
+        ``"adaptive"``: the exact L2 projection onto a target whose knots follow the
+        error (:mod:`cq_fairing.core.adaptive`), usually fewer poles than the
+        quasi-uniform ``V_n`` at the same ``tol``; one direct decomposition step, so
+        ``details``/``reconstruct`` still work.  ``"energy"``: Eck-Hadenfeld local
+        energy fairing (:mod:`cq_fairing.core.energy`, derivative ``l = 3``) that keeps
+        the poles and moves none farther than ``tol``.  Both need ``tol`` and no ``n``.
+    objective : {"compact", "faithful"}
+        ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``, the
+        rest of the budget spent on fairness.  ``"faithful"``: stop where the residual
+        is down to the source's estimated noise (:mod:`cq_fairing.core.fidelity`), or
+        later if ``tol`` needs it: the noise removed, the shape kept.
 
     Returns
     -------
@@ -506,10 +514,16 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     True
     """
     curve = make_curve(poles, knots, degree, weights)
-    if _energy_method(method, n, tol):
+    method = _tolerance_method(method, objective, n, tol)
+    if method == "energy":
         from .energy import fair_curve_energy
 
         return fair_curve_energy(curve, tol)
+    if method == "adaptive":
+        from .adaptive import fair_curve_adaptive
+
+        return fair_curve_adaptive(curve, tol, target_degree=target_degree,
+                                   objective=objective)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n (target scale) and tol (tolerance); "
@@ -526,7 +540,8 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
 
 def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=None,
                  weights=None, target_degree=None, schedule="auto",
-                 strategy="guaranteed", deviation="geometric", method="wavelet"):
+                 strategy="guaranteed", deviation="geometric", method="wavelet",
+                 objective="compact"):
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
 
     .. math:: C_n = A_u\, C\, A_v^T, \qquad
@@ -554,9 +569,13 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     schedule : {"auto", "direct", "hybrid"}
     strategy, deviation
         Accuracy-control settings used with ``tol``.
-    method : {"wavelet", "energy"}
-        ``"energy"``: local thin-plate energy fairing within ``tol`` that keeps the net
-        size (:mod:`cq_fairing.core.energy`; ``tol`` required, ``n`` omitted).
+    method : {"wavelet", "adaptive", "energy"}
+        ``"adaptive"``: exact projection onto u and v targets whose knots follow the
+        error (:mod:`cq_fairing.core.adaptive`; polynomial surfaces).  ``"energy"``:
+        local thin-plate energy fairing within ``tol`` that keeps the net size
+        (:mod:`cq_fairing.core.energy`).  Both need ``tol`` and no ``n``.
+    objective : {"compact", "faithful"}
+        ``method="adaptive"`` only, as for :func:`fair_curve`.
 
     Returns
     -------
@@ -567,10 +586,16 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     InvalidInputError, InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
-    if _energy_method(method, n, tol):
+    method = _tolerance_method(method, objective, n, tol)
+    if method == "energy":
         from .energy import fair_surface_energy
 
         return fair_surface_energy(surface, tol)
+    if method == "adaptive":
+        from .adaptive import fair_surface_adaptive
+
+        return fair_surface_adaptive(surface, tol, target_degree=target_degree,
+                                     objective=objective)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
@@ -589,21 +614,24 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     return project_surface(surface, target_u, target_v, schedule)
 
 
-METHODS = ("wavelet", "energy")
+METHODS = ("wavelet", "adaptive", "energy")
 
 
-def _energy_method(method, n, tol):
-    """Validate ``method``; True for energy fairing (which needs ``tol`` and no ``n``)."""
+def _tolerance_method(method, objective, n, tol):
+    """Validate ``method`` (and ``objective``); the tolerance-only methods need ``tol``, no ``n``."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
-    if method == "wavelet":
-        return False
-    if n is not None or tol is None:
+    if method != "adaptive" and objective != "compact":
         raise InvalidInputError(
-            "method='energy' keeps the control points and needs tol (the largest "
-            f"distance a point may move) and no n; got n={n!r}, tol={tol!r}."
-        )
-    return True
+            f"objective={objective!r} applies to method='adaptive' only, got method={method!r}; "
+            "add method='adaptive' or drop objective.")
+    if method != "wavelet" and (n is not None or tol is None):
+        what = ("keeps the control points" if method == "energy"
+                else "chooses the target itself")
+        raise InvalidInputError(
+            f"method={method!r} {what} and needs tol (the largest allowed deviation) and "
+            f"no n; got n={n!r}, tol={tol!r}.")
+    return method
 
 
 def _split_pair(value, name):

@@ -101,3 +101,32 @@ def test_a_noise_free_polynomial_reduces_to_one_span(seed, inner):
 def test_unknown_objective_is_refused(seed):
     with pytest.raises(InvalidInputError, match="objective must be one of"):
         fair_curve_adaptive(seed.curve, 0.02, objective="smooth")
+
+
+def test_public_fair_curve_offers_the_faithful_adaptive_method(seed, faithful_p7):
+    c = seed.curve
+    result = cf.fair_curve(c.poles, tol=0.02, knots=c.knots, degree=c.degree,
+                           method="adaptive", objective="faithful", target_degree=7)
+    assert result.schedule == "adaptive"
+    assert np.array_equal(result.poles, faithful_p7.poles)
+    assert np.array_equal(result.knots, faithful_p7.knots)
+
+
+def test_public_fair_surface_offers_the_adaptive_method():
+    b = examples.blade_surface((16, 20), noise=0.0, span=50.0, chord=15.0)
+    s = b.surface
+    result = cf.fair_surface(s.poles, tol=0.05, u_knots=s.u_knots, v_knots=s.v_knots,
+                             method="adaptive", objective="faithful")
+    assert result.schedule == "adaptive"
+    assert deviation(s, result.surface, per_span=6).max <= 0.05
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(n=20, method="adaptive"), "needs tol"),
+    (dict(tol=0.02, objective="faithful"), "applies to method='adaptive' only"),
+    (dict(tol=0.02, method="energy", objective="faithful"), "applies to method='adaptive'"),
+    (dict(tol=0.02, method="adaptive", objective="fewest"), "objective must be one of"),
+])
+def test_adaptive_arguments_are_checked(seed, kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        cf.fair_curve(seed.curve.poles, **kwargs)
