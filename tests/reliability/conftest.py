@@ -5,6 +5,7 @@ import hashlib
 import importlib
 import os
 import pkgutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -39,6 +40,16 @@ def fuzz(examples):
         suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much,
                                HealthCheck.data_too_large],
     )
+
+
+def interruptible():
+    """``preexec_fn`` giving the child the default SIGINT disposition of a terminal.
+
+    A test run started in the background of a non-interactive shell (``cmd &``) inherits
+    SIGINT *ignored*, and so would every child: Ctrl-C could never reach it.  The tests
+    that send SIGINT model a user at a terminal, so they restore the default first.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def sha256(path):

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .conftest import REAL_DATA, REPO, run_cli, sha256
+from .conftest import REAL_DATA, REPO, interruptible, run_cli, sha256
 
 CLI_PRESENT = importlib.util.find_spec("cq_fairing.cli") is not None
 pytestmark = pytest.mark.xfail(not CLI_PRESENT, strict=True,
@@ -135,7 +135,8 @@ def test_sigint_leaves_no_partial_output(tmp_path, cli_help):
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-m", "cq_fairing.cli", "fair", str(src), "-o",
                              str(out), "--tol", "2"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
+                            preexec_fn=interruptible)
     time.sleep(6.0)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)

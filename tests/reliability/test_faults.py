@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import REAL_DATA, REPO, sha256
+from .conftest import REAL_DATA, REPO, interruptible, sha256
 
 TERRAIN = REAL_DATA / "terrain.brep"
 
@@ -37,7 +37,7 @@ def _start(tmp_path, tol="2.0"):
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-c", PIPELINE, str(TERRAIN), str(out), tol],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=env, cwd=tmp_path)
+                            env=env, cwd=tmp_path, preexec_fn=interruptible)
     return proc, out
 
 
