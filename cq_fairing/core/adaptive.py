@@ -73,7 +73,7 @@ __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_spac
            "error_density"]
 
 THETA = 0.9          # redistribution aims at THETA * tol
-SAFETY = 1.0        # the search works to SAFETY * tol; a denser final check uses tol
+SAFETY = 0.99       # the search works to SAFETY * tol (room for excess between samples)
 ROUNDS = 4           # redistribution rounds per count
 FLOOR = 0.25         # density floor, fraction of the mean density
 OBJECTIVES = ("compact", "faithful")
