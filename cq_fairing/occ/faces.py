@@ -3,7 +3,8 @@ r"""Fair one OCP face: :func:`fair_face` and its :class:`FaceFairReport`.
 Pipeline: classify the face; convert it to NURBS on request; take its net
 (:func:`~cq_fairing.occ.face_to_surface`); choose the target (explicit ``n`` or the
 fewest poles within ``tol``, :mod:`cq_fairing.occ.search`); fair with the core
-(:func:`cq_fairing.fair_surface`); put the faired surface under the face's own trim
+(:func:`cq_fairing.fair_surface`), or with ``method="adaptive"`` let the core choose
+non-uniform targets within ``tol`` (:mod:`cq_fairing.core.adaptive`); put the faired surface under the face's own trim
 (:func:`~cq_fairing.occ.surface_to_face`); measure the deviation with OCCT's projection
 (:func:`~cq_fairing.occ.sample_face_deviation`).
 
@@ -11,7 +12,9 @@ Special cases handled, not refused:
 
 * **rational** faces are faired in homogeneous coordinates :math:`(w P, w)`; if a
   weight of the result is not positive, a non-rational least-squares approximation in
-  the same spline spaces is faired instead and ``message`` says so;
+  the same spline spaces is faired instead and ``message`` says so.  The adaptive
+  method fairs polynomial surfaces only: a rational face gets status
+  ``'skipped-rational'`` and is left unchanged;
 * **periodic** directions are faired on the unperiodized (clamped) net and the first
   and last rows are tied to their mean afterwards, so the surface stays closed (G0 at
   the seam; tangent continuity across the seam is not enforced);
@@ -34,8 +37,9 @@ from OCP.TopoDS import TopoDS
 
 from ..core.fairing import SurfaceFairResult, fair_surface, target_space
 from ..core.geometry import BSplineSurface
-from ..errors import (InvalidInputError, InvalidToleranceError,
-                      NumericalError, ToleranceNotMetError)
+from ..core.spaces import SplineSpace
+from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
+                      ToleranceNotMetError, UnsupportedGeometryError)
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, face_uv_grid, reference_samples
 from .search import max_scales, project, search_scales
@@ -43,12 +47,13 @@ from .search import max_scales, project, search_scales
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
            "check_options"]
 
-METHODS = ("wavelet",)
+METHODS = ("wavelet", "adaptive")
+OBJECTIVES = ("compact", "faithful")
 BOUNDARIES = ("free", "fixed")
 SEARCHES = ("local", "core")
 MARGIN = 0.9
-STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-not-selected",
-            "tolerance-not-met", "failed")
+STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-rational",
+            "skipped-not-selected", "tolerance-not-met", "failed")
 
 
 @dataclass(eq=False)
@@ -61,7 +66,7 @@ class FaceFairReport:
         The faired face, or the original one when it was not faired.
     status : str
         ``'faired'``, ``'unchanged'`` (nothing to reduce), ``'skipped-not-bspline'``,
-        ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
+        ``'skipped-rational'`` (``method="adaptive"``), ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
     message : str
         One line for the user (empty when there is nothing to say).
     result : SurfaceFairResult or None
@@ -114,8 +119,13 @@ def default_tolerance(shape):
     return 1e-3 * float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
 
 
-def check_options(tol, n, method, boundary):
-    """Validate the shared options of :func:`fair_face` and ``fair_shape`` once."""
+def check_options(tol, n, method, boundary, objective="compact"):
+    """Validate the shared options of :func:`fair_face` and ``fair_shape`` once.
+
+    ``method="adaptive"`` chooses its targets itself: it needs ``tol`` (or the default
+    tolerance, ``n`` and ``tol`` both ``None``) and refuses ``n``; ``objective`` applies
+    to it only.
+    """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
     if tol is not None:
@@ -126,12 +136,23 @@ def check_options(tol, n, method, boundary):
             )
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
+    if objective not in OBJECTIVES:
+        raise InvalidInputError(f"objective must be one of {OBJECTIVES}, got {objective!r}.")
+    if method != "adaptive" and objective != "compact":
+        raise InvalidInputError(
+            f"objective={objective!r} applies to method='adaptive' only, got method={method!r}; "
+            "add method='adaptive' or drop objective.")
+    if method == "adaptive" and n is not None:
+        raise InvalidInputError(
+            f"method='adaptive' chooses the target itself and needs tol, not n; got n={n!r}. "
+            "Give tol, or use method='wavelet' for explicit scales.")
     if boundary not in BOUNDARIES:
         raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
 
 
-def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, boundary="free",
-              target_degree=None, density=None, details=True, search="local"):
+def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", convert=False,
+              boundary="free", target_degree=None, density=None, details=True,
+              search="local"):
     r"""Fair one face and put the result under the face's own trim.
 
     Parameters
@@ -145,8 +166,16 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
     n : (int or None, int or None) or int, optional
         Explicit target scales (knot spans) per direction, passed to
         :func:`cq_fairing.fair_surface`; ``None`` keeps a direction.
-    method : {"wavelet"}
-        Multiresolution (ARWFA/DWFA) fairing.
+    method : {"wavelet", "adaptive"}
+        ``"wavelet"``: multiresolution (ARWFA/DWFA) fairing onto quasi-uniform targets.
+        ``"adaptive"``: the same exact L2 projection onto u and v targets whose knots
+        follow the error (``cq_fairing.fair_surface(method="adaptive")``), usually
+        fewer poles at the same ``tol``; needs ``tol`` (or the default), refuses ``n``,
+        ignores ``search``; polynomial faces only (rational ones: ``'skipped-rational'``).
+    objective : {"compact", "faithful"}
+        ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
+        ``"faithful"``: stop where the residual reaches the net's estimated noise level
+        (more poles, closer to the noise-free shape), within ``tol``.
     convert : bool, optional
         Convert a non-B-spline face to NURBS (``BRepBuilderAPI_NurbsConvert``, exact)
         instead of skipping it.
@@ -181,7 +210,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
     """
     start = time.perf_counter()
     face = as_face(face)
-    check_options(tol, n, method, boundary)
+    check_options(tol, n, method, boundary, objective)
     info = face_info(face)
     if not info.is_bspline:
         if not convert:
@@ -194,13 +223,39 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", convert=False, bounda
         tol = default_tolerance(face)
     if search not in SEARCHES:
         raise InvalidInputError(f"search must be one of {SEARCHES}, got {search!r}.")
-    report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, search)
+    criteria = _criteria(tol, search, method, objective)
+    try:
+        report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
+    except UnsupportedGeometryError:  # the core's adaptive method refuses weights
+        if method != "adaptive":
+            raise
+        report = FaceFairReport(face, "skipped-rational", (
+            "rational face left unchanged: method='adaptive' fairs polynomial surfaces only; "
+            "use method='wavelet' for it."), info=info, tolerance=tol)
     report.original = face
     report.seconds = time.perf_counter() - start
     return report
 
 
-def _fair_bspline(face, tol, n, boundary, target_degree, density, details, search):
+def _criteria(tol, search, method, objective):
+    """The ``(criterion, goal)`` attempts of :func:`_fair_verified`, in order.
+
+    With explicit ``n``: one attempt.  ``method="adaptive"``: the core's adaptive search
+    (criterion: the objective) at ``tol``, then at ``MARGIN * tol``.  Otherwise the
+    requested search (``"local"`` with the normal-distance estimate, or the core's
+    ``fair_surface(tol=...)``), then the local search with the parametric distance, an
+    upper bound of the true distance; they aim at ``MARGIN * tol`` (room for excursions
+    between samples), the last one at ``tol``.
+    """
+    if tol is None:
+        return [(None, None)]
+    if method == "adaptive":
+        return [(objective, tol), (objective, MARGIN * tol)]
+    first = "core" if search == "core" else "normal"
+    return [(first, MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
+
+
+def _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria):
     surface, info = face_to_surface(face)
     density = density or tuple(int(np.clip(2 * k + 1, 20, 400)) for k in surface.shape)
     degree = _target_degree(surface, target_degree)
@@ -219,12 +274,12 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, searc
                           "(degree + 1 poles per direction); nothing to fair", tol)
     try:
         return _fair_verified(face, info, surface, surface, tol, n, degree, sampler, finish,
-                              details, search, notes)
+                              details, criteria, notes)
     except NumericalError:
         notes.append("fairing in homogeneous coordinates gave non-positive weights; "
                      "faired a non-rational least-squares approximation instead")
         return _fair_verified(face, info, surface, _non_rational(surface), tol, n, degree,
-                              sampler, finish, details, search, notes)
+                              sampler, finish, details, criteria, notes)
 
 
 def _check_samples(face, grid, trimmed):
@@ -246,19 +301,13 @@ def _classify(face, u, v):
 
 
 def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish, details,
-                   search, notes):
+                   criteria, notes):
     """Fair, rebuild and check with OCCT; with ``tol`` retry with stricter searches.
 
-    The searches in order: the requested one (``"local"`` with the normal-distance
-    estimate, or the core's ``fair_surface(tol=...)``), then the local search with the
-    parametric distance, an upper bound of the true distance; the searches aim at
-    ``MARGIN * tol`` (room for excursions between samples), the last one at ``tol``.
-    The OCCT check runs on the search grid plus the centres of its cells.
+    ``criteria`` are the attempts of :func:`_criteria`; the first whose rebuilt face
+    passes the check wins.  The OCCT check runs on the search grid plus the centres of
+    its cells.
     """
-    criteria = [(None, None)] if tol is None else (
-        [("core", MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
-        if search == "core" else
-        [("normal", MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)])
     measured = []
     check = None
     for criterion, goal in criteria:
@@ -294,9 +343,13 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
 
 
 def _is_identity(source, target, degree):
-    """True when the target scales give back the source's own spaces."""
+    """True when the target (scales, or the adaptive method's spaces) gives back the
+    source's own spaces."""
     for space, n, deg in zip((source.u_space, source.v_space), target, degree):
-        if n is not None and not target_space(space, int(n), deg).same_as(space):
+        if n is None:
+            continue
+        chosen = n if isinstance(n, SplineSpace) else target_space(space, int(n), deg)
+        if not chosen.same_as(space):
             return False
     return True
 
@@ -319,7 +372,19 @@ def _target_degree(surface, target_degree):
 
 
 def _choose(source, tol, n, degree, sampler, finish, criterion):
-    """Target scales, the faired (finished) surface and the core result if computed."""
+    """Target scales, the faired (finished) surface and the core result if computed.
+
+    For the adaptive method (``criterion`` an objective) the target is the pair of
+    non-uniform spaces the core chose.
+    """
+    if criterion in OBJECTIVES:
+        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
+                              v_knots=source.v_knots,
+                              degree=(source.u_degree, source.v_degree),
+                              weights=source.weights, target_degree=degree,
+                              method="adaptive", objective=criterion)
+        spaces = (result.surface.u_space, result.surface.v_space)
+        return spaces, finish(result.surface), result
     if criterion == "core":
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,

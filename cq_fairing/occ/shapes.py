@@ -92,9 +92,9 @@ def _selection(faces, count):
     return chosen
 
 
-def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert=False,
-               progress=None, boundary="free", target_degree=None, density=None,
-               details=False, max_gap=None, jobs=1, face_timeout=None):
+def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
+               convert=False, progress=None, boundary="free", target_degree=None,
+               density=None, details=False, max_gap=None, jobs=1, face_timeout=None):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -108,8 +108,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
         Explicit target scales for every selected face.
     faces : iterable of int, optional
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
-    method, boundary, target_degree, density
-        As in :func:`~cq_fairing.occ.fair_face`.
+    method, objective, boundary, target_degree, density
+        As in :func:`~cq_fairing.occ.fair_face` (``method="adaptive"``: the core's
+        adaptive targets per face, ``objective`` ``"compact"`` or ``"faithful"``; the
+        faces next to a too-large gap are faired again the same way with half ``tol``).
     convert : bool, optional
         Convert the whole shape to NURBS first (``BRepBuilderAPI_NurbsConvert``, exact;
         every analytic face becomes a B-spline face, also unselected ones).
@@ -147,20 +149,20 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", convert
     """
     start = time.perf_counter()
     shape = as_shape(shape)
-    check_options(tol, n, method, boundary)
+    check_options(tol, n, method, boundary, objective)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
     if tol is None and n is None:
         tol = default_tolerance(shape)
     if max_gap is not None:
-        check_options(max_gap, None, method, boundary)
+        check_options(max_gap, None, method, boundary, objective)
     max_gap = tol if max_gap is None else float(max_gap)
     _check_workers(jobs, face_timeout)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
-    options = dict(method=method, boundary=boundary, target_degree=target_degree,
-                   density=density, details=details)
+    options = dict(method=method, objective=objective, boundary=boundary,
+                   target_degree=target_degree, density=density, details=details)
     pool = None if jobs == 1 and face_timeout is None else FacePool(jobs, face_timeout)
     try:
         job = _Job(source, originals, options, pool)

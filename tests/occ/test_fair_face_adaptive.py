@@ -1,0 +1,79 @@
+"""fair_face(method="adaptive"): within tolerance by OCCT's projection, no more poles than
+the uniform (wavelet) search, and the faithful objective closer to the noise-free truth."""
+
+import numpy as np
+import pytest
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+
+from cq_fairing.core.examples import blade_surface
+from cq_fairing.errors import InvalidInputError
+from cq_fairing.occ import fair_face, fair_shape, list_faces
+from cq_fairing.occ.builders import surface_to_natural_face
+from tests.occ.helpers import faces_of, global_distance, occ_points, uv_box_grid
+from tests.occ.test_fair_face import check_within
+
+TOL = 0.1  # mm; the blade is 100 x 30 mm, its net carries 0.02 mm of Gaussian noise
+
+
+@pytest.fixture(scope="module")
+def blade():
+    """A noisy 22 x 32 blade face, its noise-free truth, and the three fairings."""
+    example = blade_surface(shape=(20, 30), noise=0.02)
+    face = surface_to_natural_face(example.surface)
+    runs = {name: fair_face(face, tol=TOL, details=False, **kw) for name, kw in (
+        ("wavelet", dict(method="wavelet")),
+        ("compact", dict(method="adaptive")),
+        ("faithful", dict(method="adaptive", objective="faithful")))}
+    return face, surface_to_natural_face(example.truth), runs
+
+
+def test_adaptive_meets_tol_with_no_more_poles_than_wavelet(blade):
+    face, _, runs = blade
+    for name in ("compact", "faithful"):
+        check_within(runs[name], face, TOL)
+    assert np.prod(runs["compact"].poles_after) <= np.prod(runs["wavelet"].poles_after)
+    assert np.prod(runs["compact"].poles_after) < np.prod(runs["compact"].poles_before) / 4
+    assert runs["compact"].result.table[0][0] == "lambda"  # the core's adaptive result
+
+
+def test_faithful_lands_closer_to_the_truth_than_compact(blade):
+    """RMS of OCCT's projection distance from noise-free points to each faired face."""
+    _, truth, runs = blade
+    u, v = uv_box_grid(truth, 25, 25)
+    points = occ_points(truth, u, v).reshape(-1, 3)
+    rms = {}
+    for name in ("compact", "faithful"):
+        distance = global_distance(points, runs[name].face)
+        assert np.isfinite(distance).all()
+        rms[name] = float(np.sqrt(np.mean(distance ** 2)))
+    assert rms["faithful"] < 0.8 * rms["compact"], rms
+
+
+def test_rational_face_is_skipped_in_one_line():
+    cylinder = BRepPrimAPI_MakeCylinder(5.0, 10.0).Shape()
+    lateral = next(face for face, info in zip(faces_of(cylinder), list_faces(cylinder))
+                   if info.surface_type == "Cylinder")  # NURBS-converted: rational
+    report = fair_face(lateral, tol=0.01, method="adaptive", convert=True)
+    assert report.status == "skipped-rational"
+    assert "\n" not in report.message and "method='wavelet'" in report.message
+    assert report.face.IsSame(report.original)
+
+
+def test_adaptive_option_errors():
+    face = surface_to_natural_face(blade_surface(shape=(8, 8)).surface)
+    with pytest.raises(InvalidInputError, match="needs tol, not n"):
+        fair_face(face, n=(4, 4), method="adaptive")
+    with pytest.raises(InvalidInputError, match="method='adaptive' only"):
+        fair_face(face, tol=TOL, objective="faithful")
+    with pytest.raises(InvalidInputError, match="objective must be one of"):
+        fair_face(face, tol=TOL, method="adaptive", objective="smooth")
+
+
+def test_fair_shape_passes_method_and_objective_to_workers(blade):
+    """Faithful (54 poles here) differs from compact (48): the worker got the objective."""
+    face, _, runs = blade
+    result = fair_shape(face, tol=TOL, method="adaptive", objective="faithful", jobs=2)
+    report, = result.faces
+    assert report.status == "faired" and result.valid
+    assert report.poles_after == runs["faithful"].poles_after != runs["compact"].poles_after
+    np.testing.assert_allclose(report.surface.poles, runs["faithful"].surface.poles, atol=1e-12)
