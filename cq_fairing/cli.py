@@ -2,10 +2,15 @@
 
 Subcommands
 -----------
-``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5] [--method wavelet|energy]
-[--jobs N] [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
+``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
+[--method wavelet|adaptive|energy] [--objective compact|faithful] [--jobs N]
+[--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
+    ``--method adaptive`` lets the knots follow the error (fewer poles at the same
+    tolerance; polynomial faces only, rational ones are skipped) and takes
+    ``--objective faithful`` to stop at the estimated noise level instead of at the
+    fewest poles.
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
     up on a face after S seconds (reported failed, kept unchanged).
 ``inspect IN``
@@ -116,7 +121,13 @@ def build_parser():
     fair.add_argument("--target", type=int, nargs=2, metavar=("NU", "NV"),
                       help="explicit target poles per direction instead of --tol")
     fair.add_argument("--faces", type=_face_list, help="faces to fair, 1-based (default: all)")
-    fair.add_argument("--method", choices=("wavelet", "energy"), default="wavelet")
+    fair.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
+                      help="wavelet: uniform targets (default); adaptive: targets whose "
+                           "knots follow the error, fewer poles (needs --tol or its "
+                           "default, not --target)")
+    fair.add_argument("--objective", choices=("compact", "faithful"),
+                      help="with --method adaptive: compact = fewest poles within --tol "
+                           "(default), faithful = stop at the estimated noise level")
     fair.add_argument("--boundary", choices=("free", "fixed"), default="free",
                       help="keep the face borders fixed or let them move within --tol")
     fair.add_argument("--convert", action="store_true",
@@ -182,6 +193,7 @@ def command_fair(args):
 
     outputs = [p for p in (args.output, args.report, args.deviation_map, args.curvature_map) if p]
     _check_suffixes(args)
+    _check_method(args)
     for path in outputs:
         check_output_path(path, force=args.force, inputs=(args.input,))
     if args.tol is not None and args.target is not None:
@@ -195,7 +207,8 @@ def command_fair(args):
     tol = None if args.target else (args.tol or default_tolerance(shape))
     progress = _Progress(args.progress or sys.stderr.isatty())
     result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
-                        method=args.method, convert=args.convert, progress=progress,
+                        method=args.method, objective=_objective(args),
+                        convert=args.convert, progress=progress,
                         boundary=args.boundary, details=False, jobs=args.jobs,
                         face_timeout=args.face_timeout)
     write_shape(result.shape, args.output, force=args.force, input_path=args.input)
@@ -218,6 +231,21 @@ def _check_suffixes(args):
         if path is not None and path.suffix.lower() not in suffixes:
             raise OutputPathError(
                 f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
+
+
+def _check_method(args):
+    """--objective needs --method adaptive; adaptive chooses its own target (no --target)."""
+    if args.objective is not None and args.method != "adaptive":
+        raise InvalidInputError(
+            f"--objective {args.objective} applies to --method adaptive only, got --method "
+            f"{args.method}; add --method adaptive or drop --objective.")
+    if args.method == "adaptive" and args.target is not None:
+        raise InvalidInputError("--method adaptive chooses the target itself; give --tol "
+                                "instead of --target, or use --method wavelet.")
+
+
+def _objective(args):
+    return args.objective or "compact"
 
 
 def _target_scales(target):
@@ -277,7 +305,9 @@ def _build_report(args, result, tol, seconds):
             fairness_before=before, fairness_after=after, seconds=face.seconds,
             deviation=stats))
     return build_report(entries, input_path=args.input, output_path=args.output,
-                        tolerance=tol, method=args.method, max_gap=result.max_gap,
+                        tolerance=tol, method=args.method,
+                        objective=_objective(args) if args.method == "adaptive" else None,
+                        max_gap=result.max_gap,
                         valid=result.valid, seconds=seconds,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
 

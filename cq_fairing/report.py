@@ -252,15 +252,16 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
 
 
 def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
-                 method=None, max_gap=None, valid=None, maps=None, seconds=None,
-                 command=None, units="mm"):
+                 method=None, objective=None, max_gap=None, valid=None, maps=None,
+                 seconds=None, command=None, units="mm"):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
     Returns
     -------
     dict
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
-        ``units``, ``method``, ``faces``, ``summary`` (counts, poles before/after,
+        ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"`` for the
+        adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
         worst deviation, max gap between faces, validity, time), ``maps`` (name ->
         PNG/VTP path) and ``skipped`` (index, reason).
     """
@@ -285,7 +286,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "tool": f"cq-fairing {__version__}",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command, "input": _str(input_path), "output": _str(output_path),
-        "tolerance": tolerance, "units": units, "method": method,
+        "tolerance": tolerance, "units": units, "method": method, "objective": objective,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
                     for f in faces if f["status"] in ("skipped", "failed")],
@@ -383,13 +384,19 @@ def _html_table(report):
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
 
 
+def _method(report):
+    """``adaptive (faithful)``, or the bare method when it has no objective."""
+    objective = report.get("objective")
+    return f"{report['method']} ({objective})" if objective else report["method"]
+
+
 def render_html(report):
     """The report as one self-contained HTML page (maps embedded as base64 PNG)."""
     s = report["summary"]
     esc = html.escape
     settings = [("input", report["input"]), ("output", report["output"]),
                 ("tolerance", f"{_fmt(report['tolerance'])} {report['units']}"),
-                ("method", report["method"]), ("command", report["command"]),
+                ("method", _method(report)), ("command", report["command"]),
                 ("created", report["created"]), ("tool", report["tool"])]
     summary = [("faces ok / total", f"{s['faces_ok']} / {s['faces_total']}"),
                ("over tolerance", s["faces_tolerance_not_met"]),
