@@ -9,6 +9,7 @@ Usage::
     part = cq.importers.importStep("blade.step")
     faired = part.fair(tol=0.05)                 # every B-spline face of the solids
     one = part.faces(">Z").fair(n=(None, 12))    # selected faces, solid rebuilt
+    lean = part.fair(tol=0.05, method="adaptive", objective="faithful", jobs=2)
 
 Following CadQuery's plugin convention the method is a plain function attached to
 ``cq.Workplane``; it returns a new Workplane (``newObject``) and never changes the
@@ -26,8 +27,12 @@ from .occ.convert import indexed_faces
 __all__ = ["register", "fair_face", "fair_shape", "fair"]
 
 
-def fair_face(face, *, tol=None, n=None, method="wavelet", return_report=False, **options):
+def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact",
+              return_report=False, **options):
     """Fair a ``cq.Face`` (see :func:`cq_fairing.occ.fair_face` for the options).
+
+    ``method`` ``"wavelet"`` or ``"adaptive"`` (``objective`` ``"compact"`` or
+    ``"faithful"``, adaptive only); other options as in :func:`cq_fairing.occ.fair_face`.
 
     Returns
     -------
@@ -36,17 +41,19 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", return_report=False, 
     """
     if not isinstance(face, cq.Face):
         raise InvalidInputError(f"face must be a cadquery Face, got {type(face).__name__}.")
-    report = _fair_face(face.wrapped, tol=tol, n=n, method=method, **options)
+    report = _fair_face(face.wrapped, tol=tol, n=n, method=method, objective=objective,
+                        **options)
     out = cq.Face(report.face) if report.faired else face
     return (out, report) if return_report else out
 
 
-def fair_shape(shape, *, tol=None, n=None, method="wavelet", faces=None, return_report=False,
-               **options):
+def fair_shape(shape, *, tol=None, n=None, method="wavelet", objective="compact", faces=None,
+               jobs=1, face_timeout=None, return_report=False, **options):
     """Fair the B-spline faces of a ``cq.Shape`` (Solid, Shell, Compound...).
 
-    ``faces`` may hold indices or ``cq.Face`` objects of ``shape``.  Other options as in
-    :func:`cq_fairing.occ.fair_shape`.
+    ``faces`` may hold indices or ``cq.Face`` objects of ``shape``.  ``method``,
+    ``objective``, ``jobs`` (worker processes) and ``face_timeout`` (seconds per face)
+    and the other options as in :func:`cq_fairing.occ.fair_shape`.
 
     Returns
     -------
@@ -54,8 +61,9 @@ def fair_shape(shape, *, tol=None, n=None, method="wavelet", faces=None, return_
     """
     if not isinstance(shape, cq.Shape):
         raise InvalidInputError(f"shape must be a cadquery Shape, got {type(shape).__name__}.")
-    result = _fair_shape(shape.wrapped, tol=tol, n=n, method=method,
-                         faces=_face_indices(shape, faces), **options)
+    result = _fair_shape(shape.wrapped, tol=tol, n=n, method=method, objective=objective,
+                         faces=_face_indices(shape, faces), jobs=jobs,
+                         face_timeout=face_timeout, **options)
     out = cq.Shape.cast(result.shape)
     return (out, result) if return_report else out
 
@@ -76,14 +84,19 @@ def _face_indices(shape, faces):
     return out
 
 
-def fair(self, tol=None, n=None, method="wavelet", **options):
+def fair(self, tol=None, n=None, method="wavelet", objective="compact", jobs=1,
+         face_timeout=None, **options):
     """``Workplane.fair``: fair the selected faces or solids; returns a new Workplane.
 
     * Faces selected from a solid (``.faces(...)``): the solid is rebuilt with those
       faces faired (it stays one closed solid) and pushed on the new stack.
     * Solids, shells or compounds on the stack: each is faired whole.
-    * Free faces: each is faired alone.
+    * Free faces: each is faired alone, in this process (``jobs`` does not apply;
+      ``face_timeout`` is refused, since no worker runs them).
     * Nothing selected: the first solid found on the chain.
+
+    ``method``, ``objective``, ``jobs``, ``face_timeout`` and the other options as in
+    :func:`fair_shape`.
     """
     objects = [o for o in self.objects if isinstance(o, cq.Shape)]
     if not objects:
@@ -91,19 +104,24 @@ def fair(self, tol=None, n=None, method="wavelet", **options):
     faces = [o for o in objects if isinstance(o, cq.Face)]
     parent = _parent_solid(self) if faces and len(faces) == len(objects) else None
     reports = []
+    options = dict(options, tol=tol, n=n, method=method, objective=objective,
+                   return_report=True)
+    workers = dict(jobs=jobs, face_timeout=face_timeout)
     if parent is not None:
-        shape, report = fair_shape(parent, tol=tol, n=n, method=method, faces=faces,
-                                   return_report=True, **options)
+        shape, report = fair_shape(parent, faces=faces, **workers, **options)
         results, reports = [shape], [report]
     else:
+        if face_timeout is not None and faces:
+            raise InvalidInputError(
+                f"face_timeout={face_timeout!r} applies to faces of a solid, shell or "
+                "compound (faired in worker processes); free faces are faired in this "
+                "process. Select the faces from their solid, or drop face_timeout.")
         results = []
         for obj in objects:
             if isinstance(obj, cq.Face):
-                out, report = fair_face(obj, tol=tol, n=n, method=method,
-                                        return_report=True, **options)
+                out, report = fair_face(obj, **options)
             else:
-                out, report = fair_shape(obj, tol=tol, n=n, method=method,
-                                         return_report=True, **options)
+                out, report = fair_shape(obj, **workers, **options)
             results.append(out)
             reports.append(report)
     new = self.newObject(results)

@@ -56,3 +56,24 @@ def test_fair_face_and_fair_shape_return_cadquery_objects(linkrods):
         fair_face(shape)
     with pytest.raises(InvalidInputError):
         fair_shape("solid")
+
+
+def test_workplane_fair_passes_method_objective_and_workers():
+    """Faithful and compact give different nets on the noisy blade: the options arrive."""
+    from cq_fairing.core.examples import blade_surface
+    from cq_fairing.occ.builders import surface_to_natural_face
+
+    register()
+    face = cq.Face(surface_to_natural_face(blade_surface(shape=(20, 30)).surface))
+    options = dict(tol=0.1, method="adaptive", objective="faithful")
+    free = cq.Workplane().add(face).fair(**options)
+    report, = free.fair_report
+    assert report.status == "faired"
+    whole = cq.Workplane().add(cq.Compound.makeCompound([face])).fair(
+        **options, jobs=2, face_timeout=120)
+    result, = whole.fair_report
+    assert result.faces[0].poles_after == report.poles_after
+    compact = fair_face(face, tol=0.1, method="adaptive", return_report=True)[1]
+    assert compact.poles_after != report.poles_after
+    with pytest.raises(InvalidInputError, match="face_timeout"):
+        cq.Workplane().add(face).fair(**options, face_timeout=120)
