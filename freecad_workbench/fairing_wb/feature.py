@@ -3,8 +3,8 @@
 A ``Part::FeaturePython`` whose proxy :class:`Fairing` fairs the linked B-spline faces
 or edges of its ``Source`` on every recompute.  Its properties are declared once in
 :data:`PROPERTIES`; :meth:`Fairing.onDocumentRestored` adds any property missing from an
-older document (migration).  The proxy's module path ``fairing_wb.feature`` is frozen:
-saved documents refer to it.
+older document and extends enumerations saved with fewer choices (migration).  The
+proxy's module path ``fairing_wb.feature`` is frozen: saved documents refer to it.
 """
 
 import Part
@@ -15,7 +15,7 @@ from . import make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 1
+VERSION = 2  # 2: Method "adaptive" and the Objective property
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -26,7 +26,12 @@ PROPERTIES = (
      "Largest allowed deviation from the source", False),
     ("App::PropertyInteger", "TargetU", "Fairing", "Control points in u (Target mode)", False),
     ("App::PropertyInteger", "TargetV", "Fairing", "Control points in v (Target mode)", False),
-    ("App::PropertyEnumeration", "Method", "Fairing", "wavelet (ARWFA/DWFA) or energy", False),
+    ("App::PropertyEnumeration", "Method", "Fairing",
+     "wavelet (ARWFA/DWFA), energy (keeps the net) or adaptive (knots follow the error, "
+     "fewer control points; Tolerance mode, polynomial faces)", False),
+    ("App::PropertyEnumeration", "Objective", "Fairing",
+     "adaptive method only: compact (fewest control points within Tolerance) or faithful "
+     "(stop where the residual reaches the source's estimated noise)", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Search", "Fairing",
@@ -41,8 +46,8 @@ PROPERTIES = (
     ("App::PropertyFloat", "FairingTime", "Figures", "Seconds of the last recompute", True),
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )
-ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Boundary": make.BOUNDARIES,
-                "Search": make.SEARCHES, "Measure": make.MEASURES}
+ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OBJECTIVES,
+                "Boundary": make.BOUNDARIES, "Search": make.SEARCHES, "Measure": make.MEASURES}
 
 
 def _sewn(compound, deviation):
@@ -89,9 +94,21 @@ class Fairing:
         if obj.Tolerance.Value == 0:
             obj.Tolerance = 0.01
 
+    @staticmethod
+    def _extend_enumerations(obj):
+        """Give enumerations saved with fewer choices the current ones.
+
+        Version 1 saved Method without ``adaptive``; FreeCAD keeps the chosen value, which
+        is still among the choices.
+        """
+        for name, values in ENUMERATIONS.items():
+            if obj.getEnumerationsOfProperty(name) != list(values):
+                setattr(obj, name, list(values))
+
     def onDocumentRestored(self, obj):
-        """Migrate documents saved by older versions: add missing properties."""
+        """Migrate older documents: add missing properties, extend enumerations."""
         self._add_properties(obj)
+        self._extend_enumerations(obj)
         self.Type, self.Version = TYPE, VERSION
 
     def execute(self, obj):
@@ -110,8 +127,13 @@ class Fairing:
 
     @staticmethod
     def settings(obj):
-        """Keyword arguments of :func:`make.fair_face` from the properties."""
-        common = {"method": obj.Method, "search": obj.Search, "measure": obj.Measure}
+        """Keyword arguments of :func:`make.fair_face` from the properties.
+
+        ``Objective`` applies to the adaptive method only and is ignored otherwise.
+        """
+        objective = obj.Objective if obj.Method == "adaptive" else "compact"
+        common = {"method": obj.Method, "search": obj.Search, "measure": obj.Measure,
+                  "objective": objective}
         if obj.Mode == "Tolerance":
             return {"tolerance": obj.Tolerance.Value, "target": None, **common}
         return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), **common}
@@ -130,9 +152,7 @@ class Fairing:
                 results.append(make.fair_face(element, boundary=obj.Boundary, **kwargs))
             else:
                 target = None if kwargs["target"] is None else kwargs["target"][0]
-                results.append(make.fair_edge(element, kwargs["tolerance"], target,
-                                              kwargs["method"], kwargs["search"],
-                                              kwargs["measure"]))
+                results.append(make.fair_edge(element, **{**kwargs, "target": target}))
         shapes = [r.shape for r in results]
         if len(shapes) == 1:
             return shapes[0], results

@@ -23,10 +23,11 @@ import cq_fairing as cf
 from . import analysis, conversion
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "FairedShape", "MODES", "METHODS",
-           "BOUNDARIES", "SEARCHES", "MEASURES"]
+           "OBJECTIVES", "BOUNDARIES", "SEARCHES", "MEASURES"]
 
 MODES = ("Tolerance", "Target")
-METHODS = ("wavelet", "energy")
+METHODS = ("wavelet", "energy", "adaptive")
+OBJECTIVES = ("compact", "faithful")
 BOUNDARIES = ("free", "corners", "edges")
 SEARCHES = ("linear", "guaranteed", "polyfit")
 MEASURES = ("parametric", "geometric")
@@ -64,17 +65,46 @@ def _check_tolerance(tolerance):
     return float(tolerance)
 
 
-def _core_keywords(method):
-    """Keyword arguments selecting ``method``; refuse clearly if the core lacks it."""
-    if method not in METHODS:
-        raise cf.InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
+def _core_keywords(method, objective="compact", tolerance=None):
+    """Keyword arguments of the core selecting ``method`` and ``objective``.
+
+    ``energy`` keeps the net and ``adaptive`` chooses its (non-uniform) targets itself:
+    both need a tolerance, so target mode is refused in plain words.  ``objective``
+    belongs to ``adaptive``: ``compact`` spends the tolerance on the fewest poles,
+    ``faithful`` stops at the smallest net whose residual is down to the source's
+    estimated noise (discrepancy principle, ``cq_fairing.core.fidelity``).
+    """
+    if method not in METHODS or objective not in OBJECTIVES:
+        raise cf.InvalidInputError(
+            f"method must be one of {METHODS} and objective one of {OBJECTIVES}, got "
+            f"{method!r} and {objective!r}.")
+    if method != "adaptive" and objective != "compact":
+        raise cf.InvalidInputError(
+            f"objective {objective!r} applies to the adaptive method only, got method "
+            f"{method!r}; choose method 'adaptive' or objective 'compact'.")
     if method == "wavelet":
         return {}
+    if tolerance is None:
+        what = ("keeps the control points" if method == "energy"
+                else "chooses the control points itself")
+        raise cf.InvalidInputError(
+            f"the {method} method {what} and needs tolerance mode (a tolerance in mm); set "
+            "Mode to Tolerance, or choose the wavelet method for target control points.")
     if "method" not in inspect.signature(cf.fair_surface).parameters:
         raise cf.InvalidInputError(
-            "the installed cq_fairing core has no energy fairing yet (fair_surface has no "
+            f"the installed cq_fairing core has no {method} fairing yet (fair_surface has no "
             "'method' argument); choose the wavelet method.")
+    if method == "adaptive":
+        return {"method": method, "objective": objective}
     return {"method": method}
+
+
+def _check_polynomial(source, method):
+    """The adaptive method fairs polynomial surfaces only (the core refuses weights)."""
+    if method == "adaptive" and source.weights is not None:
+        raise cf.UnsupportedGeometryError(
+            "this face is rational (its control points have weights) and the adaptive "
+            "method fairs polynomial faces only; choose the wavelet method for it.")
 
 
 def _require_accuracy_control():
@@ -144,18 +174,20 @@ def _search_keywords(search, measure):
 
 
 def fair_surface_net(source, tolerance=None, target=None, method="wavelet", search="linear",
-                     measure="parametric"):
+                     measure="parametric", objective="compact"):
     """Fair a core surface by tolerance or by target control points (core call only).
 
     ``search`` is the accuracy-control strategy of the core (``linear``: the seed's
     hypothesis iteration, a few evaluations; ``guaranteed``: the fewest poles in total,
     slower; ``polyfit``) and ``measure`` its deviation (``parametric`` is an upper bound of
     the ``geometric`` one, so the tolerance holds either way, and is about 3x faster).
+    ``method="adaptive"`` ignores both: it checks the true closest-point distance itself.
     """
-    keywords = _core_keywords(method)
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
+    keywords = _core_keywords(method, objective, tolerance)
+    _check_polynomial(source, method)
     if tolerance is not None:
         _require_accuracy_control()
         return cf.fair_surface(source.poles, tol=_check_tolerance(tolerance),
@@ -172,8 +204,8 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
 
 
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
-              search="linear", measure="parametric"):
-    """Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
+              search="linear", measure="parametric", objective="compact"):
+    r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
     Parameters
     ----------
@@ -182,7 +214,11 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         Largest allowed deviation in mm (tolerance mode).
     target : (int, int), optional
         Control points (u, v) of the result (target mode).
-    method : {"wavelet", "energy"}
+    method : {"wavelet", "energy", "adaptive"}
+        ``wavelet``: quasi-uniform targets (ARWFA/DWFA); ``energy``: thin-plate fairing that
+        keeps the net; ``adaptive``: exact L2 projection onto targets whose knots follow
+        the error, usually far fewer poles at the same tolerance (polynomial faces only).
+        ``energy`` and ``adaptive`` need ``tolerance``.
     boundary : {"free", "corners", "edges"}
         ``free``: L2-best surface, the boundary may move within the tolerance;
         ``corners``: the four corner points stay; ``edges``: boundary curves are the
@@ -191,15 +227,21 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         Accuracy-control strategy (tolerance mode), see :func:`fair_surface_net`.
     measure : {"parametric", "geometric"}
         Deviation measured by the search (tolerance mode).
+    objective : {"compact", "faithful"}
+        ``method="adaptive"`` only: ``compact`` is the fewest poles within ``tolerance``;
+        ``faithful`` the smallest net whose residual variance is down to the source's
+        estimated noise, :math:`\|r\|^2/(N-k) \le (1+\delta)^2\hat\sigma^2`
+        (falls back to ``compact`` if that net exceeds ``tolerance``).
 
     Raises
     ------
     cq_fairing.FairingError
-        Any user error (non-B-spline face, bad tolerance or target, unmet tolerance).
+        Any user error (non-B-spline face, rational face with ``adaptive``, bad tolerance
+        or target, target mode with ``energy``/``adaptive``, unmet tolerance).
     """
     start = time.perf_counter()
     source = conversion.surface_from_face(face)
-    result = fair_surface_net(source, tolerance, target, method, search, measure)
+    result = fair_surface_net(source, tolerance, target, method, search, measure, objective)
     faired = _fix_boundary(source, result.surface, boundary)
     uv_range = conversion.uv_range(face, source)
     _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
@@ -215,14 +257,18 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
 
 
 def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linear",
-              measure="parametric"):
-    """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``)."""
+              measure="parametric", objective="compact"):
+    """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``).
+
+    The arguments are those of :func:`fair_face` with one target count; the adaptive
+    method also fairs rational curves.
+    """
     start = time.perf_counter()
-    keywords = {} if method == "wavelet" else _core_keywords(method)
     source = conversion.curve_from_edge(edge)
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or a target control-point count, not both/neither.")
+    keywords = _core_keywords(method, objective, tolerance)
     common = dict(knots=source.knots, degree=source.degree, weights=source.weights, **keywords)
     if tolerance is not None:
         _require_accuracy_control()
@@ -258,7 +304,8 @@ def _source_link(source):
 
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
-                 search="linear", measure="parametric", name="Fairing", doc=None):
+                 search="linear", measure="parametric", objective="compact", name="Fairing",
+                 doc=None):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
 
     Parameters
@@ -272,10 +319,12 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         source's bounding-box diagonal).
     target : int or (int, int), optional
         Control points of the result; selects target mode.
-    method : {"wavelet", "energy"}
+    method : {"wavelet", "energy", "adaptive"}
     boundary : {"free", "corners", "edges"}
     search, measure : str
         Accuracy control of tolerance mode, see :func:`fair_face`.
+    objective : {"compact", "faithful"}
+        Of the adaptive method, see :func:`fair_face`.
 
     Returns
     -------
@@ -301,6 +350,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         obj.Tolerance = (tolerance if tolerance is not None
                          else preferences.default_tolerance(obj_source.Shape))
     obj.Method, obj.Boundary, obj.Search, obj.Measure = method, boundary, search, measure
+    obj.Objective = objective
     obj_source.Visibility = False  # App-level property: undo shows the source again
     if FreeCAD.GuiUp:
         from . import view_provider

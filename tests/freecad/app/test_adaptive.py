@@ -1,0 +1,170 @@
+"""The adaptive method (knots that follow the error) and its objectives inside FreeCAD.
+
+Checked on the seeded noisy 50 x 80 bicubic face of :mod:`fixtures` at 0.05 mm: the
+tolerance by FreeCAD's own ``distToShape`` (independent of the core's closest points),
+the pole count against the wavelet method, the feature's properties through save and
+reopen, and the plain-words refusals (target mode, rational faces).
+"""
+
+import numpy as np
+import pytest
+
+import FreeCAD
+import Part
+import cq_fairing as cf
+from fairing_wb import make
+
+import fixtures
+
+TOL = 0.05
+
+
+@pytest.fixture(scope="module")
+def face():
+    surface, _ = fixtures.noisy_blade_surface(50, 80)
+    return surface.toShape()
+
+
+@pytest.fixture(scope="module")
+def faired(face):
+    """One :class:`make.FairedShape` per setting (the adaptive runs take seconds)."""
+    settings = {"wavelet linear": dict(search="linear"),
+                "wavelet guaranteed": dict(search="guaranteed"),
+                "adaptive compact": dict(method="adaptive", objective="compact"),
+                "adaptive faithful": dict(method="adaptive", objective="faithful")}
+    return {name: make.fair_face(face, tolerance=TOL, **kw) for name, kw in settings.items()}
+
+
+@pytest.fixture
+def doc():
+    document = FreeCAD.newDocument("AdaptiveTest")
+    name = document.Name
+    yield document
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+@pytest.fixture
+def noisy(doc, face):
+    obj = fixtures.add_shape(doc, face, "Noisy")
+    doc.recompute()
+    return obj
+
+
+def _count(poles):
+    return int(np.prod(poles))
+
+
+def _ok(obj):
+    return obj.isValid() and "Invalid" not in obj.State and obj.Status == "OK"
+
+
+@pytest.mark.parametrize("objective", ["compact", "faithful"])
+def test_adaptive_meets_the_tolerance_by_freecad_distance(face, faired, objective):
+    result = faired[f"adaptive {objective}"]
+    shape = result.shape.Faces[0]
+    assert shape.isValid()
+    assert result.max_deviation <= TOL
+    assert fixtures.sample_distance(shape, face, 15) <= TOL
+
+
+def test_adaptive_needs_fewer_poles_than_wavelet(faired):
+    """On this face: wavelet 39 x 62 (linear) / 37 x 64 (guaranteed), adaptive 19 x 21."""
+    wavelet = min(_count(faired[k].poles_after) for k in ("wavelet linear",
+                                                          "wavelet guaranteed"))
+    for objective in ("compact", "faithful"):
+        assert _count(faired[f"adaptive {objective}"].poles_after) <= wavelet
+    assert 2 * _count(faired["adaptive compact"].poles_after) < wavelet
+
+
+def test_adaptive_targets_have_non_uniform_knots(faired):
+    surface = faired["adaptive compact"].shape.Faces[0].Surface
+    spans = [np.diff(surface.getUKnots()), np.diff(surface.getVKnots())]
+    assert any(s.max() > 1.05 * s.min() for s in spans)
+
+
+def test_objective_needs_the_adaptive_method(face):
+    with pytest.raises(cf.InvalidInputError, match="applies to the adaptive method only"):
+        make.fair_face(face, tolerance=TOL, objective="faithful")
+
+
+def test_target_mode_is_refused_in_plain_words(doc, noisy, face):
+    with pytest.raises(cf.InvalidInputError, match="needs tolerance mode"):
+        make.fair_face(face, target=(18, 26), method="adaptive")
+    obj = make.make_fairing((noisy, ["Face1"]), target=(18, 26), method="adaptive")
+    doc.recompute()
+    assert not obj.isValid()
+    assert obj.Status.startswith("Error: the adaptive method chooses the control points")
+
+
+def test_rational_face_is_refused_in_plain_words(doc):
+    shape = Part.read(str(fixtures.REAL / "linkrods.step"))
+    src = fixtures.add_shape(doc, shape, "Linkrods")
+    index = next(i for i, f in enumerate(shape.Faces)
+                 if isinstance(f.Surface, Part.BSplineSurface)
+                 and (f.Surface.isURational() or f.Surface.isVRational()))
+    with pytest.raises(cf.UnsupportedGeometryError, match="rational"):
+        make.fair_face(shape.Faces[index], tolerance=0.1, method="adaptive")
+    obj = make.make_fairing((src, [f"Face{index + 1}"]), tolerance=0.1, method="adaptive")
+    doc.recompute()
+    assert not obj.isValid()
+    assert "face is rational" in obj.Status and "choose the wavelet method" in obj.Status
+
+
+def test_feature_faithful_save_reopen_keeps_method_and_objective(doc, noisy, faired,
+                                                                  tmp_path):
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=TOL, method="adaptive",
+                            objective="faithful")
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.PolesAfter == " x ".join(map(str, faired["adaptive faithful"].poles_after))
+    assert fixtures.sample_distance(obj.Shape.Faces[0], noisy.Shape.Faces[0], 12) <= TOL
+    path = str(tmp_path / "adaptive.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        again = reopened.getObject("Fairing")
+        assert (again.Method, again.Objective) == ("adaptive", "faithful")
+        again.Objective = "compact"
+        reopened.recompute()
+        assert _ok(again), again.Status
+        assert again.PolesAfter == " x ".join(map(str, faired["adaptive compact"].poles_after))
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+
+def test_document_of_version_1_migrates(doc, noisy, tmp_path):
+    """A version-1 document: Method offered wavelet/energy only, no Objective."""
+    obj = make.make_fairing((noisy, ["Face1"]), target=(18, 26), method="wavelet")
+    doc.recompute()
+    obj.Method = ["wavelet", "energy"]
+    obj.removeProperty("Objective")
+    path = str(tmp_path / "version1.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    reopened = FreeCAD.openDocument(path)
+    try:
+        again = reopened.getObject("Fairing")
+        assert again.getEnumerationsOfProperty("Method") == list(make.METHODS)
+        assert (again.Method, again.Objective) == ("wavelet", "compact")
+        assert again.Proxy.Version == 2
+        again.Method = "adaptive"
+        reopened.recompute()
+        assert "needs tolerance mode" in again.Status  # target mode, refused in words
+    finally:
+        FreeCAD.closeDocument(reopened.Name)
+
+
+def test_adaptive_edge_within_tolerance_by_freecad_distance():
+    points = [FreeCAD.Vector(x, 10 * np.sin(x / 10), 0.05 * (-1) ** i)
+              for i, x in enumerate(np.linspace(0, 60, 61))]
+    curve = Part.BSplineCurve()
+    curve.interpolate(points)
+    source = curve.toShape()
+    result = make.fair_edge(source, tolerance=0.1, method="adaptive", objective="faithful")
+    edge = result.shape
+    far = max(source.distToShape(Part.Vertex(edge.valueAt(t)))[0]
+              for t in np.linspace(*edge.ParameterRange, 200))
+    assert far <= 0.1
+    assert result.poles_after[0] < result.poles_before[0]
