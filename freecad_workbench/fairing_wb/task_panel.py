@@ -1,7 +1,8 @@
 """Task panels: Fair Surface / Fair Curve (create or edit a Fairing) and Levels (GUI only).
 
 Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_target_u``,
-``fairing_target_v``, ``fairing_method``, ``fairing_boundary``, ``fairing_preview``,
+``fairing_target_v``, ``fairing_method``, ``fairing_objective``, ``fairing_boundary``,
+``fairing_search``, ``fairing_measure``, ``fairing_preview``,
 ``fairing_figures``, ``fairing_error``, ``fairing_faces``, ``fairing_level``) so scripts and
 GUI tests can find them with ``Gui.getMainWindow().findChild``.
 """
@@ -30,6 +31,9 @@ def make_call(link, settings, boundary):
     args = [f"(App.ActiveDocument.getObject({obj.Name!r}), {subs!r})"]
     if settings["target"] is not None:
         args.append(f"target={tuple(settings['target'])!r}")
+    elif settings["method"] == "adaptive":  # search and measure do not apply
+        args += [f"tolerance={settings['tolerance']!r}",
+                 f"objective={settings['objective']!r}"]
     else:
         args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
                  f"measure={settings['measure']!r}"]
@@ -44,7 +48,11 @@ def _row(layout, text, widget, name):
 
 
 class FairSurfacePanel:
-    """Tolerance, mode, target, method, boundary, live figures; Preview / OK / Cancel."""
+    """Tolerance, mode, target, method, objective, boundary, figures; Preview / OK / Cancel.
+
+    Objective is enabled for the adaptive method only; search and measure for the other
+    methods in tolerance mode (the adaptive method checks the true distance itself).
+    """
 
     def __init__(self, link=None, fairing=None, kind="Face"):
         self.fairing = fairing
@@ -78,6 +86,12 @@ class FairSurfacePanel:
         self.target_v.setVisible(self.kind == "Face")
         self.method = _row(layout, "Method:", QtWidgets.QComboBox(), "fairing_method")
         self.method.addItems(list(make.METHODS))
+        self.method.setToolTip("adaptive: knots follow the error, fewer control points "
+                               "(tolerance mode, polynomial faces; slower)")
+        self.objective = _row(layout, "Objective:", QtWidgets.QComboBox(), "fairing_objective")
+        self.objective.addItems(list(make.OBJECTIVES))
+        self.objective.setToolTip("compact: fewest control points within the tolerance; "
+                                  "faithful: stop where the residual reaches the noise")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")
@@ -96,6 +110,7 @@ class FairSurfacePanel:
         self.error.setStyleSheet("color: #b00000")
         self.error.setWordWrap(True)
         self.mode.currentIndexChanged.connect(self._mode_changed)
+        self.method.currentIndexChanged.connect(self._mode_changed)
         return form
 
     def _load(self):
@@ -116,6 +131,7 @@ class FairSurfacePanel:
             self.target_u.setValue(f.TargetU)
             self.target_v.setValue(f.TargetV)
             self.method.setCurrentText(f.Method)
+            self.objective.setCurrentText(f.Objective)
             self.boundary.setCurrentText(f.Boundary)
             self.search.setCurrentText(f.Search)
             self.measure.setCurrentText(f.Measure)
@@ -123,17 +139,22 @@ class FairSurfacePanel:
 
     def _mode_changed(self, *_):
         by_tolerance = self.mode.currentIndex() == 0
+        adaptive = self.method.currentText() == "adaptive"
         self.tolerance.setEnabled(by_tolerance)
-        self.search.setEnabled(by_tolerance)
-        self.measure.setEnabled(by_tolerance)
+        self.objective.setEnabled(adaptive)
+        self.search.setEnabled(by_tolerance and not adaptive)
+        self.measure.setEnabled(by_tolerance and not adaptive)
         self.target_u.setEnabled(not by_tolerance)
         self.target_v.setEnabled(not by_tolerance)
 
     # -- values ----------------------------------------------------------------------------
     def settings(self):
         """Keyword arguments of :func:`make.fair_face` (without ``boundary``)."""
-        common = {"method": self.method.currentText(), "search": self.search.currentText(),
-                  "measure": self.measure.currentText()}
+        method = self.method.currentText()
+        common = {"method": method, "search": self.search.currentText(),
+                  "measure": self.measure.currentText(),
+                  "objective": self.objective.currentText() if method == "adaptive"
+                  else "compact"}
         if self.mode.currentIndex() == 0:
             return {"tolerance": float(self.tolerance.property("rawValue")), "target": None,
                     **common}
@@ -152,8 +173,7 @@ class FairSurfacePanel:
                                               **s))
             else:
                 target = None if s["target"] is None else s["target"][0]
-                results.append(make.fair_edge(element, s["tolerance"], target, s["method"],
-                                              s["search"], s["measure"]))
+                results.append(make.fair_edge(element, **{**s, "target": target}))
         return results
 
     def on_preview(self):
@@ -199,7 +219,8 @@ class FairSurfacePanel:
             FreeCADGui.doCommand(f"fairing.Mode = 'Target'; fairing.TargetU, fairing.TargetV = "
                                  f"{s['target'][0]}, {s['target'][1]}")
         FreeCADGui.doCommand(
-            f"fairing.Method = {s['method']!r}; fairing.Boundary = {boundary!r}; "
+            f"fairing.Method = {s['method']!r}; fairing.Objective = {s['objective']!r}; "
+            f"fairing.Boundary = {boundary!r}; "
             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
 
     def reject(self):
@@ -299,7 +320,8 @@ class LevelsPanel:
         doc.openTransaction("Fairing level")
         FreeCADGui.doCommand("import fairing_wb.make")
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
-                                     "search": "linear", "measure": "parametric"}, "free")
+                                     "search": "linear", "measure": "parametric",
+                                     "objective": "compact"}, "free")
         FreeCADGui.doCommand(f"fairing = {call}")
         FreeCADGui.doCommand("App.ActiveDocument.recompute()")
         doc.commitTransaction()

@@ -10,6 +10,7 @@ passed (closing FreeCAD's window would always give 0).
 
 import json
 import os
+import re
 import sys
 import time
 import traceback
@@ -71,6 +72,57 @@ def grab_window(path):
     pump(0.5)
     screen = QtGui.QGuiApplication.primaryScreen()
     return screen.grabWindow(Gui.getMainWindow().winId()).save(path)
+
+
+def preview_poles():
+    """Click Preview once; ``(poles after, max deviation, seconds, figures text)``."""
+    start = time.perf_counter()
+    find("fairing_preview").click()
+    seconds = time.perf_counter() - start
+    pump(0.1)
+    figures = find("fairing_figures").text()
+    found = re.search(r"-> (\d+) x (\d+) control points\nmax deviation ([0-9.e+-]+) mm", figures)
+    if found is None:
+        return None, None, seconds, figures + find("fairing_error").text()
+    return int(found[1]) * int(found[2]), float(found[3]), seconds, figures
+
+
+def console_text():
+    console = Gui.getMainWindow().findChild(QtWidgets.QPlainTextEdit, "Python console")
+    return console.toPlainText() if console is not None else ""
+
+
+def check_adaptive_panel(doc, source):
+    """Adaptive in the task panel: Objective enabled for it only, Preview against the
+    wavelet figures, OK creates the feature and echoes method and objective."""
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(source, "Face1")
+    Gui.runCommand("Fairing_FairSurface")
+    pump()
+    find("fairing_tolerance").setProperty("rawValue", 0.05)
+    check("objective disabled for wavelet", not find("fairing_objective").isEnabled())
+    wavelet, _, _, wavelet_text = preview_poles()
+    find("fairing_method").setCurrentText("adaptive")
+    check("objective enabled for adaptive, search and measure not",
+          find("fairing_objective").isEnabled() and not find("fairing_search").isEnabled()
+          and not find("fairing_measure").isEnabled())
+    find("fairing_objective").setCurrentText("faithful")
+    poles, deviation, seconds, figures = preview_poles()
+    check("adaptive preview: fewer poles than wavelet within 0.05 mm",
+          poles is not None and wavelet is not None and poles < wavelet and deviation <= 0.05,
+          f"adaptive faithful {figures!r} in {seconds:.2f} s; wavelet {wavelet_text!r}")
+    grab_window(os.path.join(ARTIFACTS, "fair_surface_panel_adaptive.png"))
+    press_task_ok()
+    pump()
+    made = [o for o in doc.Objects if o.Name.startswith("Fairing")
+            and getattr(o, "Method", None) == "adaptive"]
+    check("adaptive OK creates the feature", len(made) == 1 and made[0].isValid()
+          and made[0].Objective == "faithful" and made[0].MaxDeviation.Value <= 0.05,
+          [(o.Name, o.Status) for o in made])
+    echo = [line for line in console_text().splitlines() if "make_fairing(" in line]
+    check("console echo carries method and objective",
+          bool(echo) and "method='adaptive'" in echo[-1] and "objective='faithful'" in echo[-1],
+          echo[-1:] or "no make_fairing line in the Python console")
 
 
 def run():
@@ -251,6 +303,8 @@ def run():
         Gui.Selection.addSelection(curves[0])
         check("DeviationMap disabled for an edge fairing", not is_active("Fairing_DeviationMap"))
         Gui.Selection.clearSelection()
+
+    check_adaptive_panel(doc, source)
 
     # Points to surface on a grid file (the file dialog is the only part skipped).
     import numpy as np
