@@ -320,6 +320,9 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
         if _is_identity(source, target, degree):
             return _unchanged(face, info, surface, "the finest admissible target is the "
                               "source space itself; nothing to fair", tol)
+        if _keeps_every_pole(source, target, faired):
+            return _unchanged(face, info, surface, "the adaptive target needs as many poles "
+                              "as the source; nothing to reduce", tol)
         new_face = surface_to_face(faired, face)
         check = check or _check_samples(face, sampler.grid, info.trimmed)
         deviation = deviation_on_grid(face, new_face, None, reference=check)
@@ -340,6 +343,14 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
         f"no target keeps this face within tol={tol:g} by OCCT's measure (best found "
         f"{best:.4g}); raise the tolerance or leave the face as is.",
         tolerance=tol, best_deviation=best)
+
+
+def _keeps_every_pole(source, target, faired):
+    """True when an adaptive result (``target`` holds spaces, not scales) has at least the
+    source's pole count: it only moved knots, so the face is kept, as the uniform search
+    keeps a face whose only admissible target is the source's own space."""
+    adaptive = any(isinstance(t, SplineSpace) for t in target)
+    return adaptive and faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
 
 
 def _is_identity(source, target, degree):

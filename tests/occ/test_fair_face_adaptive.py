@@ -77,3 +77,21 @@ def test_fair_shape_passes_method_and_objective_to_workers(blade):
     assert report.status == "faired" and result.valid
     assert report.poles_after == runs["faithful"].poles_after != runs["compact"].poles_after
     np.testing.assert_allclose(report.surface.poles, runs["faithful"].surface.poles, atol=1e-12)
+
+
+def test_a_face_the_adaptive_target_cannot_reduce_is_kept_unchanged():
+    """The IEA blade's 4 x 17 root face at 0.001 mm: the adaptive target keeps all 68
+    poles (it would only move knots and polish), so the face is reported unchanged and
+    kept, as the uniform search keeps a face whose only target is its own space."""
+    from pathlib import Path
+
+    from cq_fairing.occ import face_to_surface, read_shape
+    from cq_fairing.occ.convert import indexed_faces
+
+    step = Path(__file__).resolve().parents[2] / "examples" / "data" / "IEA_15MW_CFD.stp"
+    face = next(f for f in indexed_faces(read_shape(step))
+                if face_to_surface(f)[0].shape == (4, 17))
+    report = fair_face(face, tol=0.001, method="adaptive", details=False)
+    assert report.status == "unchanged"
+    assert "nothing to reduce" in report.message
+    assert report.face.IsSame(face)
