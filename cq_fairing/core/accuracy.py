@@ -46,7 +46,8 @@ then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots` (in steps of
 :math:`\lfloor (n_{u,\max} - u_{lo})/32 \rfloor` first, then by one around the best): for each it tests the largest :math:`n_v` that would
 beat the best total so far and, if that passes, bisects down to the smallest passing
 :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
-when even :math:`n_v = v_{lo}` could not improve.  The answer is measured within ``tol``
+when even :math:`n_v = 1` could not improve (not :math:`v_{lo}`: between non-nested spaces a
+smaller :math:`n_u` can pass where the source's :math:`n_u` fails).  The answer is measured within ``tol``
 and scanned like the curve case in both directions.  ``"linear"`` and ``"polyfit"``
 apply the seed's methods along the equal-ratio diagonal
 :math:`(n_u, n_v) \approx s\,(n_{u,\max}, n_{v,\max})`.
@@ -500,24 +501,30 @@ def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
     v_lo = _guaranteed(v_err, V, tol, window)
     best = _diagonal_start(err, (u_lo, v_lo), (U, V), tol)
     step = max(1, (U - u_lo) // 32)
-    best = _walk(err, range(u_lo, U + 1, step), best, v_lo, V, pu, pv, tol)
+    best = _walk(err, range(u_lo, U + 1, step), best, V, pu, pv, tol)
     if step > 1:
         near = range(max(u_lo, best[0] - step + 1), min(U, best[0] + step - 1) + 1)
-        best = _walk(err, near, best, v_lo, V, pu, pv, tol)
+        best = _walk(err, near, best, V, pu, pv, tol)
     return _scan_surface(err, best, tol, window)
 
 
-def _walk(err, nus, best, v_lo, V, pu, pv, tol):
-    """For increasing ``n_u``, the smallest passing ``n_v`` that beats ``best`` (if any)."""
+def _walk(err, nus, best, V, pu, pv, tol):
+    """For increasing ``n_u``, the smallest passing ``n_v`` that beats ``best`` (if any).
+
+    The fewest v-spans with u at the source would be a lower bound of ``n_v`` if the
+    deviation grew monotonically as ``n_u`` shrinks; between non-nested spaces it
+    need not (a 9 x 8 net: ``(6, 2)`` misses tol by 0.2 % while ``(4, 2)`` passes), so
+    the walk goes on while any ``n_v >= 1`` could still beat ``best``.
+    """
     for nu in nus:
         total = (best[0] + pu) * (best[1] + pv)
         cap = min(total // (nu + pu) - pv, V)
         if (cap + pv) * (nu + pu) >= total:
             cap -= 1
-        if cap < v_lo:
+        if cap < 1:
             break
         if err((nu, cap)) <= tol:
-            best = (nu, _min_along(err, nu, tol, v_lo - 1, cap, axis=1))
+            best = (nu, _min_along(err, nu, tol, 0, cap, axis=1))
     return best
 
 
