@@ -29,7 +29,7 @@ from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Wr
 from OCP.TopoDS import TopoDS_Shape
 
 from ..errors import FileFormatError, OutputPathError
-from ..report import folder_error, publish, temporary_beside
+from ..report import atomic_output, folder_error
 from .convert import as_shape, indexed_faces
 
 __all__ = ["read_shape", "write_shape", "step_length_unit", "quiet_occt", "READ_SUFFIXES",
@@ -223,19 +223,9 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
     n_faces = len(indexed_faces(shape))
     with quiet_occt():
         data = _step_bytes(shape, unit) if kind == "step" else _brep_bytes(shape)
-    try:
-        tmp = temporary_beside(path)
-    except OSError as exc:
-        raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
-    try:
+    with atomic_output(path, force=force) as tmp:
         _write_bytes(tmp, data, path)
         _verify_written(tmp, n_faces)
-        publish(tmp, path)
-    except OSError as exc:
-        raise OutputPathError(f"cannot write '{path}': {exc.strerror}.") from exc
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def _write_bytes(tmp, data, path):

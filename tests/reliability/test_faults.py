@@ -113,8 +113,7 @@ def stop_after(path):
     print("temporary", tmp, flush=True)
     os.kill(os.getpid(), signal.SIGSTOP)
     return tmp
-import cq_fairing.occ.io as occ_io
-occ_io.temporary_beside = stop_after
+report.temporary_beside = stop_after   # the one atomic writer every output goes through
 write_shape(read_shape(sys.argv[1]), sys.argv[2])
 """
 

@@ -196,14 +196,14 @@ def test_collapsed_and_closed_borders_stay_closed_in_a_solid():
     assert _max_tolerance(result.shape, "vertex") <= 1e-6
 
 
-def test_periodic_and_rational_real_faces_are_handled(real_shape):
-    ring = indexed_faces(real_shape("ring_nurbs.brep"))[0]
+def test_periodic_and_rational_real_faces_are_handled(real):
+    ring = indexed_faces(real("ring_nurbs.brep"))[0]
     report = fair_face(ring, tol=0.5, details=False)       # the ring is ~70 across
     assert report.status in ("faired", "unchanged") and report.info.unperiodized
     with pytest.raises(FairingError) as info:                  # tight: typed, one line
         fair_face(ring, tol=1e-6, details=False)
     assert "\n" not in str(info.value)
-    linkrods = real_shape("linkrods.step")
+    linkrods = real("linkrods.step")
     from cq_fairing.occ import list_faces
 
     rational = [f for f, i in zip(indexed_faces(linkrods), list_faces(linkrods))
@@ -384,15 +384,3 @@ def test_failed_validation_leaves_no_file(tmp_path, small_shape):
     with pytest.raises(FairingError):
         write_shape(compound, out)
     assert not out.exists() and _no_temp_left(tmp_path)
-
-
-@pytest.fixture(scope="module")
-def real_shape():
-    cache = {}
-
-    def load(name):
-        if name not in cache:
-            cache[name] = read_shape(REAL_DATA / name)
-        return cache[name]
-
-    return load
