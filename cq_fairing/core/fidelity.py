@@ -30,57 +30,65 @@ projections and evaluations.
 
 import numpy as np
 
-__all__ = ["DISCREPANCY", "curve_residual_variance", "surface_residual_variance",
-           "noise_level", "within_noise", "extent"]
+__all__ = ["DISCREPANCY", "CurveResidual", "SurfaceResidual", "noise_level", "within_noise",
+           "extent"]
 
 DISCREPANCY = 0.10     # delta: residual variance within (1 + delta)^2 of the noise level
 NOISE_FRACTION = 3     # the noise is measured on a target 1/NOISE_FRACTION of the source
 NOISE_FLOOR = 1e-9     # noise below this fraction of the part's size is rounding
 
 
-def curve_residual_variance(source, faired):
-    r"""Residual variance :math:`\|r\|^2 / (N - k)` of ``faired`` at ``source``'s Greville points.
+class CurveResidual:
+    r"""Residual variance :math:`\|r\|^2 / (N - k)` of candidates at a source curve's
+    Greville points (the source's points and unit tangents computed once).
 
     Parameters
     ----------
-    source, faired : BSplineCurve
-        ``faired`` has ``k`` poles, ``source`` ``N > k``.
-
-    Returns
-    -------
-    float
-        Sum of the squared residual components orthogonal to the source's tangent,
-        over :math:`N - k`.
+    source : BSplineCurve
+        The curve being faired, ``N`` poles.
     """
-    xi = source.space.greville
-    r = faired.evaluate(xi) - source.evaluate(xi)
-    tangent = _unit(source.evaluate(xi, 1))
-    r = r - np.einsum("qd,qd->q", r, tangent)[:, None] * tangent
-    return float(np.sum(r * r)) / max(xi.size - faired.space.dimension, 1)
+
+    def __init__(self, source):
+        self.xi = source.space.greville
+        self.points = source.evaluate(self.xi)
+        self.tangent = _unit(source.evaluate(self.xi, 1))
+
+    def variance(self, faired):
+        """Sum of the squared residual components orthogonal to the source's tangent,
+        over :math:`N - k` (``faired`` has ``k < N`` poles)."""
+        r = faired.evaluate(self.xi) - self.points
+        r = r - np.einsum("qd,qd->q", r, self.tangent)[:, None] * self.tangent
+        return float(np.sum(r * r)) / max(self.xi.size - faired.space.dimension, 1)
 
 
-def surface_residual_variance(source, faired):
-    r"""Residual variance on the tensor grid of ``source``'s Greville points.
+class SurfaceResidual:
+    r"""Residual variance of candidates on the tensor grid of a source surface's
+    Greville points (the source's points and unit normals computed once).
+
+    The residual is taken along the source's unit normal (none where the normal
+    vanishes, as at a collapsed border row; the whole residual for nets that are not
+    three-dimensional).
 
     Parameters
     ----------
-    source, faired : BSplineSurface
-
-    Returns
-    -------
-    float
-        :math:`\|r\|^2 / (N_u N_v - k_u k_v)` with :math:`r` the residual along the
-        source's unit normal (none where the normal vanishes, as at a collapsed
-        border row; the whole residual for nets that are not three-dimensional).
+    source : BSplineSurface
     """
-    xu, xv = source.u_space.greville, source.v_space.greville
-    r = faired.evaluate_grid(xu, xv) - source.evaluate_grid(xu, xv)
-    if r.shape[-1] == 3:
-        normal = _unit(np.cross(source.evaluate_grid(xu, xv, nu=1),
-                                source.evaluate_grid(xu, xv, nv=1)))
-        r = np.einsum("uvd,uvd->uv", r, normal)
-    k = faired.u_space.dimension * faired.v_space.dimension
-    return float(np.sum(r * r)) / max(xu.size * xv.size - k, 1)
+
+    def __init__(self, source):
+        self.xu, self.xv = source.u_space.greville, source.v_space.greville
+        self.points = source.evaluate_grid(self.xu, self.xv)
+        self.normal = None
+        if self.points.shape[-1] == 3:
+            self.normal = _unit(np.cross(source.evaluate_grid(self.xu, self.xv, nu=1),
+                                         source.evaluate_grid(self.xu, self.xv, nv=1)))
+
+    def variance(self, faired):
+        r""":math:`\|r\|^2 / (N_u N_v - k_u k_v)` for a ``faired`` net of ``k_u x k_v`` poles."""
+        r = faired.evaluate_grid(self.xu, self.xv) - self.points
+        if self.normal is not None:
+            r = np.einsum("uvd,uvd->uv", r, self.normal)
+        k = faired.u_space.dimension * faired.v_space.dimension
+        return float(np.sum(r * r)) / max(self.xu.size * self.xv.size - k, 1)
 
 
 def _unit(vectors):

@@ -90,10 +90,16 @@ def gram_matrix(space_a, space_b=None, nu=0):
     merged = merged[np.concatenate([[True], np.diff(merged) > 1e-13 * (dom_a[1] - dom_a[0])])]
     merged[-1] = dom_a[1]
     degree = max(space_a.degree + space_b.degree - 2 * nu, 0)
-    nodes, weights = quadrature_rule(merged, degree // 2 + 1)
+    per_interval = degree // 2 + 1
+    nodes, weights = quadrature_rule(merged, per_interval)
     rows, values_a = _local_basis(space_a, nodes, nu)
     cols, values_b = (rows, values_a) if space_b is space_a else _local_basis(space_b, nodes, nu)
-    products = weights[:, None, None] * values_a[:, :, None] * values_b[:, None, :]
+    # the nodes of one merged interval share their spans in both spaces: sum the products
+    # over each interval's nodes first, (s, p_a + 1, n) @ (s, n, p_b + 1)
+    s = merged.size - 1
+    weighted = (weights[:, None] * values_a).reshape(s, per_interval, -1).transpose(0, 2, 1)
+    products = np.matmul(weighted, values_b.reshape(s, per_interval, -1))
+    rows, cols = rows[::per_interval], cols[::per_interval]
     shape = products.shape
     coo = sp.coo_matrix(
         (products.ravel(),
@@ -101,7 +107,7 @@ def gram_matrix(space_a, space_b=None, nu=0):
           np.broadcast_to(cols[:, None, :], shape).ravel())),
         shape=(space_a.dimension, space_b.dimension),
     )
-    return coo.tocsr()  # sums the contributions of all quadrature nodes
+    return coo.tocsr()  # sums the contributions of intervals that share basis functions
 
 
 def _local_basis(space, nodes, nu):

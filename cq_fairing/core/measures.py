@@ -63,6 +63,7 @@ __all__ = [
 ]
 
 DEVIATIONS = ("geometric", "parametric")
+STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
 
 
 # -- samples and evaluation ---------------------------------------------------------------
@@ -141,9 +142,16 @@ def surface_derivatives(surface, u, v, order):
     bv = basis_functions(vs, v, sv, order)
     iu = su[:, None] - us.degree + np.arange(us.degree + 1)[None, :]
     iv = sv[:, None] - vs.degree + np.arange(vs.degree + 1)[None, :]
-    local = coeffs[iu[:, :, None], iv[:, None, :]]
+    flat = iu[:, :, None] * coeffs.shape[1] + iv[:, None, :]   # (q, pu+1, pv+1)
     keys = [(a, b) for a in range(order + 1) for b in range(order + 1 - a)]
-    h = {key: np.einsum("qi,qj,qijd->qd", bu[key[0]], bv[key[1]], local) for key in keys}
+    h = {key: np.empty((u.size, coeffs.shape[2])) for key in keys}
+    # one coordinate plane at a time, v contracted before u: gathers and two-operand
+    # einsums are several times faster than one three-operand einsum on (q, i, j, d)
+    for c in range(coeffs.shape[2]):
+        local = np.ascontiguousarray(coeffs[:, :, c]).ravel().take(flat)
+        rows = [np.einsum("qj,qij->qi", bv[b], local) for b in range(order + 1)]
+        for a, b in keys:
+            h[(a, b)][:, c] = np.einsum("qi,qi->q", bu[a], rows[b])
     if not surface.is_rational:
         return h
     w = {key: val[:, -1:] for key, val in h.items()}
@@ -179,7 +187,9 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     Solves :math:`f(t) = C'(t)\cdot(C(t) - P) = 0` with
     :math:`f' = |C'|^2 + C''\cdot(C - P)` (a gradient step when :math:`f' \le 0`),
     clamping ``t`` to the domain and halving a step until the distance decreases, so
-    the distance never grows from the start.
+    the distance never grows from the start.  A point has converged once its step would
+    move the foot point by less than ``STEP_FLOOR`` times the curve's size (the distance
+    is then exact to far below any tolerance; iterating on costs only halvings).
 
     Parameters
     ----------
@@ -202,6 +212,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
     dist = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
     active = np.arange(t.size)
+    size = _extent(curve.poles)
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
@@ -213,7 +224,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
         fp = speed2 + np.einsum("qd,qd->q", c2, r)
         step = -f / np.where(fp > 1e-12 * speed2, fp, speed2)
         step = np.where(((t[active] <= lo) & (step < 0)) | ((t[active] >= hi) & (step > 0)), 0.0, step)
-        big = np.abs(step) > 1e-13 * (hi - lo)
+        big = (np.abs(step) > 1e-13 * (hi - lo)) & (np.abs(step) * np.sqrt(speed2) > STEP_FLOOR * size)
         active, step = active[big], step[big]
         if active.size == 0:
             break
@@ -227,6 +238,12 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
         t[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
     return t, dist
+
+
+def _extent(poles):
+    """Bounding-box diagonal of a pole array (the scale of a converged Newton step)."""
+    flat = poles.reshape(-1, poles.shape[-1])
+    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
 
 
 def _above(active, dist, stop_below):
@@ -273,7 +290,9 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     Hessian :math:`H = J^T J + [S_{uu}\cdot r,\ S_{uv}\cdot r;\ S_{uv}\cdot r,\ S_{vv}\cdot r]`
     (Gauss-Newton :math:`J^T J` when :math:`H` is not positive definite), clamping to the
     domain and halving steps until the distance decreases.  With ``stop_below`` a point
-    stops once its distance is at most that value (as :func:`closest_points_curve`).
+    stops once its distance is at most that value; it has converged once its step would
+    move the foot point by less than ``STEP_FLOOR`` times the surface's size (as
+    :func:`closest_points_curve`).
 
     Returns
     -------
@@ -287,6 +306,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     dist = np.linalg.norm(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)] - points, axis=1)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
+    size = _extent(surface.poles)
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
@@ -313,7 +333,8 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         # on a boundary: minimise along it (1-D Newton in the free parameter)
         step[:, 0] = np.where(blocked_u, 0.0, np.where(blocked_v, -g1 / np.maximum(ha, 1e-300), step[:, 0]))
         step[:, 1] = np.where(blocked_v, 0.0, np.where(blocked_u, -g2 / np.maximum(hc, 1e-300), step[:, 1]))
-        big = np.abs(step).sum(axis=1) > 1e-13 * scale
+        moves = a * step[:, 0] ** 2 + 2 * b * step[:, 0] * step[:, 1] + c * step[:, 1] ** 2
+        big = (np.abs(step).sum(axis=1) > 1e-13 * scale) & (moves > (STEP_FLOOR * size) ** 2)
         active, step = active[big], step[big]
         if active.size == 0:
             break
@@ -470,7 +491,8 @@ class CurveProbe:
         if self.method == "parametric":
             i = int(np.argmax(bound))
             return float(bound[i]), i
-        return _pruned_max(bound, lambda idx: self.true_distance(faired, other, idx, tol), tol)
+        return _pruned_max(bound, lambda idx, below: self.true_distance(faired, other, idx, below),
+                           tol)
 
 
 class SurfaceProbe:
@@ -559,19 +581,24 @@ class SurfaceProbe:
         if self.method == "parametric":
             k = int(np.argmax(flat))
             return float(flat[k]), k
-        return _pruned_max(flat, lambda idx: self.true_distance(faired, other, idx, tol=tol), tol)
+        return _pruned_max(flat, lambda idx, below: self.true_distance(faired, other, idx,
+                                                                        tol=below), tol)
 
 
 def _pruned_max(bound, exact, tol):
-    """Max of ``exact`` over all samples, evaluating it only where ``bound`` can win.
+    """Max of the true distance over all samples, computing it only where ``bound`` can win.
 
-    ``bound >= exact`` holds sample-wise.  Candidates (bound above the tolerance, or
-    above the true distance at the 64 largest bounds) are processed in decreasing order
-    of the bound, in doubling batches, until the next bound cannot beat the running
-    maximum.  Without ``tol`` the exact maximum is returned.  With ``tol`` the search
-    also stops as soon as the maximum exceeds ``tol`` (the value returned is then an
-    exact sample distance ``> tol``, a lower bound of the maximum) or once no remaining
-    bound exceeds ``tol`` (the value returned is then an upper bound ``<= tol``).
+    ``bound >= exact`` holds sample-wise.  ``exact(idx, below)`` returns the true distance
+    at samples ``idx`` where it exceeds ``below`` and an upper bound ``<= below`` elsewhere
+    (its Newton iterations stop there); ``below=None`` asks for every value exactly.
+    Candidates (bound above the tolerance, or above the true distance at the 64 largest
+    bounds) are processed in decreasing order of the bound, in doubling batches, each with
+    ``below`` the running maximum (a sample that cannot beat it needs no exact value),
+    until the next bound cannot beat the running maximum.  Without ``tol`` the exact
+    maximum is returned.  With ``tol`` the search also stops as soon as the maximum
+    exceeds ``tol`` (the value returned is then an exact sample distance ``> tol``, a lower
+    bound of the maximum) or once no remaining bound exceeds ``tol`` (the value returned is
+    then an upper bound ``<= tol``).
     """
     best, best_i = -1.0, int(np.argmax(bound))
     if tol is not None:
@@ -580,10 +607,12 @@ def _pruned_max(bound, exact, tol):
             return float(bound[best_i]), best_i
     else:
         top = np.argpartition(bound, -min(64, bound.size))[-min(64, bound.size):]
-        d = exact(top)
+        d = exact(top, None)
         k = int(np.argmax(d))
         best, best_i = float(d[k]), int(top[k])
-        candidates = np.setdiff1d(np.flatnonzero(bound > best), top)
+        beaten = bound > best
+        beaten[top] = False
+        candidates = np.flatnonzero(beaten)
     order = candidates[np.argsort(bound[candidates])[::-1]]
     start, batch = 0, 256
     while start < order.size:
@@ -593,7 +622,7 @@ def _pruned_max(bound, exact, tol):
         if tol is not None and next_bound <= tol:
             return max(best, next_bound), best_i
         idx = order[start:start + batch]
-        d = exact(idx)
+        d = exact(idx, best if tol is None else max(best, tol))
         k = int(np.argmax(d))
         if d[k] > best:
             best, best_i = float(d[k]), int(idx[k])

@@ -270,49 +270,48 @@ def basis_functions(space, x, spans, nu=0):
     """
     t, p = space.knots, space.degree
     q = x.size
-    left = np.empty((q, p + 1))
-    right = np.empty((q, p + 1))
-    ndu = np.empty((q, p + 1, p + 1))  # ndu[:, j, r]: basis (upper), knot diffs (lower)
-    ndu[:, 0, 0] = 1.0
+    # arrays indexed [..., point] so that every vector operation runs on contiguous memory
+    left = np.empty((p + 1, q))
+    right = np.empty((p + 1, q))
+    ndu = np.empty((p + 1, p + 1, q))  # ndu[j, r]: basis (upper), knot diffs (lower)
+    ndu[0, 0] = 1.0
     for j in range(1, p + 1):
-        left[:, j] = x - t[spans + 1 - j]
-        right[:, j] = t[spans + j] - x
+        left[j] = x - t[spans + 1 - j]
+        right[j] = t[spans + j] - x
         saved = np.zeros(q)
         for r in range(j):
-            ndu[:, j, r] = right[:, r + 1] + left[:, j - r]
-            temp = ndu[:, r, j - 1] / ndu[:, j, r]
-            ndu[:, r, j] = saved + right[:, r + 1] * temp
-            saved = left[:, j - r] * temp
-        ndu[:, j, j] = saved
-    out = np.zeros((nu + 1, q, p + 1))
-    out[0] = ndu[:, :, p]
-    if nu == 0:
-        return out
-    for r in range(p + 1):
-        a = np.zeros((2, q, p + 1))
+            ndu[j, r] = right[r + 1] + left[j - r]
+            temp = ndu[r, j - 1] / ndu[j, r]
+            ndu[r, j] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        ndu[j, j] = saved
+    out = np.zeros((nu + 1, p + 1, q))
+    out[0] = ndu[:, p]
+    for r in range(p + 1) if nu > 0 else ():
+        a = np.zeros((2, p + 1, q))
         s1, s2 = 0, 1
-        a[s1, :, 0] = 1.0
+        a[s1, 0] = 1.0
         for k in range(1, min(nu, p) + 1):
             d = np.zeros(q)
             rk, pk = r - k, p - k
             if r >= k:
-                a[s2, :, 0] = _safe_divide(a[s1, :, 0], ndu[:, pk + 1, rk])
-                d = a[s2, :, 0] * ndu[:, rk, pk]
+                a[s2, 0] = _safe_divide(a[s1, 0], ndu[pk + 1, rk])
+                d = a[s2, 0] * ndu[rk, pk]
             j1 = 1 if rk >= -1 else -rk
             j2 = k - 1 if r - 1 <= pk else p - r
             for j in range(j1, j2 + 1):
-                a[s2, :, j] = _safe_divide(a[s1, :, j] - a[s1, :, j - 1], ndu[:, pk + 1, rk + j])
-                d = d + a[s2, :, j] * ndu[:, rk + j, pk]
+                a[s2, j] = _safe_divide(a[s1, j] - a[s1, j - 1], ndu[pk + 1, rk + j])
+                d = d + a[s2, j] * ndu[rk + j, pk]
             if r <= pk:
-                a[s2, :, k] = _safe_divide(-a[s1, :, k - 1], ndu[:, pk + 1, r])
-                d = d + a[s2, :, k] * ndu[:, r, pk]
-            out[k, :, r] = d
+                a[s2, k] = _safe_divide(-a[s1, k - 1], ndu[pk + 1, r])
+                d = d + a[s2, k] * ndu[r, pk]
+            out[k, r] = d
             s1, s2 = s2, s1
     factor = float(p)
     for k in range(1, min(nu, p) + 1):
         out[k] *= factor
         factor *= p - k
-    return out
+    return np.ascontiguousarray(out.transpose(0, 2, 1))
 
 
 def _safe_divide(numerator, denominator):
