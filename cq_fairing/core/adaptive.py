@@ -34,7 +34,7 @@ knots follow the error:
    .. math:: (G_T + \lambda\, G^{(l)}_T)\, C = \langle\Phi_T|\Phi_S\rangle C_S
 
    (curves: :math:`G^{(3)}`, the energy of Eck and Hadenfeld with ``l = 3``; surfaces:
-   the thin-plate matrix :math:`K` of :mod:`cq_fairing.core.energy`) with the largest
+   its tensor counterpart, :func:`variation_energy_matrix`) with the largest
    :math:`\lambda` (bisection on :math:`\log\lambda`) whose deviation is within ``tol``.
    :math:`\lambda = 0` is the plain L2 projection, so the polish never loses the
    tolerance.
@@ -60,17 +60,15 @@ import scipy.sparse.linalg as spla
 from ..errors import InvalidInputError, ToleranceNotMetError, UnsupportedGeometryError
 from .accuracy import check_tolerance
 from .decomposition import decomposition
-from .energy import surface_energy_matrix
 from .fairing import FairResult, SurfaceFairResult
-from .fidelity import (curve_residual_variance, extent, noise_level,
-                       surface_residual_variance, within_noise)
+from .fidelity import CurveResidual, SurfaceResidual, extent, noise_level, within_noise
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
 from .measures import CurveProbe, SurfaceProbe, sample_parameters
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_space",
-           "error_density"]
+           "error_density", "net_lengths", "variation_energy_matrix"]
 
 THETA = 0.9          # redistribution aims at THETA * tol
 SAFETY = 0.99       # the search works to SAFETY * tol (room for excess between samples)
@@ -386,9 +384,11 @@ def _objective(value):
 
 def _faithful_count(fit, family, top):
     """Smallest count whose residual variance is within the noise level, and that level."""
+    residual = CurveResidual(fit.curve)
+
     def variance(n):
         space = family(n)
-        return curve_residual_variance(fit.curve, fit.geometry(space, fit.project(space)))
+        return residual.variance(fit.geometry(space, fit.project(space)))
 
     sigma = noise_level(lambda fraction: variance(max(1, int(round(fraction * top)))),
                         extent(fit.curve.poles))
@@ -452,6 +452,7 @@ class _SurfaceFit:
             u = sample_parameters(surface.u_space, per_span=per_span)
             v = sample_parameters(surface.v_space, per_span=per_span)
         self.probe = SurfaceProbe(surface, uv=(u, v))
+        self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._rhs = {}
 
@@ -479,9 +480,7 @@ class _SurfaceFit:
             y = spla.splu(sp.csc_matrix(gv)).solve(
                 np.swapaxes(x, 0, 1).reshape(tv.dimension, -1))
             return np.swapaxes(y.reshape(tv.dimension, tu.dimension, -1), 0, 1)
-        probe = BSplineSurface(np.zeros((tu.dimension, tv.dimension, 1)), tu.knots, tv.knots,
-                               tu.degree, tv.degree)
-        k = surface_energy_matrix(probe)
+        k = variation_energy_matrix(tu, tv, self.lengths)
         m = sp.kron(gu, gv).tocsc()
         k = k * (m.diagonal().sum() / max(k.diagonal().sum(), 1e-300))
         sol = spla.splu((m + lam * k).tocsc()).solve(rhs.reshape(tu.dimension * tv.dimension, -1))
@@ -501,6 +500,48 @@ class _SurfaceFit:
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
         return faired, values, float(values.max())
+
+
+def net_lengths(poles):
+    r"""Mean polygon lengths :math:`(L_u, L_v)` of a net's rows along u and along v.
+
+    Parameters
+    ----------
+    poles : ndarray, shape (k_u, k_v, d)
+
+    Returns
+    -------
+    (float, float)
+        Positive (a degenerate direction gets a billionth of the other's length).
+    """
+    lu = float(np.mean(np.linalg.norm(np.diff(poles, axis=0), axis=-1).sum(axis=0)))
+    lv = float(np.mean(np.linalg.norm(np.diff(poles, axis=1), axis=-1).sum(axis=1)))
+    floor = 1e-9 * max(lu, lv, 1e-300)
+    return max(lu, floor), max(lv, floor)
+
+
+def variation_energy_matrix(space_u, space_v, lengths):
+    r"""Curvature-variation energy of a tensor net in the net's physical scale.
+
+    With :math:`s = L_u u`, :math:`t = L_v v` (the net's lengths, :func:`net_lengths`),
+
+    .. math:: E = \iint S_{sss}^2 + 3 S_{sst}^2 + 3 S_{stt}^2 + S_{ttt}^2 \,ds\,dt
+        = \sum_{a + b = 3} \binom{3}{a} \frac{c^T (G^{(a)}_u \otimes G^{(b)}_v) c}
+          {L_u^{2a - 1} L_v^{2b - 1}},
+
+    the tensor counterpart of the curves' :math:`G^{(3)}` (Eck and Hadenfeld, ``l = 3``):
+    it penalises the change of curvature along every direction, which is what the
+    thin-plate (second-order) energy leaves alone.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (k_u k_v, k_u k_v)
+        Row-major net index ``i k_v + j``.
+    """
+    lu, lv = lengths
+    return sum(w * sp.kron(gram_matrix(space_u, nu=a), gram_matrix(space_v, nu=3 - a))
+               / (lu ** (2 * a - 1) * lv ** (5 - 2 * a))
+               for a, w in ((3, 1.0), (2, 3.0), (1, 3.0), (0, 1.0))).tocsr()
 
 
 def _reduce_surface(fit, spaces, result, tol, rounds=ROUNDS):
@@ -560,7 +601,8 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     objective : {"compact", "faithful"}
         As for :func:`fair_curve_adaptive`.
     polish : bool
-        Spend the remaining tolerance on the thin-plate energy (penalised projection;
+        Spend the remaining tolerance on the curvature-variation energy
+        (:func:`variation_energy_matrix`, penalised projection;
         ``"compact"`` only).
     per_span : int
         Deviation samples per source span (lowered until the grid has at most
@@ -592,22 +634,18 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         return [equidistributed_space(b, r, max(1, int(np.ceil(t * top - 1e-9))), p)
                 for (b, r), top, p in zip(dens, tops, degrees)]
 
+    check_probe = _final_probe(surface, 2 * per_span, 4 * max_samples)
     table, found = (), None
     if faithful:
         spaces, sigma = _faithful_net(fit, family, dens, tops)
         table = (("noise", sigma),)
-        trial = fit.trial(*spaces)
-        found = (spaces, trial, 0.0) if trial[2] <= fit.tol else None
-    if found is None:
-        found = _compact_surface(fit, family, dens, tops, polish, tol)
-    spaces, (faired, _, _), lam = found
-    check_probe = _final_probe(surface, 2 * per_span, 4 * max_samples)
-    e = check_probe.max_deviation(faired)[0]
-    while e > tol and lam > 0.0:
-        lam = lam / 10.0 if lam > 1e-8 else 0.0
-        faired = BSplineSurface(fit.project(*spaces, lam), spaces[0].knots, spaces[1].knots,
+        faired = BSplineSurface(fit.project(*spaces), spaces[0].knots, spaces[1].knots,
                                 *degrees)
         e = check_probe.max_deviation(faired)[0]
+        found = (spaces, faired, e, 0.0) if e <= tol else None
+    if found is None:
+        found = _checked_compact(fit, family, dens, tops, polish, tol, check_probe)
+    spaces, faired, e, lam = found
     if e > tol and _safety > 0.9:
         return fair_surface_adaptive(surface, tol, target_degree=target_degree,
                                      objective=objective, polish=polish, per_span=per_span,
@@ -622,6 +660,19 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     return SurfaceFairResult(surface, faired, (tuple(tops), n), n, "adaptive", (step,),
                              max_deviation=e, evaluations=fit.evaluations,
                              table=(("lambda", lam),) + table)
+
+
+def _checked_compact(fit, family, dens, tops, polish, tol, check_probe):
+    """The compact net, its polish backed off until the denser ``check_probe`` finds it
+    within ``tol``: ``(spaces, faired, deviation there, lambda)``."""
+    spaces, (faired, _, _), lam = _compact_surface(fit, family, dens, tops, polish, tol)
+    e = check_probe.max_deviation(faired)[0]
+    while e > tol and lam > 0.0:
+        lam = lam / 10.0 if lam > 1e-8 else 0.0
+        faired = BSplineSurface(fit.project(*spaces, lam), spaces[0].knots, spaces[1].knots,
+                                *fit.degrees)
+        e = check_probe.max_deviation(faired)[0]
+    return spaces, faired, e, lam
 
 
 def _compact_surface(fit, family, dens, tops, polish, tol):
@@ -652,10 +703,12 @@ def _compact_surface(fit, family, dens, tops, polish, tol):
 def _faithful_net(fit, family, dens, tops):
     """Smallest net whose residual is within the noise level: the diagonal, then each
     direction (the larger first) bisected with the other held; and the noise level."""
+    residual = SurfaceResidual(fit.surface)
+
     def variance(spaces):
         net = fit.project(*spaces)
-        faired = BSplineSurface(net, spaces[0].knots, spaces[1].knots, *fit.degrees)
-        return surface_residual_variance(fit.surface, faired)
+        return residual.variance(BSplineSurface(net, spaces[0].knots, spaces[1].knots,
+                                                *fit.degrees))
 
     sigma = noise_level(lambda fraction: variance(family(fraction)), extent(fit.surface.poles))
     steps = max(tops)

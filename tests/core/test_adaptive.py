@@ -6,8 +6,11 @@ import pytest
 
 import cq_fairing as cf
 from cq_fairing.core import examples
+from scipy.interpolate import BSpline
+
 from cq_fairing.core.adaptive import (equidistributed_space, fair_curve_adaptive,
-                                      fair_surface_adaptive)
+                                      fair_surface_adaptive, net_lengths,
+                                      variation_energy_matrix)
 from cq_fairing.core.measures import deviation
 from cq_fairing.errors import (InvalidToleranceError, ToleranceNotMetError,
                                UnsupportedGeometryError)
@@ -93,6 +96,62 @@ def test_unpolished_surface_reconstructs_source(blade):
     result = fair_surface_adaptive(blade, 0.05, polish=False)
     assert np.allclose(result.reconstruct(), blade.poles, atol=1e-8)
     assert deviation(blade, result.surface).max <= 0.05
+
+
+def _variation_energy_by_quadrature(surface, lengths, nodes=12):
+    """int int sum_a C(3,a) |d^3 S / ds^a dt^(3-a)|^2 ds dt with s = L_u u, t = L_v v, by
+    scipy's BSpline derivatives (v rows first, then u) and Gauss-Legendre per knot cell."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    bu, bv = np.unique(surface.u_knots), np.unique(surface.v_knots)
+    u = (0.5 * (bu[1:, None] + bu[:-1, None]) + 0.5 * np.diff(bu)[:, None] * x).ravel()
+    v = (0.5 * (bv[1:, None] + bv[:-1, None]) + 0.5 * np.diff(bv)[:, None] * x).ravel()
+    weight = np.outer((0.5 * np.diff(bu)[:, None] * w).ravel(),
+                      (0.5 * np.diff(bv)[:, None] * w).ravel())
+    lu, lv = lengths
+    total = 0.0
+    for a, binom in ((3, 1), (2, 3), (1, 3), (0, 1)):
+        rows = BSpline(surface.v_knots, np.swapaxes(surface.poles, 0, 1),
+                       surface.v_degree).derivative(3 - a)(v)          # (len v, k_u, 3)
+        d = BSpline(surface.u_knots, np.swapaxes(rows, 0, 1),
+                    surface.u_degree).derivative(a)(u)                 # (len u, len v, 3)
+        d = d / (lu ** a * lv ** (3 - a))
+        total += binom * np.sum(np.sum(d * d, axis=2) * weight) * lu * lv
+    return total
+
+
+def test_variation_energy_matches_quadrature_of_third_derivatives():
+    rng = np.random.default_rng(3)
+    surface = cf.make_surface(rng.normal(size=(7, 6, 3)), degree=(4, 3))
+    surface = cf.make_surface(surface.poles, degree=(4, 3),
+                              u_knots=np.r_[[0.0] * 5, 0.2, 0.7, [1.0] * 5],
+                              v_knots=np.r_[[0.0] * 4, 0.4, 0.5, [1.0] * 4])
+    lengths = (40.0, 7.5)
+    e = variation_energy_matrix(surface.u_space, surface.v_space, lengths)
+    c = surface.poles.reshape(-1, 3)
+    ours = float(np.sum(c * (e @ c)))
+    assert ours == pytest.approx(_variation_energy_by_quadrature(surface, lengths), rel=1e-9)
+
+
+def test_net_lengths_of_a_flat_grid():
+    u, v = np.meshgrid(np.linspace(0, 30, 7), np.linspace(0, 4, 5), indexing="ij")
+    poles = np.stack([u, v, np.zeros_like(u)], axis=-1)
+    assert net_lengths(poles) == pytest.approx((30.0, 4.0))
+
+
+def test_surface_polish_lowers_the_variation_energy_within_tol(blade):
+    plain = fair_surface_adaptive(blade, 0.05, polish=False)
+    polished = fair_surface_adaptive(blade, 0.05)
+    assert dict(polished.table)["lambda"] > 0.0
+    assert deviation(blade, polished.surface).max <= 0.05
+    surface = polished.surface
+    e = variation_energy_matrix(surface.u_space, surface.v_space, net_lengths(blade.poles))
+
+    def energy(s):
+        c = s.poles.reshape(-1, 3)
+        return float(np.sum(c * (e @ c)))
+
+    assert plain.surface.poles.shape == surface.poles.shape
+    assert energy(surface) < energy(plain.surface)  # Tikhonov: E decreases with lambda
 
 
 def test_bad_tolerance_is_refused(seed):
