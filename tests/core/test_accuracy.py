@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 
 import cq_fairing as cf
 from cq_fairing.core import measures as M
-from cq_fairing.core.accuracy import dyadic_table, polyfit_scale
+from cq_fairing.core.accuracy import STRICT_PER_SPAN, dyadic_table, polyfit_scale
 from cq_fairing.core.examples import blade_surface, seed_curve
 from cq_fairing.core.fairing import project_curve, project_surface, target_space
 
@@ -23,7 +23,7 @@ def noisy_poles(k, amp, seed_):
 
 
 def exhaustive_curve(curve, tol):
-    probe = M.CurveProbe(curve)
+    probe = M.CurveProbe(curve, per_span=STRICT_PER_SPAN)
     for n in range(1, curve.n_poles - 2):
         faired = project_curve(curve, target_space(curve.space, n)).curve
         if probe.max_deviation(faired)[0] <= tol:
@@ -64,6 +64,29 @@ def test_tolerance_not_met():
     assert "raise the tolerance" in str(info.value)
 
 
+# a wild degree-2 net from the fuzz suite: its n=30 projection peaks between the samples
+# of an 8-per-span check (0.17778 there, 0.18086 at 64 per span, tol 0.17911)
+PEAK_BETWEEN_SAMPLES = np.array([
+    [1.0, 0.008592, 0.092676], [0.99611, 0.088121, -0.442983], [0.984469, 0.175556, 0.658382],
+    [0.965169, -0.11563, 0.088235], [0.122924, 0.665967, 1.054555], [0.166221, 1.049676, 0.147059],
+    [0.863104, 1.177069, 0.958776], [0.815243, 0.959644, 0.326959], [0.766039, 1.45562, 0.235294],
+    [0.406097, 1.258674, 0.202175], [-0.293026, 1.135655, 1.294118], [0.930204, 0.202835, 0.049763],
+    [0.489898, 0.87178, 0.352941], [1.01438, 1.317521, 1.003861], [1.259358, 0.944245, 1.109649],
+    [-0.304025, 0.020228, 0.825217], [-0.538947, 0.917409, 1.034219], [0.070737, 0.878475, 0.5],
+    [-0.140086, 1.000848, 0.860515], [-0.105478, 0.545521, 0.558824], [0.284624, 0.981258, 0.588235],
+    [-0.278416, 1.891738, 0.117647], [0.182195, 0.93219, 0.783969], [-0.442707, 0.896666, 0.676471],
+    [-1.294316, 0.854166, 0.551877], [-1.20741, 0.877137, 0.259179], [-0.675324, 0.749612, 0.764706],
+    [-1.17068, 0.68837, 0.794118], [-0.722761, 1.067807, 1.823529], [-0.186193, 0.555106, 1.842941],
+    [-0.892741, 0.726192, 1.25923], [-0.91859, 0.396212, 0.911765], [-1.463617, 0.312728, 1.40207],
+    [-1.328635, 1.22781, 0.220318], [-0.989992, 0.14112, 1.0]])
+
+
+def test_strict_check_catches_a_peak_between_coarse_samples():
+    tol = 0.17910559422978428
+    result = cf.fair_curve(PEAK_BETWEEN_SAMPLES, tol=tol, degree=2)
+    assert M.deviation(result.source, result.curve, per_span=64).max <= tol
+
+
 @settings(max_examples=6)
 @given(k=st.integers(10, 30), amp=st.floats(1e-3, 3e-2), rel=st.floats(0.3, 3.0),
        seed_=st.integers(0, 10_000))
@@ -71,7 +94,7 @@ def test_guaranteed_curve_is_within_tol_and_minimal(k, amp, rel, seed_):
     curve = cf.make_curve(noisy_poles(k, amp, seed_))
     tol = rel * amp
     result = cf.fair_curve(curve.poles, tol=tol)
-    truth = M.deviation(curve, result.curve).max
+    truth = M.deviation(curve, result.curve, per_span=STRICT_PER_SPAN).max
     assert truth <= tol * (1 + 1e-9)
     assert result.max_deviation == pytest.approx(truth, rel=1e-9, abs=1e-15)
     assert result.n == exhaustive_curve(curve, tol)
