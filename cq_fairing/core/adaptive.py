@@ -61,10 +61,10 @@ from ..errors import InvalidInputError, ToleranceNotMetError, UnsupportedGeometr
 from .accuracy import check_tolerance
 from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
-from .fidelity import CurveResidual, SurfaceResidual, extent, noise_level, within_noise
+from .fidelity import CurveResidual, SurfaceResidual, noise_level, within_noise
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
-from .measures import CurveProbe, SurfaceProbe, sample_parameters
+from .measures import CurveProbe, SurfaceProbe, extent, sample_parameters
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_space",

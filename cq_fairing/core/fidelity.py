@@ -30,8 +30,7 @@ projections and evaluations.
 
 import numpy as np
 
-__all__ = ["DISCREPANCY", "CurveResidual", "SurfaceResidual", "noise_level", "within_noise",
-           "extent"]
+__all__ = ["DISCREPANCY", "CurveResidual", "SurfaceResidual", "noise_level", "within_noise"]
 
 DISCREPANCY = 0.10     # delta: residual variance within (1 + delta)^2 of the noise level
 NOISE_FRACTION = 3     # the noise is measured on a target 1/NOISE_FRACTION of the source
@@ -117,12 +116,6 @@ def noise_level(variance_at, size):
         noise-free source is then reduced to the smallest target that reproduces it.
     """
     return max(float(np.sqrt(variance_at(1.0 / NOISE_FRACTION))), NOISE_FLOOR * size)
-
-
-def extent(poles):
-    """Bounding-box diagonal of a pole array (any leading shape, last axis = coordinates)."""
-    flat = np.asarray(poles).reshape(-1, np.asarray(poles).shape[-1])
-    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
 
 
 def within_noise(variance, sigma, delta=DISCREPANCY):

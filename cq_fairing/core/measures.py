@@ -54,7 +54,7 @@ from .gram import gram_matrix, quadrature_rule
 from .spaces import basis_functions, find_spans
 
 __all__ = [
-    "Deviation", "DeviationMap", "sample_parameters", "curve_derivatives",
+    "Deviation", "DeviationMap", "sample_parameters", "extent", "curve_derivatives",
     "surface_derivatives", "closest_points_curve", "closest_points_surface",
     "CurveProbe", "SurfaceProbe", "deviation", "deviation_map",
     "curve_curvature", "curvature_derivative_energy", "surface_curvatures",
@@ -212,7 +212,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
     dist = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
     active = np.arange(t.size)
-    size = _extent(curve.poles)
+    size = extent(curve.poles)
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
@@ -240,9 +240,10 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     return t, dist
 
 
-def _extent(poles):
-    """Bounding-box diagonal of a pole array (the scale of a converged Newton step)."""
-    flat = poles.reshape(-1, poles.shape[-1])
+def extent(poles):
+    """Bounding-box diagonal of a pole array (any leading shape, last axis = coordinates):
+    the size of a geometry, which scales a converged Newton step or a noise floor."""
+    flat = np.asarray(poles).reshape(-1, np.asarray(poles).shape[-1])
     return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
 
 
@@ -306,7 +307,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     dist = np.linalg.norm(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)] - points, axis=1)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
-    size = _extent(surface.poles)
+    size = extent(surface.poles)
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
