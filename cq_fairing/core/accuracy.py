@@ -75,12 +75,12 @@ __all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
 
 STRATEGIES = ("guaranteed", "linear", "polyfit")
 SCAN_WINDOW = 4
+"""Consecutive failing scales below the answer that the guaranteed search measures."""
 STRICT_PER_SPAN = 16
-"""Samples per merged span of the strict check of a curve answer.  Eight per span missed a
+r"""Samples per merged span of the strict check of a curve answer.  Eight per span missed a
 peak of a wild degree-2 net by 1.7 % between samples (0.1778 reported, 0.1809 at 16 per
 span; found by ``tests/reliability/test_fuzz.py``); sixteen quarter the second-order
 excess :math:`\tfrac18 h^2 \max|d''|` at a small cost: only answers are checked."""
-"""Consecutive failing scales below the answer that the guaranteed search measures."""
 
 
 class ScaleError(NamedTuple):

@@ -32,8 +32,9 @@ from .independent import curve_points, distance_to_curve, distance_to_surface, s
 SLACK = 1e-3
 r"""Relative excess of the independent deviation over ``tol`` that is accepted.
 
-The product certifies the deviation at its own dense samples (8 per span of the merged
-breakpoints, :func:`cq_fairing.core.measures.sample_parameters`); between two samples the
+The product certifies the deviation at its own dense samples (per span of the merged
+breakpoints, :func:`cq_fairing.core.measures.sample_parameters`: 16 for curve answers,
+:data:`cq_fairing.core.accuracy.STRICT_PER_SPAN`, 8 for surfaces); between two samples the
 distance can only exceed the sampled maximum by a second-order term, about
 :math:`\tfrac18 h^2 \max|d''|` for sample spacing :math:`h`, which is below 1e-3 of
 ``tol`` for the smooth cases generated here.  Independent samples fall between the
