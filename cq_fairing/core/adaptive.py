@@ -454,31 +454,41 @@ class _SurfaceFit:
         self.probe = SurfaceProbe(surface, uv=(u, v))
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
-        self._rhs = {}
+        self._cache = {}
+
+    def _cached(self, key, build):
+        """Per-space operators, kept while the searches revisit a space (at most 32)."""
+        if key not in self._cache:
+            if len(self._cache) >= 32:
+                self._cache.clear()
+            self._cache[key] = build()
+        return self._cache[key]
 
     def _half(self, space_u):
-        """``<Phi_Tu|Phi_Su> P`` (cached per u target), shape (k_tu, k_v, d)."""
-        key = space_u.key
-        if key not in self._rhs:
-            if len(self._rhs) > 8:
-                self._rhs.clear()
+        """``<Phi_Tu|Phi_Su> P``, shape (k_tu, k_v, d)."""
+        def build():
             p = self.surface.poles
             b = gram_matrix(space_u, self.surface.u_space)
-            self._rhs[key] = (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
-        return self._rhs[key]
+            return (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
+        return self._cached(("half", space_u.key), build)
+
+    def _gram(self, space):
+        """Gram matrix of a target space and its sparse LU factors."""
+        def build():
+            g = gram_matrix(space)
+            return g, spla.splu(sp.csc_matrix(g))
+        return self._cached(("gram", space.key), build)
 
     def project(self, tu, tv, lam=0.0):
         """Net of the (penalised) projection onto ``tu x tv``, shape (k_tu, k_tv, d)."""
         half = self._half(tu)
-        bv = gram_matrix(tv, self.surface.v_space)
+        bv = self._cached(("cross v", tv.key), lambda: gram_matrix(tv, self.surface.v_space))
         rhs = np.swapaxes((bv @ np.swapaxes(half, 0, 1).reshape(half.shape[1], -1))
                           .reshape(tv.dimension, half.shape[0], -1), 0, 1)
-        gu, gv = gram_matrix(tu), gram_matrix(tv)
+        (gu, lu_u), (gv, lu_v) = self._gram(tu), self._gram(tv)
         if lam <= 0.0:
-            x = spla.splu(sp.csc_matrix(gu)).solve(rhs.reshape(tu.dimension, -1))
-            x = x.reshape(tu.dimension, tv.dimension, -1)
-            y = spla.splu(sp.csc_matrix(gv)).solve(
-                np.swapaxes(x, 0, 1).reshape(tv.dimension, -1))
+            x = lu_u.solve(rhs.reshape(tu.dimension, -1)).reshape(tu.dimension, tv.dimension, -1)
+            y = lu_v.solve(np.swapaxes(x, 0, 1).reshape(tv.dimension, -1))
             return np.swapaxes(y.reshape(tv.dimension, tu.dimension, -1), 0, 1)
         k = variation_energy_matrix(tu, tv, self.lengths)
         m = sp.kron(gu, gv).tocsc()

@@ -210,7 +210,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     points = np.asarray(points, dtype=float)
     lo, hi = curve.domain
     t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
-    dist = np.linalg.norm(curve_derivatives(curve, t, 0)[0] - points, axis=1)
+    dist = _distance(curve_derivatives(curve, t, 0)[0], points)
     active = np.arange(t.size)
     size = extent(curve.poles)
     for _ in range(iterations):
@@ -231,13 +231,20 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
 
         def trial(idx, s):
             new = np.clip(t[idx] + s, lo, hi)
-            return new, np.linalg.norm(curve_derivatives(curve, new, 0)[0] - points[idx], axis=1)
+            return new, _distance(curve_derivatives(curve, new, 0)[0], points[idx])
 
         new, d_new = _damped(trial, active, step, dist)
         moved = (d_new < dist[active]) & (np.abs(new - t[active]) > 1e-13 * (hi - lo))
         t[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
     return t, dist
+
+
+def _distance(a, b):
+    """Euclidean distance along the last axis (an einsum: 4x faster than ``np.linalg.norm``
+    on the million-sample grids of a tolerance check)."""
+    d = a - b
+    return np.sqrt(np.einsum("...k,...k->...", d, d))
 
 
 def extent(poles):
@@ -304,7 +311,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     (ulo, uhi), (vlo, vhi) = surface.domain
     uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
                    np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
-    dist = np.linalg.norm(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)] - points, axis=1)
+    dist = _distance(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
     size = extent(surface.poles)
@@ -345,7 +352,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
             new[:, 0] = np.clip(new[:, 0], ulo, uhi)
             new[:, 1] = np.clip(new[:, 1], vlo, vhi)
             pts = surface_derivatives(surface, new[:, 0], new[:, 1], 0)[(0, 0)]
-            return new, np.linalg.norm(pts - points[idx], axis=1)
+            return new, _distance(pts, points[idx])
 
         new, d_new = _damped(trial, active, step, dist)
         moved = (d_new < dist[active]) & (np.abs(new - uv[active]).sum(axis=1) > 1e-13 * scale)
@@ -461,7 +468,7 @@ class CurveProbe:
     def bound(self, faired):
         """Faired points and the same-parameter distance at every sample."""
         other = curve_derivatives(faired, self.u, 0)[0]
-        return other, np.linalg.norm(other - self.points, axis=1)
+        return other, _distance(other, self.points)
 
     def true_distance(self, faired, other, idx, tol=None):
         """Two-sided true distance at samples ``idx`` (max of both directions).
@@ -535,7 +542,7 @@ class SurfaceProbe:
 
     def bound(self, faired):
         other = _grid_points(faired, self.u, self.v)
-        return other, np.linalg.norm(other - self.points, axis=2)
+        return other, _distance(other, self.points)
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
         """Two-sided true distance at flat grid indices ``flat_idx``.
