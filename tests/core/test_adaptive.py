@@ -169,3 +169,22 @@ def test_rational_surface_is_refused():
     surface = cf.make_surface(poles, weights=np.full((6, 6), 2.0))
     with pytest.raises(UnsupportedGeometryError):
         fair_surface_adaptive(surface, 0.1)
+
+
+def test_a_coarse_search_grid_never_loosens_the_final_check(blade):
+    """A tiny sample budget makes the search grid coarse (one sample per span); the final
+    check still samples as densely as ``deviation`` (8 per merged span), so the reported
+    maximum is the public measure's and within tol (before the fix: checked at 2 per span
+    and returned above tol)."""
+    result = fair_surface_adaptive(blade, 0.02, max_samples=1000)
+    measured = deviation(blade, result.surface).max
+    assert measured <= 0.02
+    assert result.max_deviation == pytest.approx(measured, rel=1e-9)
+
+
+def test_a_search_too_coarse_to_converge_is_refused_not_returned(blade):
+    """At tol 0.05 the one-sample-per-span search keeps accepting nets that the dense check
+    rejects; after the tightened retries the product says so instead of returning one."""
+    with pytest.raises(ToleranceNotMetError, match="denser check") as info:
+        fair_surface_adaptive(blade, 0.05, max_samples=1000)
+    assert info.value.best_deviation > 0.05
