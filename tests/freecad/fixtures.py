@@ -4,6 +4,7 @@ Imported by the headless pytest tests and by the GUI script, both inside FreeCAD
 """
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,19 @@ REPO = Path(__file__).resolve().parents[2]
 REAL = Path(os.environ.get("FAIRING_REAL_DATA", REPO.parent / "shared" / "data" / "real"))
 BLADE = REAL / "IEA_15MW_CFD.stp"
 TERRAIN = REAL / "terrain.brep"
+
+
+@contextmanager
+def reopened(doc, path):
+    """Save ``doc`` to ``path``, close it, and yield the document opened again from the
+    file (closed on exit): what a user's save and reopen does to the features."""
+    doc.saveAs(str(path))
+    FreeCAD.closeDocument(doc.Name)
+    again = FreeCAD.openDocument(str(path))
+    try:
+        yield again
+    finally:
+        FreeCAD.closeDocument(again.Name)
 
 
 def noisy_blade_surface(n_u=50, n_v=80, noise=0.02, seed=3):

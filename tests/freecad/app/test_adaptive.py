@@ -119,19 +119,13 @@ def test_feature_faithful_save_reopen_keeps_method_and_objective(doc, noisy, fai
     assert _ok(obj), obj.Status
     assert obj.PolesAfter == " x ".join(map(str, faired["adaptive faithful"].poles_after))
     assert fixtures.sample_distance(obj.Shape.Faces[0], noisy.Shape.Faces[0], 12) <= TOL
-    path = str(tmp_path / "adaptive.FCStd")
-    doc.saveAs(path)
-    FreeCAD.closeDocument(doc.Name)
-    reopened = FreeCAD.openDocument(path)
-    try:
+    with fixtures.reopened(doc, tmp_path / "adaptive.FCStd") as reopened:
         again = reopened.getObject("Fairing")
         assert (again.Method, again.Objective) == ("adaptive", "faithful")
         again.Objective = "compact"
         reopened.recompute()
         assert _ok(again), again.Status
         assert again.PolesAfter == " x ".join(map(str, faired["adaptive compact"].poles_after))
-    finally:
-        FreeCAD.closeDocument(reopened.Name)
 
 
 def test_document_of_version_1_migrates(doc, noisy, tmp_path):
@@ -140,11 +134,7 @@ def test_document_of_version_1_migrates(doc, noisy, tmp_path):
     doc.recompute()
     obj.Method = ["wavelet", "energy"]
     obj.removeProperty("Objective")
-    path = str(tmp_path / "version1.FCStd")
-    doc.saveAs(path)
-    FreeCAD.closeDocument(doc.Name)
-    reopened = FreeCAD.openDocument(path)
-    try:
+    with fixtures.reopened(doc, tmp_path / "version1.FCStd") as reopened:
         again = reopened.getObject("Fairing")
         assert again.getEnumerationsOfProperty("Method") == list(make.METHODS)
         assert (again.Method, again.Objective) == ("wavelet", "compact")
@@ -152,8 +142,6 @@ def test_document_of_version_1_migrates(doc, noisy, tmp_path):
         again.Method = "adaptive"
         reopened.recompute()
         assert "needs tolerance mode" in again.Status  # target mode, refused in words
-    finally:
-        FreeCAD.closeDocument(reopened.Name)
 
 
 def test_adaptive_edge_within_tolerance_by_freecad_distance():

@@ -179,11 +179,7 @@ def test_save_reopen_recompute_and_migrate(doc, noisy, tmp_path):
     doc.recompute()
     poles = obj.PolesAfter
     obj.removeProperty("Measure")  # as saved by an older version
-    path = str(tmp_path / "fairing.FCStd")
-    doc.saveAs(path)
-    FreeCAD.closeDocument(doc.Name)
-    reopened = FreeCAD.openDocument(path)
-    try:
+    with fixtures.reopened(doc, tmp_path / "fairing.FCStd") as reopened:
         again = reopened.getObject("Fairing")
         assert "Measure" in again.PropertiesList  # onDocumentRestored migration
         assert again.Proxy.Type == "Fairing::SurfaceFairing"
@@ -193,8 +189,6 @@ def test_save_reopen_recompute_and_migrate(doc, noisy, tmp_path):
         again.Tolerance = 0.05
         reopened.recompute()
         assert again.PolesAfter == poles
-    finally:
-        FreeCAD.closeDocument(reopened.Name)
 
 
 def test_step_export_and_read_back(doc, blade, tmp_path):

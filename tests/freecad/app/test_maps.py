@@ -104,18 +104,12 @@ def test_map_survives_save_and_reopen(doc, fairing, tmp_path):
     dmap = deviation_map.make_map(fairing)
     doc.recompute()
     values = list(dmap.Values)
-    path = str(tmp_path / "map.FCStd")
-    doc.saveAs(path)
-    FreeCAD.closeDocument(doc.Name)
-    reopened = FreeCAD.openDocument(path)
-    try:
+    with fixtures.reopened(doc, tmp_path / "map.FCStd") as reopened:
         again = [o for o in reopened.Objects if o.TypeId == "Mesh::FeaturePython"][0]
         again.touch()
         reopened.recompute()
         assert again.isValid()
         assert again.Values == pytest.approx(values)
-    finally:
-        FreeCAD.closeDocument(reopened.Name)
 
 
 def test_switch_map_to_gaussian_curvature(doc, fairing):
