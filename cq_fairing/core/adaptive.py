@@ -72,7 +72,7 @@ __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_spac
 
 THETA = 0.9          # redistribution aims at THETA * tol
 SAFETY = 0.99       # the search works to SAFETY * tol (room for excess between samples)
-STRICT_PER_SPAN = 8  # the final surface check never samples coarser than deviation() does
+FINAL_MIN_PER_SPAN = 8  # the final surface check never samples coarser than deviation() does
 ROUNDS = 4           # redistribution rounds per count
 FLOOR = 0.25         # density floor, fraction of the mean density
 OBJECTIVES = ("compact", "faithful")
@@ -783,10 +783,10 @@ def _final_check(surface, per_span, max_samples):
     density than the public measure reports (a 312 x 323 terrain was checked at 3 per span
     and passed at 23.06 where 8 per span find 23.44 > tol 23.11)."""
     spans = surface.u_space.n_spans, surface.v_space.n_spans
-    while per_span > STRICT_PER_SPAN and \
+    while per_span > FINAL_MIN_PER_SPAN and \
             (spans[0] * per_span + 1) * (spans[1] * per_span + 1) > max_samples:
         per_span //= 2
-    per_span = max(per_span, STRICT_PER_SPAN)
+    per_span = max(per_span, FINAL_MIN_PER_SPAN)
 
     def check(faired):
         uv = (sample_parameters(surface.u_space, faired.u_space, per_span=per_span),
