@@ -8,11 +8,11 @@ import cq_fairing as cf
 from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
-from cq_fairing.core.adaptive import (equidistributed_space, fair_curve_adaptive,
+from cq_fairing.core.adaptive import (_SurfaceFit, equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
 from cq_fairing.core.measures import deviation
-from cq_fairing.errors import (InvalidToleranceError, ToleranceNotMetError,
+from cq_fairing.errors import (InvalidInputError, InvalidToleranceError, ToleranceNotMetError,
                                UnsupportedGeometryError)
 
 
@@ -85,17 +85,98 @@ def test_uniform_density_gives_quasi_uniform_space():
     assert space.same_as(cf.SplineSpace.quasi_uniform(7, 3, (0.0, 2.0)))
 
 
-def test_blade_meets_tol_with_fewer_poles_than_uniform(blade):
-    result = fair_surface_adaptive(blade, 0.02)
+def test_blade_meets_tol_with_fewer_poles_than_uniform(blade, blade_auto):
+    result = blade_auto
     uniform = cf.fair_surface(blade.poles, tol=0.02)
     assert deviation(blade, result.surface).max <= 0.02
     assert np.prod(result.poles.shape[:2]) < np.prod(uniform.poles.shape[:2])
 
 
-def test_unpolished_surface_reconstructs_source(blade):
-    result = fair_surface_adaptive(blade, 0.05, polish=False)
+def test_unpolished_surface_with_free_borders_reconstructs_source(blade):
+    result = fair_surface_adaptive(blade, 0.05, polish=False, boundary="free")
     assert np.allclose(result.reconstruct(), blade.poles, atol=1e-8)
     assert deviation(blade, result.surface).max <= 0.05
+
+
+@pytest.fixture(scope="module")
+def blade_auto(blade):
+    return fair_surface_adaptive(blade, 0.02)
+
+
+def test_auto_borders_are_pinned_only_when_the_net_shrinks(blade, blade_auto):
+    """On the bump fixture the free-border search ends at 15 x 12; going on with pinned
+    borders reaches 15 x 11, so ``"auto"`` keeps them, with the corners exact."""
+    free = fair_surface_adaptive(blade, 0.02, boundary="free", polish=False)
+    assert dict(free.table)["boundary"] == "free"
+    assert dict(blade_auto.table)["boundary"] == "pinned"
+    assert blade_auto.poles[:, :, 0].size < free.poles[:, :, 0].size
+    assert deviation(blade, blade_auto.surface).max <= 0.02
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+        assert np.array_equal(blade_auto.poles[i, j], blade.poles[i, j])
+
+
+def test_pinned_borders_keep_the_corners_within_tol(blade):
+    result = fair_surface_adaptive(blade, 0.05, boundary="pinned")
+    assert dict(result.table)["boundary"] == "pinned"
+    assert deviation(blade, result.surface).max <= 0.05
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+        assert np.array_equal(result.poles[i, j], blade.poles[i, j])
+
+
+def _least_squares_with_fixed_ends(design, weights, values, ends):
+    """min sum_q w_q |design_q x - values_q|^2 over x[1:-1], with x[0], x[-1] = ends."""
+    root = np.sqrt(weights)[:, None]
+    rest = values - design[:, [0, -1]] @ ends
+    inner = np.linalg.lstsq(root * design[:, 1:-1], root * rest, rcond=None)[0]
+    return np.concatenate([ends[:1], inner, ends[1:]])
+
+
+def _gauss(breaks, nodes=8):
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    h = np.diff(breaks)[:, None]
+    return ((0.5 * (breaks[1:, None] + breaks[:-1, None]) + 0.5 * h * x).ravel(),
+            (0.5 * h * w).ravel())
+
+
+def test_pinned_projection_matches_a_dense_constrained_least_squares():
+    """Border curves projected with their ends kept, then the interior with the border
+    held, against a weighted least-squares fit at Gauss points (scipy's design matrices,
+    numpy's lstsq): an independent computation of the same minimisers."""
+    rng = np.random.default_rng(11)
+    source = cf.make_surface(rng.normal(size=(9, 8, 3)), degree=(3, 2),
+                             u_knots=np.r_[[0.0] * 4, 0.1, 0.3, 0.35, 0.6, 0.8, [1.0] * 4],
+                             v_knots=np.r_[[0.0] * 3, 0.2, 0.25, 0.5, 0.7, 0.9, [1.0] * 3])
+    tu = cf.SplineSpace.from_knots(np.r_[[0.0] * 4, 0.27, 0.55, [1.0] * 4], 3)
+    tv = cf.SplineSpace.from_knots(np.r_[[0.0] * 3, 0.4, 0.65, [1.0] * 3], 2)
+    ours = _SurfaceFit(source, 1.0, (3, 2), 4, 10_000, "pinned").project(tu, tv)
+
+    def basis(space, x):
+        return BSpline.design_matrix(x, space.knots, space.degree).toarray()
+
+    (xu, wu), (xv, wv) = (_gauss(np.union1d(a.breakpoints, b.breakpoints))
+                          for a, b in ((source.u_space, tu), (source.v_space, tv)))
+    tu_x, tv_x = basis(tu, xu), basis(tv, xv)
+    su_x, sv_x = basis(source.u_space, xu), basis(source.v_space, xv)
+    p = source.poles
+    values = np.einsum("qa,abk,rb->qrk", su_x, p, sv_x)
+    net = np.zeros((tu.dimension, tv.dimension, 3))
+    for j in (0, -1):   # border curves v = v0, v1: the clamped net's border columns
+        net[:, j] = _least_squares_with_fixed_ends(tu_x, wu, su_x @ p[:, j], p[[0, -1], j])
+    for i in (0, -1):
+        net[i, :] = _least_squares_with_fixed_ends(tv_x, wv, sv_x @ p[i], p[i, [0, -1]])
+    design = np.kron(tu_x, tv_x)
+    inside = np.zeros(net.shape[:2], dtype=bool)
+    inside[1:-1, 1:-1] = True
+    root = np.sqrt(np.kron(wu, wv))[:, None]
+    rest = values.reshape(-1, 3) - design[:, ~inside.ravel()] @ net.reshape(-1, 3)[~inside.ravel()]
+    net.reshape(-1, 3)[inside.ravel()] = np.linalg.lstsq(root * design[:, inside.ravel()],
+                                                         root * rest, rcond=None)[0]
+    assert np.allclose(ours, net, rtol=0, atol=1e-10 * np.abs(net).max())
+
+
+def test_unknown_boundary_is_refused(blade):
+    with pytest.raises(InvalidInputError, match="boundary must be one of"):
+        fair_surface_adaptive(blade, 0.05, boundary="clamped")
 
 
 def _variation_energy_by_quadrature(surface, lengths, nodes=12):
