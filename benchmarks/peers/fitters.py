@@ -289,13 +289,17 @@ def wavelet_uniform(case):
     return r.surface, f"n={r.n}"
 
 
-def wavelet_adaptive(case, degree=None, objective="compact"):
-    fair = fair_curve_adaptive if case.kind == "curve" else fair_surface_adaptive
-    r = fair(case.source, case.tol, target_degree=degree, objective=objective)
+def wavelet_adaptive(case, degree=None, objective="compact", boundary=None):
+    if case.kind == "curve":
+        r = fair_curve_adaptive(case.source, case.tol, target_degree=degree, objective=objective)
+    else:
+        r = fair_surface_adaptive(case.source, case.tol, target_degree=degree,
+                                  objective=objective, boundary=boundary or "auto")
     table = dict(r.table)
     noise = f" noise={table['noise']:.2g}" if "noise" in table else ""
+    border = f" {table['boundary']}" if "boundary" in table else ""
     return (r.curve if case.kind == "curve" else r.surface,
-            f"n={r.n} lambda={table['lambda']:.2g}{noise}")
+            f"n={r.n} lambda={table['lambda']:.2g}{noise}{border}")
 
 
 def energy(case):
@@ -318,6 +322,7 @@ METHODS = {
     "ours energy (EH)": energy,
     "ours wavelet uniform": wavelet_uniform,
     "ours wavelet adaptive": wavelet_adaptive,
+    "ours wavelet adaptive free": lambda case: wavelet_adaptive(case, boundary="free"),
     "ours wavelet adaptive p5": lambda case: wavelet_adaptive(case, degree=5),
     "ours wavelet faithful p5": lambda case: wavelet_adaptive(case, 5, "faithful"),
     "ours wavelet faithful p7": lambda case: wavelet_adaptive(case, 7, "faithful"),
