@@ -3,6 +3,7 @@ than the uniform search, exact reconstruction, valid knots, errors."""
 
 import numpy as np
 import pytest
+from hypothesis import given, strategies as st
 
 import cq_fairing as cf
 from cq_fairing.core import examples
@@ -138,18 +139,9 @@ def _gauss(breaks, nodes=8):
             (0.5 * h * w).ravel())
 
 
-def test_pinned_projection_matches_a_dense_constrained_least_squares():
-    """Border curves projected with their ends kept, then the interior with the border
-    held, against a weighted least-squares fit at Gauss points (scipy's design matrices,
-    numpy's lstsq): an independent computation of the same minimisers."""
-    rng = np.random.default_rng(11)
-    source = cf.make_surface(rng.normal(size=(9, 8, 3)), degree=(3, 2),
-                             u_knots=np.r_[[0.0] * 4, 0.1, 0.3, 0.35, 0.6, 0.8, [1.0] * 4],
-                             v_knots=np.r_[[0.0] * 3, 0.2, 0.25, 0.5, 0.7, 0.9, [1.0] * 3])
-    tu = cf.SplineSpace.from_knots(np.r_[[0.0] * 4, 0.27, 0.55, [1.0] * 4], 3)
-    tv = cf.SplineSpace.from_knots(np.r_[[0.0] * 3, 0.4, 0.65, [1.0] * 3], 2)
-    ours = _SurfaceFit(source, 1.0, (3, 2), 4, 10_000, "pinned").project(tu, tv)
-
+def _dense_pinned_projection(source, tu, tv):
+    """Border curves fitted with their ends kept, then the interior with the border held,
+    by weighted least squares at Gauss points (scipy design matrices, numpy lstsq)."""
     def basis(space, x):
         return BSpline.design_matrix(x, space.knots, space.degree).toarray()
 
@@ -158,20 +150,69 @@ def test_pinned_projection_matches_a_dense_constrained_least_squares():
     tu_x, tv_x = basis(tu, xu), basis(tv, xv)
     su_x, sv_x = basis(source.u_space, xu), basis(source.v_space, xv)
     p = source.poles
-    values = np.einsum("qa,abk,rb->qrk", su_x, p, sv_x)
     net = np.zeros((tu.dimension, tv.dimension, 3))
     for j in (0, -1):   # border curves v = v0, v1: the clamped net's border columns
         net[:, j] = _least_squares_with_fixed_ends(tu_x, wu, su_x @ p[:, j], p[[0, -1], j])
     for i in (0, -1):
         net[i, :] = _least_squares_with_fixed_ends(tv_x, wv, sv_x @ p[i], p[i, [0, -1]])
+    if min(net.shape[:2]) <= 2:
+        return net
+    values = np.einsum("qa,abk,rb->qrk", su_x, p, sv_x).reshape(-1, 3)
     design = np.kron(tu_x, tv_x)
     inside = np.zeros(net.shape[:2], dtype=bool)
     inside[1:-1, 1:-1] = True
+    inside = inside.ravel()
     root = np.sqrt(np.kron(wu, wv))[:, None]
-    rest = values.reshape(-1, 3) - design[:, ~inside.ravel()] @ net.reshape(-1, 3)[~inside.ravel()]
-    net.reshape(-1, 3)[inside.ravel()] = np.linalg.lstsq(root * design[:, inside.ravel()],
-                                                         root * rest, rcond=None)[0]
-    assert np.allclose(ours, net, rtol=0, atol=1e-10 * np.abs(net).max())
+    rest = values - design[:, ~inside] @ net.reshape(-1, 3)[~inside]
+    net.reshape(-1, 3)[inside] = np.linalg.lstsq(root * design[:, inside], root * rest,
+                                                 rcond=None)[0]
+    return net
+
+
+def _pinned(source, tu, tv):
+    return _SurfaceFit(source, 1.0, (tu.degree, tv.degree), 2, 10_000, "pinned").project(tu, tv)
+
+
+def test_pinned_projection_matches_a_dense_constrained_least_squares():
+    """An independent computation of the same minimisers on a hand-picked case."""
+    rng = np.random.default_rng(11)
+    source = cf.make_surface(rng.normal(size=(9, 8, 3)), degree=(3, 2),
+                             u_knots=np.r_[[0.0] * 4, 0.1, 0.3, 0.35, 0.6, 0.8, [1.0] * 4],
+                             v_knots=np.r_[[0.0] * 3, 0.2, 0.25, 0.5, 0.7, 0.9, [1.0] * 3])
+    tu = cf.SplineSpace.from_knots(np.r_[[0.0] * 4, 0.27, 0.55, [1.0] * 4], 3)
+    tv = cf.SplineSpace.from_knots(np.r_[[0.0] * 3, 0.4, 0.65, [1.0] * 3], 2)
+    net = _dense_pinned_projection(source, tu, tv)
+    assert np.allclose(_pinned(source, tu, tv), net, rtol=0, atol=1e-10 * np.abs(net).max())
+
+
+def _random_space(rng, degree, spans):
+    """Clamped space on [0, 1] with ``spans`` spans no shorter than a third of the mean."""
+    gaps = rng.uniform(1.0, 3.0, spans)
+    inner = np.cumsum(gaps)[:-1] / gaps.sum()
+    return cf.SplineSpace.from_knots(np.r_[[0.0] * (degree + 1), inner,
+                                           [1.0] * (degree + 1)], degree)
+
+
+@given(seed=st.integers(0, 2 ** 31), degrees=st.tuples(st.integers(1, 4), st.integers(1, 4)),
+       source_spans=st.tuples(st.integers(1, 7), st.integers(1, 7)),
+       target_degrees=st.tuples(st.integers(1, 4), st.integers(1, 4)),
+       fractions=st.tuples(st.floats(0.0, 1.0), st.floats(0.0, 1.0)))
+def test_pinned_projection_properties(seed, degrees, source_spans, target_degrees, fractions):
+    """For random sources and targets: the dense least-squares minimisers, the corners
+    kept exactly, and the source itself back when the target is the source's space."""
+    rng = np.random.default_rng(seed)
+    su, sv = (_random_space(rng, p, n) for p, n in zip(degrees, source_spans))
+    source = cf.make_surface(rng.normal(size=(su.dimension, sv.dimension, 3)),
+                             u_knots=su.knots, v_knots=sv.knots, degree=degrees)
+    tu, tv = (_random_space(rng, p, max(1, round(f * n)))
+              for p, f, n in zip(target_degrees, fractions, source_spans))
+    ours = _pinned(source, tu, tv)
+    reference = _dense_pinned_projection(source, tu, tv)
+    scale = np.abs(source.poles).max()
+    assert np.allclose(ours, reference, rtol=0, atol=1e-8 * scale)
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+        assert np.array_equal(ours[i, j], source.poles[i, j])
+    assert np.allclose(_pinned(source, su, sv), source.poles, rtol=0, atol=1e-10 * scale)
 
 
 def test_unknown_boundary_is_refused(blade):
