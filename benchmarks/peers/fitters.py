@@ -289,15 +289,15 @@ def wavelet_uniform(case):
     return r.surface, f"n={r.n}"
 
 
-def wavelet_adaptive(case, degree=None, objective="compact", boundary=None):
+def wavelet_adaptive(case, degree=None, objective="compact", borders=None):
     if case.kind == "curve":
         r = fair_curve_adaptive(case.source, case.tol, target_degree=degree, objective=objective)
     else:
         r = fair_surface_adaptive(case.source, case.tol, target_degree=degree,
-                                  objective=objective, boundary=boundary or "auto")
+                                  objective=objective, borders=borders or "auto")
     table = dict(r.table)
     noise = f" noise={table['noise']:.2g}" if "noise" in table else ""
-    border = f" {table['boundary']}" if "boundary" in table else ""
+    border = f" {table['borders']}" if "borders" in table else ""
     return (r.curve if case.kind == "curve" else r.surface,
             f"n={r.n} lambda={table['lambda']:.2g}{noise}{border}")
 
@@ -322,7 +322,7 @@ METHODS = {
     "ours energy (EH)": energy,
     "ours wavelet uniform": wavelet_uniform,
     "ours wavelet adaptive": wavelet_adaptive,
-    "ours wavelet adaptive free": lambda case: wavelet_adaptive(case, boundary="free"),
+    "ours wavelet adaptive free": lambda case: wavelet_adaptive(case, borders="free"),
     "ours wavelet adaptive p5": lambda case: wavelet_adaptive(case, degree=5),
     "ours wavelet faithful p5": lambda case: wavelet_adaptive(case, 5, "faithful"),
     "ours wavelet faithful p7": lambda case: wavelet_adaptive(case, 7, "faithful"),

@@ -83,7 +83,7 @@ __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_spac
 
 THETA = 0.9          # redistribution aims at THETA * tol
 SAFETY = 0.99       # the search works to SAFETY * tol (room for excess between samples)
-BOUNDARIES = ("auto", "free", "pinned")  # surface border rows (fair_surface_adaptive)
+BORDERS = ("auto", "free", "pinned")  # surface border rows (fair_surface_adaptive)
 FINAL_MIN_PER_SPAN = 8  # the final surface check never samples coarser than deviation() does
 ROUNDS = 4           # redistribution rounds per count
 FLOOR = 0.25         # density floor, fraction of the mean density
@@ -441,9 +441,9 @@ def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
     return faired, e, lam
 
 
-def _boundary(value):
-    if value not in BOUNDARIES:
-        raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {value!r}.")
+def _borders(value):
+    if value not in BORDERS:
+        raise InvalidInputError(f"borders must be one of {BORDERS}, got {value!r}.")
 
 
 def _degree(value, source_degree):
@@ -458,12 +458,12 @@ def _degree(value, source_degree):
 class _SurfaceFit:
     """Exact tensor projections of one source surface, with their deviation on a grid."""
 
-    def __init__(self, surface, tol, degrees, per_span, max_samples, boundary="free"):
+    def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free"):
         if surface.is_rational:
             raise UnsupportedGeometryError(
                 "adaptive fairing needs a polynomial surface; use fair_surface for rational ones.")
         self.surface, self.tol, self.degrees = surface, tol, degrees
-        self.pinned = boundary == "pinned"
+        self.pinned = borders == "pinned"
         u = sample_parameters(surface.u_space, per_span=per_span)
         v = sample_parameters(surface.v_space, per_span=per_span)
         while u.size * v.size > max_samples and per_span > 1:
@@ -520,7 +520,7 @@ class _SurfaceFit:
 
     def project(self, tu, tv, lam=0.0):
         """Net of the (penalised) projection onto ``tu x tv``, shape (k_tu, k_tv, d);
-        with ``boundary="pinned"`` the border rows are fixed first (:meth:`_border`)."""
+        with pinned borders the border rows are fixed first (:meth:`_border`)."""
         rhs = self._moments(tu, tv)
         if self.pinned:
             net = self._border(tu, tv, lam)
@@ -700,7 +700,7 @@ def _reduce_surface(fit, spaces, result, tol, rounds=ROUNDS):
 
 
 def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compact", polish=True,
-                          boundary="auto", per_span=8, max_samples=400_000, _safety=SAFETY):
+                          borders="auto", per_span=8, max_samples=400_000, _safety=SAFETY):
     r"""Fair ``surface`` into adaptive (non-uniform) u and v targets within ``tol``.
 
     ``"compact"``: the knot families start from the source's breakpoint densities.
@@ -727,7 +727,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         Spend the remaining tolerance on the curvature-variation energy
         (:func:`variation_energy_matrix`, penalised projection;
         ``"compact"`` only).
-    boundary : {"auto", "free", "pinned"}
+    borders : {"auto", "free", "pinned"}
         ``"free"``: the plain (penalised) L2 projection, whose largest deviation often
         sits at a corner.  ``"pinned"``: each border row is the projection of the
         source's border curve with its two end points kept, and the interior is
@@ -735,7 +735,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         corners stay exactly where they are, and each edge follows its own border
         curve.  ``"auto"``: free borders, then (compact search) the reduction goes on
         with pinned ones, which are kept only if the net gets smaller; the table's
-        ``"boundary"`` entry says which.
+        ``"borders"`` entry says which.
     per_span : int
         Deviation samples per source span (lowered until the grid has at most
         ``max_samples`` points).  The result is checked on a grid twice as dense per
@@ -747,7 +747,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     -------
     SurfaceFairResult
         ``max_deviation``, ``evaluations`` and ``table`` ``(("lambda", value),
-        ("boundary", "free" or "pinned"), ...)`` filled (``("noise", sigma)`` too for
+        ("borders", "free" or "pinned"), ...)`` filled (``("noise", sigma)`` too for
         ``"faithful"``); one direct decomposition step, so ``details``/``reconstruct``
         work (exactly for free borders and ``lambda = 0``, see the module notes).
 
@@ -758,11 +758,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     """
     tol = check_tolerance(tol)
     faithful = _objective(objective) == "faithful"
-    _boundary(boundary)
+    _borders(borders)
     tdu, tdv = target_degree if isinstance(target_degree, (tuple, list)) else (target_degree,) * 2
     degrees = (_degree(tdu, surface.u_degree), _degree(tdv, surface.v_degree))
     fit = _SurfaceFit(surface, _safety * tol, degrees, per_span, max_samples,
-                      "pinned" if boundary == "pinned" else "free")
+                      "pinned" if borders == "pinned" else "free")
     dens = [_source_density(s) for s in (surface.u_space, surface.v_space)]
     tops = [surface.u_space.n_spans, surface.v_space.n_spans]
 
@@ -781,11 +781,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         found = (spaces, faired, e, 0.0) if e <= tol else None
     if found is None:
         found = _checked_compact(fit, family, dens, tops, polish, tol, check,
-                                 boundary == "auto")
+                                 borders == "auto")
     spaces, faired, e, lam = found
     if e > tol and _safety > 0.9:
         return fair_surface_adaptive(surface, tol, target_degree=target_degree,
-                                     objective=objective, polish=polish, boundary=boundary,
+                                     objective=objective, polish=polish, borders=borders,
                                      per_span=per_span,
                                      max_samples=max_samples, _safety=_safety * tol / e - 0.005)
     if e > tol:
@@ -798,7 +798,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     return SurfaceFairResult(surface, faired, (tuple(tops), n), n, "adaptive", (step,),
                              max_deviation=e, evaluations=fit.evaluations,
                              table=(("lambda", lam),
-                                    ("boundary", "pinned" if fit.pinned else "free")) + table)
+                                    ("borders", "pinned" if fit.pinned else "free")) + table)
 
 
 def _checked_compact(fit, family, dens, tops, polish, tol, check, try_pinned):

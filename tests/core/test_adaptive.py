@@ -94,7 +94,7 @@ def test_blade_meets_tol_with_fewer_poles_than_uniform(blade, blade_auto):
 
 
 def test_unpolished_surface_with_free_borders_reconstructs_source(blade):
-    result = fair_surface_adaptive(blade, 0.05, polish=False, boundary="free")
+    result = fair_surface_adaptive(blade, 0.05, polish=False, borders="free")
     assert np.allclose(result.reconstruct(), blade.poles, atol=1e-8)
     assert deviation(blade, result.surface).max <= 0.05
 
@@ -107,9 +107,9 @@ def blade_auto(blade):
 def test_auto_borders_are_pinned_only_when_the_net_shrinks(blade, blade_auto):
     """On the bump fixture the free-border search ends at 15 x 12; going on with pinned
     borders reaches 15 x 11, so ``"auto"`` keeps them, with the corners exact."""
-    free = fair_surface_adaptive(blade, 0.02, boundary="free", polish=False)
-    assert dict(free.table)["boundary"] == "free"
-    assert dict(blade_auto.table)["boundary"] == "pinned"
+    free = fair_surface_adaptive(blade, 0.02, borders="free", polish=False)
+    assert dict(free.table)["borders"] == "free"
+    assert dict(blade_auto.table)["borders"] == "pinned"
     assert blade_auto.poles[:, :, 0].size < free.poles[:, :, 0].size
     assert deviation(blade, blade_auto.surface).max <= 0.02
     for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
@@ -117,8 +117,8 @@ def test_auto_borders_are_pinned_only_when_the_net_shrinks(blade, blade_auto):
 
 
 def test_pinned_borders_keep_the_corners_within_tol(blade):
-    result = fair_surface_adaptive(blade, 0.05, boundary="pinned")
-    assert dict(result.table)["boundary"] == "pinned"
+    result = fair_surface_adaptive(blade, 0.05, borders="pinned")
+    assert dict(result.table)["borders"] == "pinned"
     assert deviation(blade, result.surface).max <= 0.05
     for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
         assert np.array_equal(result.poles[i, j], blade.poles[i, j])
@@ -215,9 +215,9 @@ def test_pinned_projection_properties(seed, degrees, source_spans, target_degree
     assert np.allclose(_pinned(source, su, sv), source.poles, rtol=0, atol=1e-10 * scale)
 
 
-def test_unknown_boundary_is_refused(blade):
-    with pytest.raises(InvalidInputError, match="boundary must be one of"):
-        fair_surface_adaptive(blade, 0.05, boundary="clamped")
+def test_unknown_borders_are_refused(blade):
+    with pytest.raises(InvalidInputError, match="borders must be one of"):
+        fair_surface_adaptive(blade, 0.05, borders="clamped")
 
 
 def _variation_energy_by_quadrature(surface, lengths, nodes=12):
