@@ -499,13 +499,8 @@ class _SurfaceFit:
         return self._cached(("gram", space.key), build)
 
     def _inner(self, space):
-        """Interior block of a target's Gram matrix (LU factors) and its two border
-        columns, for projections whose end coefficients are held."""
-        def build():
-            g = sp.csr_matrix(self._gram(space)[0])
-            return (spla.splu(sp.csc_matrix(g[1:-1, 1:-1])),
-                    g[1:-1][:, [0, space.dimension - 1]].toarray())
-        return self._cached(("inner", space.key), build)
+        """:func:`_held_ends` of a target's Gram matrix, kept per space."""
+        return self._cached(("inner", space.key), lambda: _held_ends(self._gram(space)[0]))
 
     def _moments(self, tu, tv):
         r""":math:`\langle\Phi_{T_u}|\Phi_{S_u}\rangle P \langle\Phi_{T_v}|\Phi_{S_v}\rangle^T`,
@@ -567,12 +562,8 @@ class _SurfaceFit:
         x[0], x[-1] = ends
         if space.dimension <= 2:
             return x
-        if lam <= 0.0:
-            lu, columns = self._inner(space)
-        else:
-            a = sp.csr_matrix(self._gram(space)[0] + lam * _scaled_energy(space, 3))
-            lu = spla.splu(sp.csc_matrix(a[1:-1, 1:-1]))
-            columns = a[1:-1][:, [0, space.dimension - 1]].toarray()
+        lu, columns = (self._inner(space) if lam <= 0.0 else
+                       _held_ends(self._gram(space)[0] + lam * _scaled_energy(space, 3)))
         x[1:-1] = lu.solve(moments[1:-1] - columns @ ends)
         return x
 
@@ -614,6 +605,14 @@ class _SurfaceFit:
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
         return faired, values, float(values.max())
+
+
+def _held_ends(matrix):
+    """LU factors of a matrix's interior block and its first and last columns there:
+    what a solve with the two end coefficients held needs."""
+    m = sp.csr_matrix(matrix)
+    return (spla.splu(sp.csc_matrix(m[1:-1, 1:-1])),
+            m[1:-1][:, [0, m.shape[0] - 1]].toarray())
 
 
 def _tensor_solve(lu_u, lu_v, rhs):

@@ -133,6 +133,7 @@ def _least_squares_with_fixed_ends(design, weights, values, ends):
 
 
 def _gauss(breaks, nodes=8):
+    """Gauss-Legendre nodes and weights, ``nodes`` per cell of ``breaks``."""
     x, w = np.polynomial.legendre.leggauss(nodes)
     h = np.diff(breaks)[:, None]
     return ((0.5 * (breaks[1:, None] + breaks[:-1, None]) + 0.5 * h * x).ravel(),
@@ -223,12 +224,9 @@ def test_unknown_borders_are_refused(blade):
 def _variation_energy_by_quadrature(surface, lengths, nodes=12):
     """int int sum_a C(3,a) |d^3 S / ds^a dt^(3-a)|^2 ds dt with s = L_u u, t = L_v v, by
     scipy's BSpline derivatives (v rows first, then u) and Gauss-Legendre per knot cell."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    bu, bv = np.unique(surface.u_knots), np.unique(surface.v_knots)
-    u = (0.5 * (bu[1:, None] + bu[:-1, None]) + 0.5 * np.diff(bu)[:, None] * x).ravel()
-    v = (0.5 * (bv[1:, None] + bv[:-1, None]) + 0.5 * np.diff(bv)[:, None] * x).ravel()
-    weight = np.outer((0.5 * np.diff(bu)[:, None] * w).ravel(),
-                      (0.5 * np.diff(bv)[:, None] * w).ravel())
+    (u, wu), (v, wv) = (_gauss(np.unique(knots), nodes)
+                        for knots in (surface.u_knots, surface.v_knots))
+    weight = np.outer(wu, wv)
     lu, lv = lengths
     total = 0.0
     for a, binom in ((3, 1), (2, 3), (1, 3), (0, 1)):
