@@ -824,12 +824,12 @@ def _polished_and_checked(fit, spaces, result, polish, tol, check):
     faired, lam = result[0], 0.0
     if polish and min(fit.degrees) >= 2:
         (faired, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol, result, steps=8)
-    e = check(faired)
+    e = check(faired, fit.probe)
     while e > tol and lam > 0.0:
         lam = lam / 10.0 if lam > 1e-8 else 0.0
         faired = BSplineSurface(fit.project(*spaces, lam), spaces[0].knots, spaces[1].knots,
                                 *fit.degrees)
-        e = check(faired)
+        e = check(faired, fit.probe)
     return spaces, faired, e, lam
 
 
@@ -944,10 +944,13 @@ def _final_check(surface, per_span, max_samples):
         per_span //= 2
     per_span = max(per_span, FINAL_MIN_PER_SPAN)
 
-    def check(faired):
+    def check(faired, search=None):
         uv = (sample_parameters(surface.u_space, faired.u_space, per_span=per_span),
               sample_parameters(surface.v_space, faired.v_space, per_span=per_span))
-        return SurfaceProbe(surface, uv=uv).max_deviation(faired)[0]
+        probe = SurfaceProbe(surface, uv=uv)
+        if search is not None:
+            probe.adopt_feet(search)
+        return probe.max_deviation(faired)[0]
 
     return check
 

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.interpolate import RegularGridInterpolator
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
@@ -529,6 +530,18 @@ class SurfaceProbe:
     def _set_samples(self, u, v):
         self.u, self.v = u, v
         self.points = _grid_points(self.source, u, v)
+        self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
+        self._feet = {}
+
+    def _last_feet(self, key):
+        """Foot parameters last found per sample on the ``"source"`` or on the
+        ``"faired"`` geometry measured last, shape (n_u, n_v, 2); the grid's own
+        parameters until a first search.  Successive candidates of a search differ little,
+        so their feet are Newton starts that converge at once even where a candidate
+        slides along the source (its same-parameter point is far from the foot)."""
+        if key not in self._feet:
+            self._feet[key] = np.stack(np.meshgrid(self.u, self.v, indexing="ij"), axis=-1)
+        return self._feet[key]
 
     def _adapt(self, faired):
         """Use ``per_span`` samples per span of the merged breakpoints, per direction."""
@@ -539,6 +552,15 @@ class SurfaceProbe:
         if (u.size, v.size) != (self.u.size, self.v.size) or not (
                 np.array_equal(u, self.u) and np.array_equal(v, self.v)):
             self._set_samples(u, v)
+
+    def adopt_feet(self, other):
+        """Start from the feet that ``other`` (a probe of the same source on another grid)
+        found last, interpolated bilinearly onto this grid: a dense check after a search
+        on a coarser grid."""
+        uv = np.stack(np.meshgrid(self.u, self.v, indexing="ij"), axis=-1)
+        for key, feet in other._feet.items():
+            self._feet[key] = RegularGridInterpolator((other.u, other.v), feet,
+                                                      bounds_error=False, fill_value=None)(uv)
 
     def bound(self, faired):
         other = _grid_points(faired, self.u, self.v)
@@ -559,13 +581,35 @@ class SurfaceProbe:
         return np.maximum(d_fs, d_sf)
 
     def _one_way(self, target, here, there, i, j, window, tol=None):
-        """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid)."""
-        d = closest_points_surface(target, here[i, j], self.u[i], self.v[j], stop_below=tol)[2]
+        """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid).
+
+        A sample whose same-parameter distance is within ``tol`` needs no search.  Newton
+        starts from the same parameter, or from the last foot (:meth:`_last_feet`) where
+        that lies more than half a sample spacing away (the candidate slides along the
+        source); where the result stays above ``tol`` it starts again from the nearest
+        ``there`` sample within ``window``.
+        """
+        key = "source" if target is self.source else "faired"
+        p = here[i, j]
+        u0, v0 = self.u[i], self.v[j]
+        if key in self._feet:
+            lu, lv = self._feet[key][i, j, 0], self._feet[key][i, j, 1]
+            slid = (np.abs(lu - u0) > self._half_step[0][i]) | \
+                (np.abs(lv - v0) > self._half_step[1][j])
+            u0, v0 = np.where(slid, lu, u0), np.where(slid, lv, v0)
+        d = _distance(there[i, j], p)
         todo = np.flatnonzero(d > tol) if tol is not None else np.arange(d.size)
         if todo.size:
-            u0, v0 = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
-            d[todo] = np.minimum(d[todo], closest_points_surface(
-                target, here[i[todo], j[todo]], u0, v0, stop_below=tol)[2])
+            u0[todo], v0[todo], d[todo] = closest_points_surface(
+                target, p[todo], u0[todo], v0[todo], stop_below=tol)
+            todo = todo[d[todo] > tol] if tol is not None else todo
+        if todo.size:
+            wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
+            fu, fv, fd = closest_points_surface(target, p[todo], wu, wv, stop_below=tol)
+            better = fd < d[todo]
+            k = todo[better]
+            u0[k], v0[k], d[k] = fu[better], fv[better], fd[better]
+        self._last_feet(key)[i, j] = np.stack([u0, v0], axis=-1)
         return d
 
     def max_deviation(self, faired, tol=None, stride=4):

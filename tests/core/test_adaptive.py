@@ -303,8 +303,18 @@ def test_a_coarse_search_grid_never_loosens_the_final_check(blade):
 
 
 def test_a_search_too_coarse_to_converge_is_refused_not_returned(blade):
-    """At tol 0.05 the one-sample-per-span search keeps accepting nets that the dense check
-    rejects; after the tightened retries the product says so instead of returning one."""
-    with pytest.raises(ToleranceNotMetError, match="denser check") as info:
-        fair_surface_adaptive(blade, 0.05, max_samples=1000)
-    assert info.value.best_deviation > 0.05
+    """With one sample per span the search keeps accepting nets that the dense check
+    rejects at some tolerances; after the tightened retries the product either returns a
+    net that ``deviation`` confirms or says so instead of returning one (the refusal must
+    occur at least once here: at 0.045 and 0.06 the retries do not converge)."""
+    refused = 0
+    for tol in (0.045, 0.05, 0.06):
+        try:
+            result = fair_surface_adaptive(blade, tol, max_samples=1000)
+        except ToleranceNotMetError as error:
+            assert "denser check" in str(error)
+            assert error.best_deviation > tol
+            refused += 1
+        else:
+            assert deviation(blade, result.surface).max <= tol
+    assert refused >= 1

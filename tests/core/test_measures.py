@@ -1,5 +1,7 @@
 """Deviation and fairness measures against brute force and closed forms."""
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -107,6 +109,45 @@ def test_surface_deviation_matches_brute_force():
     dmap = M.deviation_map(fair)
     assert dmap.values.shape == dmap.signed.shape == (dmap.parameters[0].size, dmap.parameters[1].size)
     assert np.allclose(np.abs(dmap.signed), dmap.values)
+
+
+def _reparametrised(surface, phi, degree):
+    """Poles of ``S(phi(u), v)`` for a Bezier patch ``S`` and a polynomial ``phi`` of
+    degree ``degree / surface.u_degree``: Bernstein collocation, exact for polynomials."""
+    x = np.linspace(0.0, 1.0, degree + 1)
+    k = np.arange(degree + 1)
+    binom = np.array([math.comb(degree, i) for i in k])
+    bernstein = binom * x[:, None] ** k * (1 - x[:, None]) ** (degree - k)
+    rows = np.stack([BSpline(surface.u_space.knots, surface.poles[:, j], surface.u_degree)(phi(x))
+                     for j in range(surface.poles.shape[1])], axis=1)
+    poles = np.linalg.solve(bernstein, rows.reshape(degree + 1, -1)).reshape(rows.shape)
+    return cf.make_surface(poles, [0.0] * (degree + 1) + [1.0] * (degree + 1),
+                           surface.v_space.knots, (degree, surface.v_degree))
+
+
+def test_surface_probe_follows_a_sliding_candidate_by_its_last_feet():
+    """The candidate is the source itself with u -> phi(u) = u + 0.3 u (1 - u): the
+    same-parameter distance is large, the true one zero.  The feet the probe keeps on the
+    candidate are phi^-1 of the sample parameters (closed form), and a denser probe that
+    adopts them measures zero too."""
+    j, i = np.meshgrid(np.arange(4.0), np.arange(4.0))
+    source = cf.make_surface(np.stack([3 * i, 2 * j, np.sin(i) * np.cos(j)], axis=2))
+    candidate = _reparametrised(source, lambda u: u + 0.3 * u * (1 - u), 6)
+    probe = M.SurfaceProbe(source, per_span=20)
+    other, bound = probe.bound(candidate)
+    assert bound.max() > 0.3
+    everywhere = np.arange(bound.size)
+    assert probe.true_distance(candidate, other, everywhere).max() < 1e-9
+    inverse = (1.3 - np.sqrt(1.69 - 1.2 * probe.u)) / 0.6
+    feet = probe._last_feet("faired")
+    assert np.allclose(feet[..., 0], inverse[:, None], atol=1e-8)
+    assert np.allclose(feet[..., 1], probe.v[None, :], atol=1e-8)
+    assert probe.true_distance(candidate, other, everywhere, tol=1e-6).max() < 1e-6
+    dense = M.SurfaceProbe(source, per_span=50)
+    dense.adopt_feet(probe)
+    assert np.allclose(dense._last_feet("faired")[..., 0],
+                       ((1.3 - np.sqrt(1.69 - 1.2 * dense.u)) / 0.6)[:, None], atol=1e-3)
+    assert dense.max_deviation(candidate)[0] < 1e-9
 
 
 def test_signed_deviation_of_offset_plane():
