@@ -3,14 +3,16 @@
 Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
-[--method wavelet|adaptive|energy] [--objective compact|faithful] [--jobs N]
+[--method wavelet|adaptive|energy] [--objective compact|faithful]
+[--borders auto|free|pinned] [--jobs N]
 [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
     ``--method adaptive`` lets the knots follow the error (fewer poles at the same
     tolerance; polynomial faces only, rational ones are skipped) and takes
     ``--objective faithful`` to stop at the estimated noise level instead of at the
-    fewest poles.
+    fewest poles, and ``--borders free|pinned`` to choose the target's border rows
+    (default ``auto``: pinned where that gives fewer poles).
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
     up on a face after S seconds (reported failed, kept unchanged).
 ``inspect IN``
@@ -128,6 +130,10 @@ def build_parser():
     fair.add_argument("--objective", choices=("compact", "faithful"),
                       help="with --method adaptive: compact = fewest poles within --tol "
                            "(default), faithful = stop at the estimated noise level")
+    fair.add_argument("--borders", choices=("auto", "free", "pinned"),
+                      help="with --method adaptive: the target's border rows; auto = "
+                           "pinned (corners kept) where that gives fewer poles (default), "
+                           "free = plain projection (often faster), pinned = always")
     fair.add_argument("--boundary", choices=("free", "fixed"), default="free",
                       help="keep the face borders fixed or let them move within --tol")
     fair.add_argument("--convert", action="store_true",
@@ -208,6 +214,7 @@ def command_fair(args):
     progress = _Progress(args.progress or sys.stderr.isatty())
     result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
                         method=args.method, objective=_objective(args),
+                        borders=args.borders or "auto",
                         convert=args.convert, progress=progress,
                         boundary=args.boundary, details=False, jobs=args.jobs,
                         face_timeout=args.face_timeout)
@@ -234,11 +241,13 @@ def _check_suffixes(args):
 
 
 def _check_method(args):
-    """--objective needs --method adaptive; adaptive chooses its own target (no --target)."""
-    if args.objective is not None and args.method != "adaptive":
-        raise InvalidInputError(
-            f"--objective {args.objective} applies to --method adaptive only, got --method "
-            f"{args.method}; add --method adaptive or drop --objective.")
+    """--objective and --borders need --method adaptive; adaptive chooses its own target
+    (no --target)."""
+    for option, value in (("--objective", args.objective), ("--borders", args.borders)):
+        if value is not None and args.method != "adaptive":
+            raise InvalidInputError(
+                f"{option} {value} applies to --method adaptive only, got --method "
+                f"{args.method}; add --method adaptive or drop {option}.")
     if args.method == "adaptive" and args.target is not None:
         raise InvalidInputError("--method adaptive chooses the target itself; give --tol "
                                 "instead of --target, or use --method wavelet.")
@@ -307,6 +316,7 @@ def _build_report(args, result, tol, seconds):
     return build_report(entries, input_path=args.input, output_path=args.output,
                         tolerance=tol, method=args.method,
                         objective=_objective(args) if args.method == "adaptive" else None,
+                        borders=(args.borders or "auto") if args.method == "adaptive" else None,
                         max_gap=result.max_gap,
                         valid=result.valid, seconds=seconds,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")

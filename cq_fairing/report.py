@@ -252,8 +252,8 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
 
 
 def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
-                 method=None, objective=None, max_gap=None, valid=None, maps=None,
-                 seconds=None, command=None, units="mm"):
+                 method=None, objective=None, borders=None, max_gap=None, valid=None,
+                 maps=None, seconds=None, command=None, units="mm"):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
     Returns
@@ -261,7 +261,8 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
     dict
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
         ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"`` for the
-        adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
+        adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
+        for the adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
         worst deviation, max gap between faces, validity, time), ``maps`` (name ->
         PNG/VTP path) and ``skipped`` (index, reason).
     """
@@ -287,6 +288,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command, "input": _str(input_path), "output": _str(output_path),
         "tolerance": tolerance, "units": units, "method": method, "objective": objective,
+        "borders": borders,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
                     for f in faces if f["status"] in ("skipped", "failed")],
@@ -385,9 +387,10 @@ def _html_table(report):
 
 
 def _method(report):
-    """``adaptive (faithful)``, or the bare method when it has no objective."""
-    objective = report.get("objective")
-    return f"{report['method']} ({objective})" if objective else report["method"]
+    """``adaptive (faithful, auto borders)``, or the bare method when it has no objective."""
+    settings = [report.get("objective")] + (
+        [f"{report['borders']} borders"] if report.get("borders") else [])
+    return f"{report['method']} ({', '.join(settings)})" if settings[0] else report["method"]
 
 
 def render_html(report):

@@ -541,7 +541,7 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
 def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=None,
                  weights=None, target_degree=None, schedule="auto",
                  strategy="guaranteed", deviation="geometric", method="wavelet",
-                 objective="compact"):
+                 objective="compact", borders="auto"):
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
 
     .. math:: C_n = A_u\, C\, A_v^T, \qquad
@@ -576,6 +576,11 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         (:mod:`cq_fairing.core.energy`).  Both need ``tol`` and no ``n``.
     objective : {"compact", "faithful"}
         ``method="adaptive"`` only, as for :func:`fair_curve`.
+    borders : {"auto", "free", "pinned"}
+        ``method="adaptive"`` only: the target's border rows, see
+        :func:`~cq_fairing.core.adaptive.fair_surface_adaptive` (``"free"`` is the plain
+        L2 projection, exact reconstruction and often the faster search; ``"pinned"``
+        keeps the corners; ``"auto"`` pins them only when the net gets smaller).
 
     Returns
     -------
@@ -587,6 +592,10 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
     method = _tolerance_method(method, objective, n, tol)
+    if method != "adaptive" and borders != "auto":
+        raise InvalidInputError(
+            f"borders={borders!r} applies to method='adaptive' only, got method={method!r}; "
+            "add method='adaptive' or drop borders.")
     if method == "energy":
         from .energy import fair_surface_energy
 
@@ -595,7 +604,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         from .adaptive import fair_surface_adaptive
 
         return fair_surface_adaptive(surface, tol, target_degree=target_degree,
-                                     objective=objective)
+                                     objective=objective, borders=borders)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "

@@ -27,6 +27,7 @@ Special cases handled, not refused:
 
 import time
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 from OCP.Bnd import Bnd_Box
 from OCP.TopoDS import TopoDS
 
+from ..core.adaptive import BORDERS
 from ..core.fairing import SurfaceFairResult, fair_surface, target_space
 from ..core.geometry import BSplineSurface
 from ..core.spaces import SplineSpace
@@ -119,12 +121,12 @@ def default_tolerance(shape):
     return 1e-3 * float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
 
 
-def check_options(tol, n, method, boundary, objective="compact"):
+def check_options(tol, n, method, boundary, objective="compact", borders="auto"):
     """Validate the shared options of :func:`fair_face` and ``fair_shape`` once.
 
     ``method="adaptive"`` chooses its targets itself: it needs ``tol`` (or the default
-    tolerance, ``n`` and ``tol`` both ``None``) and refuses ``n``; ``objective`` applies
-    to it only.
+    tolerance, ``n`` and ``tol`` both ``None``) and refuses ``n``; ``objective`` and
+    ``borders`` apply to it only.
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -142,6 +144,12 @@ def check_options(tol, n, method, boundary, objective="compact"):
         raise InvalidInputError(
             f"objective={objective!r} applies to method='adaptive' only, got method={method!r}; "
             "add method='adaptive' or drop objective.")
+    if borders not in BORDERS:
+        raise InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
+    if method != "adaptive" and borders != "auto":
+        raise InvalidInputError(
+            f"borders={borders!r} applies to method='adaptive' only, got method={method!r}; "
+            "add method='adaptive' or drop borders.")
     if method == "adaptive" and n is not None:
         raise InvalidInputError(
             f"method='adaptive' chooses the target itself and needs tol, not n; got n={n!r}. "
@@ -152,7 +160,7 @@ def check_options(tol, n, method, boundary, objective="compact"):
 
 def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", convert=False,
               boundary="free", target_degree=None, density=None, details=True,
-              search="local"):
+              search="local", borders="auto"):
     r"""Fair one face and put the result under the face's own trim.
 
     Parameters
@@ -196,6 +204,13 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         (the core's accuracy control, measured on the whole parameter domain).  Either
         way OCCT's projection checks the result; if it fails, the local search runs
         again with the parametric distance, an upper bound of the true distance.
+    borders : {"auto", "free", "pinned"}
+        ``method="adaptive"`` only: the border rows of the core's target
+        (:func:`cq_fairing.core.adaptive.fair_surface_adaptive`).  ``"auto"`` pins them
+        (corners kept, each edge projected on its own) when that gives fewer poles;
+        ``"free"`` is the plain projection and often a faster search on faces whose
+        pinned net slides along the surface; ``"pinned"`` always pins.  Independent of
+        ``boundary``, which restores the source's border rows afterwards.
 
     Returns
     -------
@@ -210,7 +225,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     """
     start = time.perf_counter()
     face = as_face(face)
-    check_options(tol, n, method, boundary, objective)
+    check_options(tol, n, method, boundary, objective, borders)
     info = face_info(face)
     if not info.is_bspline:
         if not convert:
@@ -223,7 +238,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         tol = default_tolerance(face)
     if search not in SEARCHES:
         raise InvalidInputError(f"search must be one of {SEARCHES}, got {search!r}.")
-    criteria = _criteria(tol, search, method, objective)
+    criteria = _criteria(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
     except UnsupportedGeometryError:  # the core's adaptive method refuses weights
@@ -237,12 +252,19 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     return report
 
 
-def _criteria(tol, search, method, objective):
+class AdaptiveTarget(NamedTuple):
+    """Criterion of an attempt that lets the core's adaptive search choose the target."""
+
+    objective: str
+    borders: str
+
+
+def _criteria(tol, search, method, objective, borders):
     """The ``(criterion, goal)`` attempts of :func:`_fair_verified`, in order.
 
     With explicit ``n``: one attempt.  ``method="adaptive"``: the core's adaptive search
-    (criterion: the objective) at ``tol``, then at ``MARGIN * tol``.  Otherwise the
-    requested search (``"local"`` with the normal-distance estimate, or the core's
+    (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``.
+    Otherwise the requested search (``"local"`` with the normal-distance estimate, or the core's
     ``fair_surface(tol=...)``), then the local search with the parametric distance, an
     upper bound of the true distance; they aim at ``MARGIN * tol`` (room for excursions
     between samples), the last one at ``tol``.
@@ -250,7 +272,8 @@ def _criteria(tol, search, method, objective):
     if tol is None:
         return [(None, None)]
     if method == "adaptive":
-        return [(objective, tol), (objective, MARGIN * tol)]
+        target = AdaptiveTarget(objective, borders)
+        return [(target, tol), (target, MARGIN * tol)]
     first = "core" if search == "core" else "normal"
     return [(first, MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
 
@@ -385,15 +408,16 @@ def _target_degree(surface, target_degree):
 def _choose(source, tol, n, degree, sampler, finish, criterion):
     """Target scales, the faired (finished) surface and the core result if computed.
 
-    For the adaptive method (``criterion`` an objective) the target is the pair of
-    non-uniform spaces the core chose.
+    For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
+    pair of non-uniform spaces the core chose.
     """
-    if criterion in OBJECTIVES:
+    if isinstance(criterion, AdaptiveTarget):
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,
                               degree=(source.u_degree, source.v_degree),
                               weights=source.weights, target_degree=degree,
-                              method="adaptive", objective=criterion)
+                              method="adaptive", objective=criterion.objective,
+                              borders=criterion.borders)
         spaces = (result.surface.u_space, result.surface.v_space)
         return spaces, finish(result.surface), result
     if criterion == "core":

@@ -94,7 +94,8 @@ def _selection(faces, count):
 
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
                convert=False, progress=None, boundary="free", target_degree=None,
-               density=None, details=False, max_gap=None, jobs=1, face_timeout=None):
+               density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
+               borders="auto"):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -108,9 +109,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         Explicit target scales for every selected face.
     faces : iterable of int, optional
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
-    method, objective, boundary, target_degree, density
+    method, objective, borders, boundary, target_degree, density
         As in :func:`~cq_fairing.occ.fair_face` (``method="adaptive"``: the core's
-        adaptive targets per face, ``objective`` ``"compact"`` or ``"faithful"``; the
+        adaptive targets per face, ``objective`` ``"compact"`` or ``"faithful"``,
+        ``borders`` ``"auto"``, ``"free"`` or ``"pinned"``; the
         faces next to a too-large gap are faired again the same way with half ``tol``).
     convert : bool, optional
         Convert the whole shape to NURBS first (``BRepBuilderAPI_NurbsConvert``, exact;
@@ -149,19 +151,19 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     """
     start = time.perf_counter()
     shape = as_shape(shape)
-    check_options(tol, n, method, boundary, objective)
+    check_options(tol, n, method, boundary, objective, borders)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
     if tol is None and n is None:
         tol = default_tolerance(shape)
     if max_gap is not None:
-        check_options(max_gap, None, method, boundary, objective)
+        check_options(max_gap, None, method, boundary, objective, borders)
     max_gap = tol if max_gap is None else float(max_gap)
     _check_workers(jobs, face_timeout)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
-    options = dict(method=method, objective=objective, boundary=boundary,
+    options = dict(method=method, objective=objective, borders=borders, boundary=boundary,
                    target_degree=target_degree, density=density, details=details)
     pool = None if jobs == 1 and face_timeout is None else FacePool(jobs, face_timeout)
     try:

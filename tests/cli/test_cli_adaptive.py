@@ -24,7 +24,8 @@ def blade_step(tmp_path):
 
 def test_adaptive_faithful_writes_a_valid_step_within_tol(blade_step, tmp_path):
     proc = run("fair", blade_step, "-o", "out.step", "--tol", TOL, "--method", "adaptive",
-               "--objective", "faithful", "--report", "r.json", cwd=tmp_path)
+               "--objective", "faithful", "--borders", "free", "--report", "r.json",
+               cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     from OCP.BRepCheck import BRepCheck_Analyzer
 
@@ -38,7 +39,8 @@ def test_adaptive_faithful_writes_a_valid_step_within_tol(blade_step, tmp_path):
     distance = global_distance(occ_points(before, u, v).reshape(-1, 3), after)
     assert distance.max() <= TOL * (1 + 1e-6)  # STEP round trip, OCCT's projection
     report = json.loads((tmp_path / "r.json").read_text())
-    assert (report["method"], report["objective"]) == ("adaptive", "faithful")
+    assert (report["method"], report["objective"], report["borders"]) == (
+        "adaptive", "faithful", "free")
     face, = report["faces"]
     assert face["status"] == "ok" and face["poles_before"] == [22, 32]
     assert np.prod(face["poles_after"]) < 22 * 32 / 4
@@ -46,6 +48,7 @@ def test_adaptive_faithful_writes_a_valid_step_within_tol(blade_step, tmp_path):
 
 @pytest.mark.parametrize("args, words", [
     (["--objective", "faithful"], "applies to --method adaptive only"),
+    (["--borders", "pinned"], "applies to --method adaptive only"),
     (["--method", "adaptive", "--target", "6", "6"], "give --tol instead of --target")])
 def test_objective_or_target_with_the_wrong_method_is_a_usage_error(blade_step, tmp_path,
                                                                      args, words):

@@ -116,6 +116,20 @@ def test_auto_borders_are_pinned_only_when_the_net_shrinks(blade, blade_auto):
         assert np.array_equal(blade_auto.poles[i, j], blade.poles[i, j])
 
 
+def test_fair_surface_passes_borders_to_the_adaptive_method(blade, blade_auto):
+    """The public entry point reaches the same free-border net as the module's own
+    function, one pole row more than ``"auto"``; other methods refuse the option."""
+    knots = dict(u_knots=blade.u_space.knots, v_knots=blade.v_space.knots,
+                 degree=(blade.u_degree, blade.v_degree))
+    free = cf.fair_surface(blade.poles, tol=0.02, method="adaptive", borders="free", **knots)
+    direct = fair_surface_adaptive(blade, 0.02, borders="free")
+    assert dict(free.table)["borders"] == "free"
+    np.testing.assert_array_equal(free.poles, direct.poles)
+    assert free.poles[:, :, 0].size > blade_auto.poles[:, :, 0].size
+    with pytest.raises(InvalidInputError, match="method='adaptive' only"):
+        cf.fair_surface(blade.poles, tol=0.02, borders="free", **knots)
+
+
 def test_pinned_borders_keep_the_corners_within_tol(blade):
     result = fair_surface_adaptive(blade, 0.05, borders="pinned")
     assert dict(result.table)["borders"] == "pinned"

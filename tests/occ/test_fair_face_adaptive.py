@@ -67,6 +67,10 @@ def test_adaptive_option_errors():
         fair_face(face, tol=TOL, objective="faithful")
     with pytest.raises(InvalidInputError, match="objective must be one of"):
         fair_face(face, tol=TOL, method="adaptive", objective="smooth")
+    with pytest.raises(InvalidInputError, match="method='adaptive' only"):
+        fair_face(face, tol=TOL, borders="free")
+    with pytest.raises(InvalidInputError, match="borders must be one of"):
+        fair_face(face, tol=TOL, method="adaptive", borders="fixed")
 
 
 def test_fair_shape_passes_method_and_objective_to_workers(blade):
@@ -77,6 +81,23 @@ def test_fair_shape_passes_method_and_objective_to_workers(blade):
     assert report.status == "faired" and result.valid
     assert report.poles_after == runs["faithful"].poles_after != runs["compact"].poles_after
     np.testing.assert_allclose(report.surface.poles, runs["faithful"].surface.poles, atol=1e-12)
+
+
+def test_borders_reach_the_core_in_the_face_and_in_the_workers(blade):
+    """``borders`` is the core's: the table says which were used, pinned ones keep the
+    source's corner poles, and a worker process (fair_shape, jobs=2) gets the same net."""
+    face, _, _ = blade
+    source = blade_surface(shape=(20, 30), noise=0.02).surface.poles
+    pinned = fair_face(face, tol=TOL, method="adaptive", borders="pinned")
+    free = fair_face(face, tol=TOL, method="adaptive", borders="free", details=False)
+    assert dict(pinned.result.table)["borders"] == "pinned"
+    assert dict(free.result.table)["borders"] == "free"
+    for report in (pinned, free):
+        check_within(report, face, TOL)
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+        np.testing.assert_allclose(pinned.surface.poles[i, j], source[i, j], atol=1e-12)
+    shaped, = fair_shape(face, tol=TOL, method="adaptive", borders="pinned", jobs=2).faces
+    np.testing.assert_allclose(shaped.surface.poles, pinned.surface.poles, atol=1e-12)
 
 
 def test_a_face_the_adaptive_target_cannot_reduce_is_kept_unchanged():
