@@ -15,7 +15,7 @@ from . import make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 2  # 2: Method "adaptive" and the Objective property
+VERSION = 3  # 2: Method "adaptive" and the Objective property; 3: the Borders property
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -32,6 +32,9 @@ PROPERTIES = (
     ("App::PropertyEnumeration", "Objective", "Fairing",
      "adaptive method only: compact (fewest control points within Tolerance) or faithful "
      "(stop where the residual reaches the source's estimated noise)", False),
+    ("App::PropertyEnumeration", "Borders", "Fairing",
+     "adaptive method only: auto (pinned corners where that gives fewer control points), "
+     "free (plain projection, often a faster search) or pinned", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Search", "Fairing",
@@ -47,7 +50,7 @@ PROPERTIES = (
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )
 ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OBJECTIVES,
-                "Boundary": make.BOUNDARIES, "Search": make.SEARCHES, "Measure": make.MEASURES}
+                "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES, "Measure": make.MEASURES}
 
 
 def _sewn(compound, deviation):
@@ -138,6 +141,13 @@ class Fairing:
             return {"tolerance": obj.Tolerance.Value, "target": None, **common}
         return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), **common}
 
+    @staticmethod
+    def face_settings(obj):
+        """Keyword arguments of :func:`make.fair_face` that faces have and edges do not:
+        ``boundary``, and ``borders`` (adaptive method only, ignored otherwise)."""
+        return {"boundary": obj.Boundary,
+                "borders": obj.Borders if obj.Method == "adaptive" else "auto"}
+
     def _fair(self, obj):
         if obj.Source is None:
             raise cf.InvalidInputError("the Fairing has no Source; link faces or edges.")
@@ -149,7 +159,7 @@ class Fairing:
             if sub.startswith("Face"):
                 if kwargs["target"] is not None and len(subs) > 1:
                     kwargs["target"] = _clamped_target(kwargs["target"], element)
-                results.append(make.fair_face(element, boundary=obj.Boundary, **kwargs))
+                results.append(make.fair_face(element, **self.face_settings(obj), **kwargs))
             else:
                 target = None if kwargs["target"] is None else kwargs["target"][0]
                 results.append(make.fair_edge(element, **{**kwargs, "target": target}))

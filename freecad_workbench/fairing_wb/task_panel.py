@@ -1,7 +1,8 @@
 """Task panels: Fair Surface / Fair Curve (create or edit a Fairing) and Levels (GUI only).
 
 Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_target_u``,
-``fairing_target_v``, ``fairing_method``, ``fairing_objective``, ``fairing_boundary``,
+``fairing_target_v``, ``fairing_method``, ``fairing_objective``, ``fairing_borders``,
+``fairing_boundary``,
 ``fairing_search``, ``fairing_measure``, ``fairing_preview``,
 ``fairing_figures``, ``fairing_error``, ``fairing_faces``, ``fairing_level``) so scripts and
 GUI tests can find them with ``Gui.getMainWindow().findChild``.
@@ -25,19 +26,20 @@ def selection_link(kind="Face"):
     return None
 
 
-def make_call(link, settings, boundary):
-    """The scriptable ``make_fairing(...)`` line for a source link and settings."""
+def make_call(link, settings, face):
+    """The scriptable ``make_fairing(...)`` line for a source link, settings and face
+    settings (``boundary``, ``borders``)."""
     obj, subs = link
     args = [f"(App.ActiveDocument.getObject({obj.Name!r}), {subs!r})"]
     if settings["target"] is not None:
         args.append(f"target={tuple(settings['target'])!r}")
     elif settings["method"] == "adaptive":  # search and measure do not apply
         args += [f"tolerance={settings['tolerance']!r}",
-                 f"objective={settings['objective']!r}"]
+                 f"objective={settings['objective']!r}", f"borders={face['borders']!r}"]
     else:
         args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
                  f"measure={settings['measure']!r}"]
-    args += [f"method={settings['method']!r}", f"boundary={boundary!r}"]
+    args += [f"method={settings['method']!r}", f"boundary={face['boundary']!r}"]
     return f"fairing_wb.make.make_fairing({', '.join(args)})"
 
 
@@ -48,9 +50,10 @@ def _row(layout, text, widget, name):
 
 
 class FairSurfacePanel:
-    """Tolerance, mode, target, method, objective, boundary, figures; Preview / OK / Cancel.
+    """Tolerance, mode, target, method, objective, borders, boundary, figures; Preview /
+    OK / Cancel.
 
-    Objective is enabled for the adaptive method only; search and measure for the other
+    Objective and borders are enabled for the adaptive method only; search and measure for the other
     methods in tolerance mode (the adaptive method checks the true distance itself).
     """
 
@@ -92,6 +95,10 @@ class FairSurfacePanel:
         self.objective.addItems(list(make.OBJECTIVES))
         self.objective.setToolTip("compact: fewest control points within the tolerance; "
                                   "faithful: stop where the residual reaches the noise")
+        self.borders = _row(layout, "Borders:", QtWidgets.QComboBox(), "fairing_borders")
+        self.borders.addItems(list(make.BORDERS))
+        self.borders.setToolTip("auto: pinned corners where that gives fewer control points; "
+                                "free: plain projection, often a faster search; pinned")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")
@@ -132,6 +139,7 @@ class FairSurfacePanel:
             self.target_v.setValue(f.TargetV)
             self.method.setCurrentText(f.Method)
             self.objective.setCurrentText(f.Objective)
+            self.borders.setCurrentText(f.Borders)
             self.boundary.setCurrentText(f.Boundary)
             self.search.setCurrentText(f.Search)
             self.measure.setCurrentText(f.Measure)
@@ -142,6 +150,7 @@ class FairSurfacePanel:
         adaptive = self.method.currentText() == "adaptive"
         self.tolerance.setEnabled(by_tolerance)
         self.objective.setEnabled(adaptive)
+        self.borders.setEnabled(adaptive and self.kind == "Face")
         self.search.setEnabled(by_tolerance and not adaptive)
         self.measure.setEnabled(by_tolerance and not adaptive)
         self.target_u.setEnabled(not by_tolerance)
@@ -161,6 +170,13 @@ class FairSurfacePanel:
         return {"tolerance": None, "target": (self.target_u.value(), self.target_v.value()),
                 **common}
 
+    def face_settings(self):
+        """Keyword arguments of :func:`make.fair_face` that edges do not take: ``boundary``
+        and ``borders`` (adaptive method only)."""
+        adaptive = self.method.currentText() == "adaptive"
+        return {"boundary": self.boundary.currentText(),
+                "borders": self.borders.currentText() if adaptive else "auto"}
+
     def run(self):
         """Fair every selected face/edge; returns the :class:`make.FairedShape` list."""
         obj, subs = self.link
@@ -169,8 +185,7 @@ class FairSurfacePanel:
         for sub in subs:
             element = obj.Shape.getElement(sub)
             if self.kind == "Face":
-                results.append(make.fair_face(element, boundary=self.boundary.currentText(),
-                                              **s))
+                results.append(make.fair_face(element, **self.face_settings(), **s))
             else:
                 target = None if s["target"] is None else s["target"][0]
                 results.append(make.fair_edge(element, **{**s, "target": target}))
@@ -196,22 +211,22 @@ class FairSurfacePanel:
     def accept(self):
         if self.on_preview() is None:
             return False
-        s, boundary = self.settings(), self.boundary.currentText()
+        s, face = self.settings(), self.face_settings()
         doc = self.link[0].Document
         if self.fairing is None:
             doc.openTransaction("Fair surface")
             FreeCADGui.doCommand("import fairing_wb.make")
-            FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, boundary)}")
+            FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, face)}")
         else:
             doc.openTransaction("Edit fairing")
             FreeCADGui.doCommand(f"fairing = App.ActiveDocument.getObject({self.fairing.Name!r})")
-            self._echo_properties(s, boundary)
+            self._echo_properties(s, face)
         FreeCADGui.doCommand("App.ActiveDocument.recompute()")
         doc.commitTransaction()
         self._close()
         return True
 
-    def _echo_properties(self, s, boundary):
+    def _echo_properties(self, s, face):
         if s["target"] is None:
             FreeCADGui.doCommand(
                 f"fairing.Mode = 'Tolerance'; fairing.Tolerance = {s['tolerance']!r}")
@@ -220,7 +235,7 @@ class FairSurfacePanel:
                                  f"{s['target'][0]}, {s['target'][1]}")
         FreeCADGui.doCommand(
             f"fairing.Method = {s['method']!r}; fairing.Objective = {s['objective']!r}; "
-            f"fairing.Boundary = {boundary!r}; "
+            f"fairing.Borders = {face['borders']!r}; fairing.Boundary = {face['boundary']!r}; "
             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
 
     def reject(self):
@@ -321,7 +336,8 @@ class LevelsPanel:
         FreeCADGui.doCommand("import fairing_wb.make")
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
                                      "search": "linear", "measure": "parametric",
-                                     "objective": "compact"}, "free")
+                                     "objective": "compact"},
+                         {"boundary": "free", "borders": "auto"})
         FreeCADGui.doCommand(f"fairing = {call}")
         FreeCADGui.doCommand("App.ActiveDocument.recompute()")
         doc.commitTransaction()

@@ -31,7 +31,8 @@ def faired(face):
     settings = {"wavelet linear": dict(search="linear"),
                 "wavelet guaranteed": dict(search="guaranteed"),
                 "adaptive compact": dict(method="adaptive", objective="compact"),
-                "adaptive faithful": dict(method="adaptive", objective="faithful")}
+                "adaptive faithful": dict(method="adaptive", objective="faithful"),
+                "adaptive free": dict(method="adaptive", borders="free")}
     return {name: make.fair_face(face, tolerance=TOL, **kw) for name, kw in settings.items()}
 
 
@@ -86,6 +87,28 @@ def test_adaptive_targets_have_non_uniform_knots(faired):
 def test_objective_needs_the_adaptive_method(face):
     with pytest.raises(cf.InvalidInputError, match="applies to the adaptive method only"):
         make.fair_face(face, tolerance=TOL, objective="faithful")
+    with pytest.raises(cf.InvalidInputError, match="applies to the adaptive method only"):
+        make.fair_face(face, tolerance=TOL, borders="free")
+    with pytest.raises(cf.InvalidInputError, match="borders must be one of"):
+        make.fair_face(face, tolerance=TOL, method="adaptive", borders="edges")
+
+
+def test_borders_reach_the_core(face, faired):
+    """Auto pins the borders on this face (the corner poles are the source's, 11 x 11);
+    free ones are the plain projection (corners move, more poles), within TOL too."""
+    corners = [(0, 0), (0, -1), (-1, 0), (-1, -1)]
+
+    def corner_poles(shape):
+        poles = np.array([[tuple(p) for p in row] for row in shape.Faces[0].Surface.getPoles()])
+        return np.array([poles[i, j] for i, j in corners])
+
+    source = corner_poles(face)
+    np.testing.assert_allclose(corner_poles(faired["adaptive compact"].shape), source,
+                               atol=1e-9)
+    free = faired["adaptive free"]
+    assert np.abs(corner_poles(free.shape) - source).max() > 1e-6
+    assert _count(free.poles_after) > _count(faired["adaptive compact"].poles_after)
+    assert fixtures.sample_distance(free.shape.Faces[0], face, 15) <= TOL
 
 
 def test_target_mode_is_refused_in_plain_words(doc, noisy, face):
@@ -126,19 +149,26 @@ def test_feature_faithful_save_reopen_keeps_method_and_objective(doc, noisy, fai
         reopened.recompute()
         assert _ok(again), again.Status
         assert again.PolesAfter == " x ".join(map(str, faired["adaptive compact"].poles_after))
+        assert again.Borders == "auto"
+        again.Borders = "free"
+        reopened.recompute()
+        assert _ok(again), again.Status
+        assert again.PolesAfter == " x ".join(map(str, faired["adaptive free"].poles_after))
 
 
 def test_document_of_version_1_migrates(doc, noisy, tmp_path):
-    """A version-1 document: Method offered wavelet/energy only, no Objective."""
+    """A version-1 document: Method offered wavelet/energy only, no Objective (added in
+    version 2) and no Borders (version 3)."""
     obj = make.make_fairing((noisy, ["Face1"]), target=(18, 26), method="wavelet")
     doc.recompute()
     obj.Method = ["wavelet", "energy"]
     obj.removeProperty("Objective")
+    obj.removeProperty("Borders")
     with fixtures.reopened(doc, tmp_path / "version1.FCStd") as reopened:
         again = reopened.getObject("Fairing")
         assert again.getEnumerationsOfProperty("Method") == list(make.METHODS)
-        assert (again.Method, again.Objective) == ("wavelet", "compact")
-        assert again.Proxy.Version == 2
+        assert (again.Method, again.Objective, again.Borders) == ("wavelet", "compact", "auto")
+        assert again.Proxy.Version == 3
         again.Method = "adaptive"
         reopened.recompute()
         assert "needs tolerance mode" in again.Status  # target mode, refused in words

@@ -93,20 +93,24 @@ def console_text():
 
 
 def check_adaptive_panel(doc, source):
-    """Adaptive in the task panel: Objective enabled for it only, Preview against the
-    wavelet figures, OK creates the feature and echoes method and objective."""
+    """Adaptive in the task panel: Objective and Borders enabled for it only, Preview
+    against the wavelet figures, OK creates the feature and echoes method, objective and
+    borders (free: the faster search on this sliding face)."""
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Face1")
     Gui.runCommand("Fairing_FairSurface")
     pump()
     find("fairing_tolerance").setProperty("rawValue", 0.05)
-    check("objective disabled for wavelet", not find("fairing_objective").isEnabled())
+    check("objective and borders disabled for wavelet",
+          not find("fairing_objective").isEnabled() and not find("fairing_borders").isEnabled())
     wavelet, _, _, wavelet_text = preview_poles()
     find("fairing_method").setCurrentText("adaptive")
-    check("objective enabled for adaptive, search and measure not",
-          find("fairing_objective").isEnabled() and not find("fairing_search").isEnabled()
+    check("objective and borders enabled for adaptive, search and measure not",
+          find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled()
+          and not find("fairing_search").isEnabled()
           and not find("fairing_measure").isEnabled())
     find("fairing_objective").setCurrentText("faithful")
+    find("fairing_borders").setCurrentText("free")
     poles, deviation, seconds, figures = preview_poles()
     check("adaptive preview: fewer poles than wavelet within 0.05 mm",
           poles is not None and wavelet is not None and poles < wavelet and deviation <= 0.05,
@@ -117,11 +121,13 @@ def check_adaptive_panel(doc, source):
     made = [o for o in doc.Objects if o.Name.startswith("Fairing")
             and getattr(o, "Method", None) == "adaptive"]
     check("adaptive OK creates the feature", len(made) == 1 and made[0].isValid()
-          and made[0].Objective == "faithful" and made[0].MaxDeviation.Value <= 0.05,
+          and made[0].Objective == "faithful" and made[0].Borders == "free"
+          and made[0].MaxDeviation.Value <= 0.05,
           [(o.Name, o.Status) for o in made])
     echo = [line for line in console_text().splitlines() if "make_fairing(" in line]
-    check("console echo carries method and objective",
-          bool(echo) and "method='adaptive'" in echo[-1] and "objective='faithful'" in echo[-1],
+    check("console echo carries method, objective and borders",
+          bool(echo) and "method='adaptive'" in echo[-1] and "objective='faithful'" in echo[-1]
+          and "borders='free'" in echo[-1],
           echo[-1:] or "no make_fairing line in the Python console")
 
 
