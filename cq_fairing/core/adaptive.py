@@ -470,7 +470,7 @@ class _SurfaceFit:
             per_span -= 1
             u = sample_parameters(surface.u_space, per_span=per_span)
             v = sample_parameters(surface.v_space, per_span=per_span)
-        self.probe = SurfaceProbe(surface, uv=(u, v))
+        self.probe = SurfaceProbe(surface, uv=(u, v), keep_feet=True)
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._cache = {}

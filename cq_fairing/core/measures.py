@@ -46,7 +46,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.interpolate import RegularGridInterpolator
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
@@ -514,13 +513,18 @@ class SurfaceProbe:
     method : {"geometric", "parametric"}
     uv : (ndarray, ndarray), optional
         Explicit grid axes (override ``per_span``).
+    keep_feet : bool
+        Keep each sample's last foot parameters, the Newton starts of the next candidate
+        (a search that measures many nearby candidates on the same grid).
     """
 
-    def __init__(self, source, per_span=8, method="geometric", uv=None):
+    def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False):
         _check_method(method)
         self.source = source
         self.method = method
         self.per_span = per_span
+        self.keep_feet = keep_feet
+        self._prior = None
         self._fixed = uv is not None
         if uv is None:
             uv = (sample_parameters(source.u_space, per_span=per_span),
@@ -533,15 +537,27 @@ class SurfaceProbe:
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._feet = {}
 
-    def _last_feet(self, key):
-        """Foot parameters last found per sample on the ``"source"`` or on the
-        ``"faired"`` geometry measured last, shape (n_u, n_v, 2); the grid's own
-        parameters until a first search.  Successive candidates of a search differ little,
-        so their feet are Newton starts that converge at once even where a candidate
-        slides along the source (its same-parameter point is far from the foot)."""
+    def _keep(self, key, i, j, u, v):
+        """Remember the feet ``(u, v)`` of samples ``(i, j)`` on the ``"source"`` or on
+        the ``"faired"`` geometry (``keep_feet`` only; the grid's own parameters elsewhere)."""
+        if not self.keep_feet:
+            return
         if key not in self._feet:
             self._feet[key] = np.stack(np.meshgrid(self.u, self.v, indexing="ij"), axis=-1)
-        return self._feet[key]
+        self._feet[key][i, j] = np.stack([u, v], axis=-1)
+
+    def _last_feet(self, key, i, j):
+        """Foot parameters last found at samples ``(i, j)``: this probe's own, else those
+        of an adopted probe (:meth:`adopt_feet`) interpolated bilinearly; ``None`` if
+        neither.  Successive candidates of a search differ little, so their feet are
+        Newton starts that converge at once even where a candidate slides along the
+        source (its same-parameter point is far from the foot)."""
+        if key in self._feet:
+            return self._feet[key][i, j, 0], self._feet[key][i, j, 1]
+        prior = self._prior
+        if prior is not None and key in prior._feet:
+            return _bilinear(prior.u, prior.v, prior._feet[key], self.u[i], self.v[j])
+        return None
 
     def _adapt(self, faired):
         """Use ``per_span`` samples per span of the merged breakpoints, per direction."""
@@ -557,10 +573,7 @@ class SurfaceProbe:
         """Start from the feet that ``other`` (a probe of the same source on another grid)
         found last, interpolated bilinearly onto this grid: a dense check after a search
         on a coarser grid."""
-        uv = np.stack(np.meshgrid(self.u, self.v, indexing="ij"), axis=-1)
-        for key, feet in other._feet.items():
-            self._feet[key] = RegularGridInterpolator((other.u, other.v), feet,
-                                                      bounds_error=False, fill_value=None)(uv)
+        self._prior = other
 
     def bound(self, faired):
         other = _grid_points(faired, self.u, self.v)
@@ -592,8 +605,9 @@ class SurfaceProbe:
         key = "source" if target is self.source else "faired"
         p = here[i, j]
         u0, v0 = self.u[i], self.v[j]
-        if key in self._feet:
-            lu, lv = self._feet[key][i, j, 0], self._feet[key][i, j, 1]
+        last = self._last_feet(key, i, j)
+        if last is not None:
+            lu, lv = last
             slid = (np.abs(lu - u0) > self._half_step[0][i]) | \
                 (np.abs(lv - v0) > self._half_step[1][j])
             u0, v0 = np.where(slid, lu, u0), np.where(slid, lv, v0)
@@ -609,7 +623,7 @@ class SurfaceProbe:
             better = fd < d[todo]
             k = todo[better]
             u0[k], v0[k], d[k] = fu[better], fv[better], fd[better]
-        self._last_feet(key)[i, j] = np.stack([u0, v0], axis=-1)
+        self._keep(key, i, j, u0, v0)
         return d
 
     def max_deviation(self, faired, tol=None, stride=4):
@@ -801,6 +815,23 @@ def deviation_map(source, faired=None, *, method="geometric", per_span=8):
     shape = (u.size, v.size)
     return DeviationMap((u, v), pts.reshape(shape + (-1,)), values.reshape(shape),
                         signed.reshape(shape), method)
+
+
+def _bilinear(x, y, values, xq, yq):
+    """Bilinear interpolation of a grid ``values`` (n_x, n_y, 2) sampled at increasing
+    ``x``, ``y``, at the points ``(xq, yq)`` (clamped to the grid): two arrays (q,)."""
+    (a, wa), (b, wb) = _cell(x, xq), _cell(y, yq)
+    wa, wb = wa[:, None], wb[:, None]
+    out = ((1 - wa) * ((1 - wb) * values[a, b] + wb * values[a, b + 1])
+           + wa * ((1 - wb) * values[a + 1, b] + wb * values[a + 1, b + 1]))
+    return out[:, 0], out[:, 1]
+
+
+def _cell(x, xq):
+    """Index ``k`` of the cell ``[x_k, x_k+1]`` holding each ``xq`` and its weight there."""
+    xq = np.clip(xq, x[0], x[-1])
+    k = np.clip(np.searchsorted(x, xq, side="right") - 1, 0, x.size - 2)
+    return k, (xq - x[k]) / (x[k + 1] - x[k])
 
 
 def _window_start(here, there, i, j, u, v, window=2):

@@ -245,7 +245,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         (corners kept, each edge fitted to its own border curve) where that gives fewer
         poles; ``free`` is the plain projection, often a much faster search on a face
         whose pinned net slides along it (the 50 x 80 test face: 19 x 21 poles in
-        about 4 s instead of 11 x 11 in about 23 s); ``pinned`` always pins.
+        about 4 s instead of 11 x 11 in 23-30 s); ``pinned`` always pins.
 
     Raises
     ------

@@ -133,20 +133,23 @@ def test_surface_probe_follows_a_sliding_candidate_by_its_last_feet():
     j, i = np.meshgrid(np.arange(4.0), np.arange(4.0))
     source = cf.make_surface(np.stack([3 * i, 2 * j, np.sin(i) * np.cos(j)], axis=2))
     candidate = _reparametrised(source, lambda u: u + 0.3 * u * (1 - u), 6)
-    probe = M.SurfaceProbe(source, per_span=20)
+    probe = M.SurfaceProbe(source, per_span=20, keep_feet=True)
     other, bound = probe.bound(candidate)
     assert bound.max() > 0.3
     everywhere = np.arange(bound.size)
     assert probe.true_distance(candidate, other, everywhere).max() < 1e-9
     inverse = (1.3 - np.sqrt(1.69 - 1.2 * probe.u)) / 0.6
-    feet = probe._last_feet("faired")
-    assert np.allclose(feet[..., 0], inverse[:, None], atol=1e-8)
-    assert np.allclose(feet[..., 1], probe.v[None, :], atol=1e-8)
+    i, j = np.unravel_index(everywhere, bound.shape)
+    feet_u, feet_v = probe._last_feet("faired", i, j)
+    assert np.allclose(feet_u, inverse[i], atol=1e-8)
+    assert np.allclose(feet_v, probe.v[j], atol=1e-8)
     assert probe.true_distance(candidate, other, everywhere, tol=1e-6).max() < 1e-6
     dense = M.SurfaceProbe(source, per_span=50)
     dense.adopt_feet(probe)
-    assert np.allclose(dense._last_feet("faired")[..., 0],
-                       ((1.3 - np.sqrt(1.69 - 1.2 * dense.u)) / 0.6)[:, None], atol=1e-3)
+    i, j = np.unravel_index(np.arange(dense.points.shape[0] * dense.points.shape[1]),
+                            dense.points.shape[:2])
+    feet_u, _ = dense._last_feet("faired", i, j)
+    assert np.allclose(feet_u, (1.3 - np.sqrt(1.69 - 1.2 * dense.u[i])) / 0.6, atol=1e-3)
     assert dense.max_deviation(candidate)[0] < 1e-9
 
 
