@@ -215,7 +215,14 @@ class _CurveFit:
                                                                      tol=self.tol), self.tol)
 
     def trial(self, space, lam=0.0):
-        faired = self.geometry(space, self.project(space, lam))
+        """``(faired, per-sample deviation, max)``.  A rational candidate with a
+        non-positive weight fails (``max = inf``): it may pass through infinity between
+        samples.  Its samples then say nothing about where the error is, so they all get
+        the same value (twice the tolerance), which keeps the knot density as it is."""
+        coefficients = self.project(space, lam)
+        faired = self.geometry(space, coefficients)
+        if self.curve.is_rational and not np.all(coefficients[:, -1] > 0):
+            return faired, np.full(self.probe.u.size, 2.0 * self.tol), np.inf
         values = self.errors(faired)
         return faired, values, float(values.max())
 
@@ -417,10 +424,12 @@ def _compact_curve(fit, family, check, cache, top, start, tol):
     """Fewest spans within tol: doubling from ``start``, bisection, error-driven reduction."""
     fails, n = _doubling(check, top, start)
     if n is None:
+        what = ("give a non-positive weight" if np.isinf(cache[top][2])
+                else f"deviate by {cache[top][2]:.4g}")
         raise ToleranceNotMetError(
             f"no adaptive target within tol={tol:g}: the source's own knots at degree "
-            f"{fit.degree} deviate by {cache[top][2]:.4g}; raise the tolerance or keep the "
-            "degree.", tolerance=tol, best_deviation=cache[top][2])
+            f"{fit.degree} {what}; raise the tolerance or keep the degree.",
+            tolerance=tol, best_deviation=cache[top][2])
     n = _scan_below(_bisect_count(fails, n, check), check)
     return _reduce(family(n), cache[n], fit.probe.u, fit.tol, fit.degree, fit.trial)
 

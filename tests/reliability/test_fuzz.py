@@ -253,6 +253,51 @@ def test_fair_surface_with_tol_meets_tol_when_it_succeeds(data, case):
     assert measured <= allowed
 
 
+@fuzz(60)
+@given(data=st.data(), case=curves())
+def test_adaptive_curve_meets_tol_when_it_succeeds(data, case):
+    """The adaptive method (non-uniform targets, polish) under property 3."""
+    poles, knots, degree, weights = case
+    size = _size(poles)
+    tol = data.draw(tolerances(size), label="tol")
+    objective = data.draw(st.sampled_from(["compact", "faithful"]), label="objective")
+    result = _call(cf.fair_curve, poles, tol=tol, knots=knots, degree=degree, weights=weights,
+                   method="adaptive", objective=objective)
+    if result is None:
+        return
+    _check_finite(result.curve)
+    event(f"met ({objective})")
+    assert result.max_deviation <= tol
+    allowed = tol * (1 + SLACK) + 1e-12 * size
+    measured = _curve_deviation(result.source, result.curve, allowed)
+    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
+    assert measured <= allowed
+
+
+@fuzz(30)
+@given(data=st.data(), case=surfaces())
+def test_adaptive_surface_meets_tol_when_it_succeeds(data, case):
+    """The adaptive method with each border choice under property 3 (rational nets are
+    refused with a typed error)."""
+    poles, u_knots, v_knots, degree, weights = case
+    size = _size(poles)
+    tol = data.draw(tolerances(size), label="tol")
+    borders = data.draw(st.sampled_from(["auto", "free", "pinned"]), label="borders")
+    objective = data.draw(st.sampled_from(["compact", "faithful"]), label="objective")
+    result = _call(cf.fair_surface, poles, tol=tol, u_knots=u_knots, v_knots=v_knots,
+                   degree=degree, weights=weights, method="adaptive", objective=objective,
+                   borders=borders)
+    if result is None:
+        return
+    _check_finite(result.surface)
+    event(f"met ({dict(result.table)['borders']} borders)")
+    assert result.max_deviation <= tol
+    allowed = tol * (1 + SLACK) + 1e-12 * size
+    measured = _surface_deviation(result.source, result.surface, allowed)
+    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
+    assert measured <= allowed
+
+
 # -- a case the fuzzer found -----------------------------------------------------------------
 CLUSTERED_KNOTS = np.array([0, 0, 0, 0, 0, 0.064005, 0.082781, 0.162344, 0.196413, 0.25, 0.25,
                             0.33234, 0.366787, 0.366787, 0.366787, 0.366787, 0.80317, 0.80317,
@@ -296,3 +341,27 @@ def test_ill_conditioned_reconstruction_is_exact_or_refused():
         result.reconstruct()
     restored = cf.fair_curve(poles, 20, knots=knots, degree=4).reconstruct()
     assert np.abs(restored - poles).max() <= 1e-9
+
+
+def test_adaptive_rational_curve_never_keeps_a_non_positive_weight():
+    """Defect D13 (found by the adaptive fuzz property): the adaptive search accepted a
+    projection of this rational curve with a weight of -1.93, a NURBS that may pass
+    through infinity between the samples it was checked at.  Such candidates now fail,
+    and the answer's weights are positive and its deviation is within tol by the
+    independent measure."""
+    poles = np.array([0.01107718, 0.01081691, 0.01107829, 0.01159826, 0.01093271, 0.01073169,
+                      0.01062161, 0.00968082, 0.01036236, 0.0107752, 0.01009375, 0.01074181,
+                      0.01003829, 0.00893428, 0.0101594, 0.00937183, 0.00926261, 0.00890479,
+                      0.0086585, 0.00858214, 0.00985399])[:, None]
+    knots = np.r_[[0.0] * 6, 0.044211, 0.076521, 0.081116, 0.144811, 0.148224, 0.333333,
+                  0.346088, 0.408156, 0.421845, [0.480336] * 3, [0.9] * 3, [1.0] * 6]
+    weights = np.array([3.10044331, 1.52744842, 2.68140439, 1.5482483, 3.12664315, 0.99, 0.4,
+                        3.46591276, 4.53950878, 4.24497773, 4.94694464, 3.67905317,
+                        2.64126859, 0.5, 2.16493846, 1.00489608, 4.49239154, 1.98546405,
+                        4.36373426, 2.28052565, 0.5])
+    tol = 0.0001658328845024582
+    result = cf.fair_curve(poles, tol=tol, knots=knots, degree=5, weights=weights,
+                           method="adaptive")
+    assert np.all(result.curve.weights > 0)
+    assert result.max_deviation <= tol
+    assert _curve_deviation(result.source, result.curve, tol) <= tol * (1 + SLACK)
