@@ -591,11 +591,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     InvalidInputError, InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
-    method = _tolerance_method(method, objective, n, tol)
-    if method != "adaptive" and borders != "auto":
-        raise InvalidInputError(
-            f"borders={borders!r} applies to method='adaptive' only, got method={method!r}; "
-            "add method='adaptive' or drop borders.")
+    method = _tolerance_method(method, objective, n, tol, borders)
     if method == "energy":
         from .energy import fair_surface_energy
 
@@ -626,14 +622,16 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 METHODS = ("wavelet", "adaptive", "energy")
 
 
-def _tolerance_method(method, objective, n, tol):
-    """Validate ``method`` (and ``objective``); the tolerance-only methods need ``tol``, no ``n``."""
+def _tolerance_method(method, objective, n, tol, borders="auto"):
+    """Validate ``method`` (and ``objective``, ``borders``, which belong to the adaptive
+    method); the tolerance-only methods need ``tol``, no ``n``."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
-    if method != "adaptive" and objective != "compact":
-        raise InvalidInputError(
-            f"objective={objective!r} applies to method='adaptive' only, got method={method!r}; "
-            "add method='adaptive' or drop objective.")
+    for name, value, default in (("objective", objective, "compact"), ("borders", borders, "auto")):
+        if method != "adaptive" and value != default:
+            raise InvalidInputError(
+                f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
+                f"add method='adaptive' or drop {name}.")
     if method != "wavelet" and (n is not None or tol is None):
         what = ("keeps the control points" if method == "energy"
                 else "chooses the target itself")

@@ -571,8 +571,8 @@ class SurfaceProbe:
 
     def adopt_feet(self, other):
         """Start from the feet that ``other`` (a probe of the same source on another grid)
-        found last, interpolated bilinearly onto this grid: a dense check after a search
-        on a coarser grid."""
+        found last, interpolated bilinearly at each sample when it is measured: a dense
+        check after a search on a coarser grid."""
         self._prior = other
 
     def bound(self, faired):
