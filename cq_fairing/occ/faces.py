@@ -138,18 +138,14 @@ def check_options(tol, n, method, boundary, objective="compact", borders="auto")
             )
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
-    if objective not in OBJECTIVES:
-        raise InvalidInputError(f"objective must be one of {OBJECTIVES}, got {objective!r}.")
-    if method != "adaptive" and objective != "compact":
-        raise InvalidInputError(
-            f"objective={objective!r} applies to method='adaptive' only, got method={method!r}; "
-            "add method='adaptive' or drop objective.")
-    if borders not in BORDERS:
-        raise InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
-    if method != "adaptive" and borders != "auto":
-        raise InvalidInputError(
-            f"borders={borders!r} applies to method='adaptive' only, got method={method!r}; "
-            "add method='adaptive' or drop borders.")
+    for name, value, choices, default in (("objective", objective, OBJECTIVES, "compact"),
+                                          ("borders", borders, BORDERS, "auto")):
+        if value not in choices:
+            raise InvalidInputError(f"{name} must be one of {choices}, got {value!r}.")
+        if method != "adaptive" and value != default:
+            raise InvalidInputError(
+                f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
+                f"add method='adaptive' or drop {name}.")
     if method == "adaptive" and n is not None:
         raise InvalidInputError(
             f"method='adaptive' chooses the target itself and needs tol, not n; got n={n!r}. "

@@ -162,6 +162,16 @@ def _surface_deviation(source, faired, threshold):
     return float(max(there.max(), back.max()))
 
 
+def _assert_within(result, faired, deviation, tol, size):
+    """Property 3: the reported deviation is within ``tol``, and so is the one measured
+    independently by ``deviation`` up to :data:`SLACK`."""
+    assert result.max_deviation <= tol
+    allowed = tol * (1 + SLACK) + 1e-12 * size
+    measured = deviation(result.source, faired, allowed)
+    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
+    assert measured <= allowed
+
+
 def _reconstruction_bound(result):
     """Relative reconstruction error allowed: 1e-7, or the rounding bound of D8.
 
@@ -210,11 +220,7 @@ def test_fair_curve_with_tol_meets_tol_when_it_succeeds(data, case):
         return
     _check_finite(result.curve)
     event("met" if result.n < result.source.n_poles - result.degree else "met by the source")
-    assert result.max_deviation <= tol
-    allowed = tol * (1 + SLACK) + 1e-12 * size
-    measured = _curve_deviation(result.source, result.curve, allowed)
-    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
-    assert measured <= allowed
+    _assert_within(result, result.curve, _curve_deviation, tol, size)
 
 
 @fuzz(80)
@@ -246,11 +252,7 @@ def test_fair_surface_with_tol_meets_tol_when_it_succeeds(data, case):
         return
     _check_finite(result.surface)
     event("met" if result.surface.poles.size < result.source.poles.size else "met by the source")
-    assert result.max_deviation <= tol
-    allowed = tol * (1 + SLACK) + 1e-12 * size
-    measured = _surface_deviation(result.source, result.surface, allowed)
-    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
-    assert measured <= allowed
+    _assert_within(result, result.surface, _surface_deviation, tol, size)
 
 
 @fuzz(60)
@@ -267,11 +269,7 @@ def test_adaptive_curve_meets_tol_when_it_succeeds(data, case):
         return
     _check_finite(result.curve)
     event(f"met ({objective})")
-    assert result.max_deviation <= tol
-    allowed = tol * (1 + SLACK) + 1e-12 * size
-    measured = _curve_deviation(result.source, result.curve, allowed)
-    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
-    assert measured <= allowed
+    _assert_within(result, result.curve, _curve_deviation, tol, size)
 
 
 @fuzz(30)
@@ -291,11 +289,7 @@ def test_adaptive_surface_meets_tol_when_it_succeeds(data, case):
         return
     _check_finite(result.surface)
     event(f"met ({dict(result.table)['borders']} borders)")
-    assert result.max_deviation <= tol
-    allowed = tol * (1 + SLACK) + 1e-12 * size
-    measured = _surface_deviation(result.source, result.surface, allowed)
-    note(f"reported {result.max_deviation:.6g}, independent {measured:.6g}, tol {tol:.6g}")
-    assert measured <= allowed
+    _assert_within(result, result.surface, _surface_deviation, tol, size)
 
 
 # -- a case the fuzzer found -----------------------------------------------------------------
