@@ -214,7 +214,7 @@ def command_fair(args):
     progress = _Progress(args.progress or sys.stderr.isatty())
     result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
                         method=args.method, objective=_objective(args),
-                        borders=args.borders or "auto",
+                        borders=_borders(args),
                         convert=args.convert, progress=progress,
                         boundary=args.boundary, details=False, jobs=args.jobs,
                         face_timeout=args.face_timeout)
@@ -255,6 +255,10 @@ def _check_method(args):
 
 def _objective(args):
     return args.objective or "compact"
+
+
+def _borders(args):
+    return args.borders or "auto"
 
 
 def _target_scales(target):
@@ -316,7 +320,7 @@ def _build_report(args, result, tol, seconds):
     return build_report(entries, input_path=args.input, output_path=args.output,
                         tolerance=tol, method=args.method,
                         objective=_objective(args) if args.method == "adaptive" else None,
-                        borders=(args.borders or "auto") if args.method == "adaptive" else None,
+                        borders=_borders(args) if args.method == "adaptive" else None,
                         max_gap=result.max_gap,
                         valid=result.valid, seconds=seconds,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")

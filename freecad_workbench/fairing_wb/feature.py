@@ -50,7 +50,8 @@ PROPERTIES = (
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )
 ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OBJECTIVES,
-                "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES, "Measure": make.MEASURES}
+                "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES,
+                "Measure": make.MEASURES}
 
 
 def _sewn(compound, deviation):

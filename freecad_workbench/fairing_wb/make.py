@@ -19,6 +19,7 @@ import numpy as np
 
 import FreeCAD
 import cq_fairing as cf
+from cq_fairing.core.adaptive import BORDERS  # "auto" first: the enumeration's default
 
 from . import analysis, conversion
 
@@ -28,7 +29,6 @@ __all__ = ["make_fairing", "fair_face", "fair_edge", "FairedShape", "MODES", "ME
 MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
 OBJECTIVES = ("compact", "faithful")
-BORDERS = ("auto", "free", "pinned")
 BOUNDARIES = ("free", "corners", "edges")
 SEARCHES = ("linear", "guaranteed", "polyfit")
 MEASURES = ("parametric", "geometric")
