@@ -675,10 +675,18 @@ def variation_energy_matrix(space_u, space_v, lengths):
                for a, w in ((3, 1.0), (2, 3.0), (1, 3.0), (0, 1.0))).tocsr()
 
 
+def _redistributed(fit, breaks, axis, values, n, tol):
+    """The ``n``-span space along ``axis`` whose knots equidistribute the error density of
+    the search-grid deviations ``values`` (their largest over the other direction) on
+    ``breaks``."""
+    marginal = values.max(axis=1 - axis)
+    samples = (fit.probe.u, fit.probe.v)[axis]
+    rho = error_density(breaks, _span_max(breaks, samples, marginal), tol, fit.degrees[axis])
+    return equidistributed_space(breaks, rho, n, fit.degrees[axis])
+
+
 def _reduce_surface(fit, spaces, result, tol, rounds=ROUNDS):
     """Lower ``N_u`` or ``N_v`` by one span at a time (the larger net first) with error-driven knots."""
-    u, v = fit.probe.u, fit.probe.v
-    degrees = fit.degrees
     blocked = [False, False]
     while not all(blocked):
         axis = int(np.argmax([s.dimension if not blocked[i] else -1
@@ -690,10 +698,7 @@ def _reduce_surface(fit, spaces, result, tol, rounds=ROUNDS):
         found, values = None, result[1]
         b = space.breakpoints
         for _ in range(rounds):
-            marginal = values.max(axis=1 - axis)
-            rho = error_density(b, _span_max(b, (u, v)[axis], marginal), tol, degrees[axis])
-            b_old = b
-            cand = equidistributed_space(b_old, rho, space.n_spans - 1, degrees[axis])
+            cand = _redistributed(fit, b, axis, values, space.n_spans - 1, tol)
             pair = (cand, spaces[1]) if axis == 0 else (spaces[0], cand)
             trial = fit.trial(*pair)
             if trial[2] <= tol:
@@ -749,7 +754,9 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         ``max_samples`` points).  The result is checked on a grid twice as dense per
         span of the merged breakpoints, never coarser than the 8 per span of
         :func:`~cq_fairing.core.measures.deviation`; if that finds more than ``tol``,
-        the search is repeated with a tighter working tolerance (down to 0.9 ``tol``).
+        the compact net is grown by one span along u or v (knots from its error
+        density, the smaller net first) and checked again, and only if neither passes
+        is the search repeated with a tighter working tolerance (down to 0.9 ``tol``).
 
     Returns
     -------
@@ -823,8 +830,29 @@ def _checked_compact(fit, family, dens, tops, polish, tol, check, try_pinned):
         fit.pinned = pinned
         found = _polished_and_checked(fit, spaces, result, polish, tol, check)
         if found[2] <= tol:
-            break
-    return found
+            return found
+    return _grown_and_checked(fit, spaces, result, polish, tol, check) or found
+
+
+def _grown_and_checked(fit, spaces, result, polish, tol, check):
+    """A net the denser ``check`` refused, grown by one span along u or along v (knots
+    from its error density, the smaller of the two nets first), polished and checked:
+    the first that passes (as :func:`_polished_and_checked`), else ``None``.  One span
+    more where the error is usually covers the excess between the search's samples, at
+    the cost of two trials instead of a new search."""
+    grown = []
+    for axis in (0, 1):
+        pair = list(spaces)
+        pair[axis] = _redistributed(fit, spaces[axis].breakpoints, axis, result[1],
+                                    spaces[axis].n_spans + 1, fit.tol)
+        grown.append(pair)
+    for pair in sorted(grown, key=_net_size):
+        trial = fit.trial(*pair)
+        if trial[2] <= tol:
+            found = _polished_and_checked(fit, pair, trial, polish, tol, check)
+            if found[2] <= tol:
+                return found
+    return None
 
 
 def _polished_and_checked(fit, spaces, result, polish, tol, check):
