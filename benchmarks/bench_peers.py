@@ -153,6 +153,14 @@ def shape(g):
     return f"{g.poles.shape[0]}x{g.poles.shape[1]} (p{g.u_degree}x{g.v_degree})"
 
 
+def _fairness(case, geometry):
+    """The fairness columns of one geometry in words (the input line's reference values:
+    a fit with fewer extrema than the noise-free truth has smoothed shape away)."""
+    f = curve_fairness(geometry) if case.kind == "curve" else surface_fairness(geometry)
+    return (f"fairness int(dk/ds)^2 {f['dk2']:.3g}, bending {f['bending']:.3g}, curvature "
+            f"{f['kmin']:.3g}..{f['kmax']:.3g}, extrema {f['extrema']}")
+
+
 HEADER = ("| method | poles | setting | max dev | ok | truth RMS | truth max | int(dk/ds)^2 | "
           "bending | curvature range | extrema | time s | peak MB |")
 
@@ -180,12 +188,10 @@ def main():
         if args.cases and not any(case.name.startswith(c) for c in args.cases):
             continue
         n_pts = case.points.reshape(-1, 3).shape[0]
-        src = case.source
-        fair0 = curve_fairness(src) if case.kind == "curve" else surface_fairness(src)
         emit(f"\n### {case.name}, tol {case.tol:.4g}\n")
-        emit(f"Input: {n_pts} points; source net {shape(src)}; source fairness "
-             f"int(dk/ds)^2 {fair0['dk2']:.3g}, bending {fair0['bending']:.3g}, curvature "
-             f"{fair0['kmin']:.3g}..{fair0['kmax']:.3g}, extrema {fair0['extrema']}.\n")
+        truth = "" if case.truth is None else f"; noise-free truth {_fairness(case, case.truth)}"
+        emit(f"Input: {n_pts} points; source net {shape(case.source)}; source "
+             f"{_fairness(case, case.source)}{truth}.\n")
         emit(HEADER)
         emit("|" + "---|" * 13)
         for method in args.methods:
