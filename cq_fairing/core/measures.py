@@ -167,17 +167,8 @@ def surface_derivatives(surface, u, v, order):
 
 
 def _grid_points(surface, u, v):
-    """Surface points on the grid ``u x v`` with sparse tensor evaluation, shape (Nu, Nv, d)."""
-    coeffs = surface.homogeneous() if surface.is_rational else surface.poles
-    ku, kv, d = coeffs.shape
-    mu = surface.u_space.collocation(u)
-    mv = surface.v_space.collocation(v)
-    rows = (mu @ coeffs.reshape(ku, kv * d)).reshape(len(u), kv, d)
-    grid = (mv @ rows.transpose(1, 0, 2).reshape(kv, len(u) * d)).reshape(len(v), len(u), d)
-    grid = grid.transpose(1, 0, 2)
-    if surface.is_rational:
-        return grid[..., :-1] / grid[..., -1:]
-    return grid
+    """Surface points on the grid ``u x v`` (sparse tensor evaluation), shape (Nu, Nv, d)."""
+    return surface.evaluate_grid(u, v)
 
 
 # -- closest points ---------------------------------------------------------------------------

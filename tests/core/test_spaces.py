@@ -7,8 +7,9 @@ from hypothesis import strategies as st
 from scipy.interpolate import BSpline
 
 from cq_fairing import InvalidInputError, SplineSpace
+from cq_fairing.core.geometry import BSplineSurface
 
-from .naive import random_clamped_knots
+from .naive import basis_matrix, random_clamped_knots
 
 
 @given(degree=st.integers(1, 7), extra=st.integers(0, 20), seed=st.integers(0, 2**31 - 1))
@@ -23,6 +24,36 @@ def test_evaluation_and_derivatives_match_scipy(degree, extra, seed):
         ours = space.evaluate(c, x, nu)
         ref = BSpline(knots, c, degree)(x, nu)
         assert np.allclose(ours, ref, rtol=1e-10, atol=1e-9 * np.abs(ref).max()), nu
+
+
+@given(degrees=st.tuples(st.integers(1, 5), st.integers(1, 5)),
+       extra=st.tuples(st.integers(0, 12), st.integers(0, 12)), rational=st.booleans(),
+       seed=st.integers(0, 2**31 - 1))
+def test_surface_grid_evaluation_matches_dense_scipy_bases(degrees, extra, rational, seed):
+    r"""``evaluate_grid`` (sparse collocation products) against :math:`B_u^{(a)} P B_v^{(b)T}`
+    with dense scipy bases, every partial up to order 2, and the quotient
+    :math:`(B_u W P B_v^T) / (B_u W B_v^T)` for a rational net."""
+    rng = np.random.default_rng(seed)
+    k = [p + 1 + e for p, e in zip(degrees, extra)]
+    knots = [random_clamped_knots(rng, n, p) for n, p in zip(k, degrees)]
+    poles = rng.normal(size=(k[0], k[1], 3))
+    weights = rng.uniform(0.5, 2.0, size=k) if rational else None
+    surface = BSplineSurface(poles, knots[0], knots[1], *degrees, weights=weights)
+    u = np.concatenate([rng.random(9), [0.0, 1.0]])
+    v = np.concatenate([rng.random(7), [0.0, 1.0]])
+    if rational:
+        bu, bv = basis_matrix(knots[0], degrees[0], u), basis_matrix(knots[1], degrees[1], v)
+        w = bu @ weights @ bv.T
+        ref = np.einsum("ui,ijd,vj->uvd", bu, poles * weights[..., None], bv) / w[..., None]
+        assert np.allclose(surface.evaluate_grid(u, v), ref, rtol=1e-10, atol=1e-10)
+        return
+    for a, b in ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)):
+        if a > degrees[0] or b > degrees[1]:
+            continue
+        ref = np.einsum("ui,ijd,vj->uvd", basis_matrix(knots[0], degrees[0], u, a), poles,
+                        basis_matrix(knots[1], degrees[1], v, b))
+        assert np.allclose(surface.evaluate_grid(u, v, a, b), ref, rtol=1e-9,
+                           atol=1e-9 * max(np.abs(ref).max(), 1.0)), (a, b)
 
 
 def test_collocation_rows_are_a_partition_of_unity():
