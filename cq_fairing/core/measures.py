@@ -166,11 +166,6 @@ def surface_derivatives(surface, u, v, order):
     return out
 
 
-def _grid_points(surface, u, v):
-    """Surface points on the grid ``u x v`` (sparse tensor evaluation), shape (Nu, Nv, d)."""
-    return surface.evaluate_grid(u, v)
-
-
 # -- closest points ---------------------------------------------------------------------------
 def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     r"""Foot points on ``curve`` of ``points`` by damped, clamped Newton iterations.
@@ -524,7 +519,7 @@ class SurfaceProbe:
 
     def _set_samples(self, u, v):
         self.u, self.v = u, v
-        self.points = _grid_points(self.source, u, v)
+        self.points = self.source.evaluate_grid(u, v)
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._feet = {}
 
@@ -567,7 +562,7 @@ class SurfaceProbe:
         self._prior = other
 
     def bound(self, faired):
-        other = _grid_points(faired, self.u, self.v)
+        other = faired.evaluate_grid(self.u, self.v)
         return other, _distance(other, self.points)
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
@@ -791,7 +786,7 @@ def deviation_map(source, faired=None, *, method="geometric", per_span=8):
     uu, vv = np.meshgrid(u, v, indexing="ij")
     s = surface_derivatives(source, uu.ravel(), vv.ravel(), 1)
     pts = s[(0, 0)]
-    foot = _grid_points(faired, u, v).reshape(-1, pts.shape[1])
+    foot = faired.evaluate_grid(u, v).reshape(-1, pts.shape[1])
     if method == "geometric":
         here = pts.reshape(u.size, v.size, -1)
         there = foot.reshape(u.size, v.size, -1)
