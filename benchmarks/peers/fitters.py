@@ -298,8 +298,10 @@ def wavelet_adaptive(case, degree=None, objective="compact", borders=None):
     table = dict(r.table)
     noise = f" noise={table['noise']:.2g}" if "noise" in table else ""
     border = f" {table['borders']}" if "borders" in table else ""
+    weight = (f" span weight<={table['span weight']:.2g}"
+              if table.get("span weight", 1.0) > 1.0 else "")
     return (r.curve if case.kind == "curve" else r.surface,
-            f"n={r.n} lambda={table['lambda']:.2g}{noise}{border}")
+            f"n={r.n} lambda={table['lambda']:.2g}{weight}{noise}{border}")
 
 
 def energy(case):

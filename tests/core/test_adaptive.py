@@ -3,15 +3,19 @@ than the uniform search, exact reconstruction, valid knots, errors."""
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from hypothesis import given, strategies as st
 
 import cq_fairing as cf
 from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
-from cq_fairing.core.adaptive import (_SurfaceFit, equidistributed_space, fair_curve_adaptive,
+from cq_fairing.core.adaptive import (_SurfaceFit, _constrained_stages, _net_solve, _polish,
+                                      equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
+from cq_fairing.core.gram import gram_matrix
 from cq_fairing.core.measures import deviation
 from cq_fairing.errors import (InvalidInputError, InvalidToleranceError, ToleranceNotMetError,
                                UnsupportedGeometryError)
@@ -334,3 +338,64 @@ def test_a_search_too_coarse_to_converge_is_refused_not_returned(blade):
             assert deviation(blade, result.surface).max <= tol
             outcomes[tol] = "returned"
     assert outcomes == {0.045: "returned", 0.05: "returned", 0.06: "refused"}
+
+
+@pytest.mark.parametrize("borders", ["free", "pinned"])
+def test_unit_span_weights_give_the_plain_penalised_projection(blade, borders):
+    """The span-weighted path (band assembly, banded Cholesky) with every weight 1 is the
+    Kronecker path of the plain polish, free and pinned."""
+    tu = cf.SplineSpace.quasi_uniform(7, 3)
+    tv = cf.SplineSpace.quasi_uniform(5, 3)
+    fit = _SurfaceFit(blade, 0.05, (3, 3), 4, 100_000, borders)
+    ones = np.ones(fit.span_shape)
+    for lam in (0.0, 0.3):
+        plain = fit.project(tu, tv, lam)
+        assert np.allclose(fit.project(tu, tv, lam, ones), plain, rtol=0,
+                           atol=1e-9 * np.abs(plain).max())
+
+
+@pytest.mark.parametrize("shape", [(6, 9), (9, 6)])
+def test_net_solve_matches_a_sparse_lu(shape):
+    """Banded Cholesky in either numbering against scipy's sparse LU, and the LU
+    fall-back on an indefinite matrix."""
+    rng = np.random.default_rng(3)
+    tu, tv = (cf.SplineSpace.quasi_uniform(k - 3, 3) for k in shape)
+    mass = sp.kron(gram_matrix(tu), gram_matrix(tv)).tocsr()
+    matrix = mass + 0.01 * variation_energy_matrix(tu, tv, (1.0, 1.0))
+    rhs = rng.normal(size=(shape[0] * shape[1], 3))
+    reference = spla.spsolve(matrix.tocsc(), rhs)
+    assert np.allclose(_net_solve(matrix, rhs, shape), reference, rtol=1e-9, atol=1e-9)
+    indefinite = matrix - 2.0 * mass.diagonal().max() * sp.eye(matrix.shape[0])
+    reference = spla.spsolve(indefinite.tocsc(), rhs)
+    assert np.allclose(_net_solve(indefinite, rhs, shape), reference, rtol=1e-9, atol=1e-9)
+
+
+def test_constrained_stages_lower_the_energy_within_tol(blade):
+    """Each stage of the constrained polish stays within tol by the public measure, has
+    a lower curvature-variation energy than the one before, the first lower than the
+    single-lambda polish's, and weighs some patches more than others."""
+    spaces = [fair_surface_adaptive(blade, 0.05, polish=False, borders="free").surface]
+    spaces = (spaces[0].u_space, spaces[0].v_space)
+    fit = _SurfaceFit(blade, 0.99 * 0.05, (3, 3), 8, 400_000)
+    (faired, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol,
+                                  fit.trial(*spaces), steps=8)
+    stages = _constrained_stages(fit, spaces, faired, lam)
+    e = variation_energy_matrix(*spaces, net_lengths(blade.poles))
+
+    def energy(s):
+        c = s.poles.reshape(-1, 3)
+        return float(np.sum(c * (e @ c)))
+
+    assert len(stages) >= 1
+    energies = [energy(faired)] + [energy(s) for s, _, _ in stages]
+    assert all(b < a for a, b in zip(energies, energies[1:])), energies
+    for staged, stage_lam, weights in stages:
+        assert stage_lam > lam
+        assert deviation(blade, staged).max <= 0.05
+        assert weights.min() >= 1.0 and weights.max() > 1.0
+
+
+def test_the_public_result_reports_its_span_weights(blade):
+    result = fair_surface_adaptive(blade, 0.05, borders="free")
+    assert dict(result.table)["span weight"] > 1.0
+    assert deviation(blade, result.surface).max <= 0.05
