@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from ..errors import InvalidInputError
 from .spaces import basis_functions, find_spans
 
-__all__ = ["gram_matrix", "quadrature_rule"]
+__all__ = ["gram_matrix", "quadrature_rule", "merged_breakpoints", "interval_products"]
 
 
 def quadrature_rule(breakpoints, points_per_interval):
@@ -85,10 +85,41 @@ def gram_matrix(space_a, space_b=None, nu=0):
             f"Gram matrices need spaces on one domain, got {tuple(dom_a)} and {tuple(dom_b)}; "
             "reparameterise one of them."
         )
+    merged = merged_breakpoints(space_a, space_b)
+    rows, cols, products = interval_products(space_a, space_b, merged, nu)
+    shape = products.shape
+    coo = sp.coo_matrix(
+        (products.ravel(),
+         (np.broadcast_to(rows[:, :, None], shape).ravel(),
+          np.broadcast_to(cols[:, None, :], shape).ravel())),
+        shape=(space_a.dimension, space_b.dimension),
+    )
+    return coo.tocsr()  # sums the contributions of intervals that share basis functions
+
+
+def merged_breakpoints(space_a, space_b):
+    """Breakpoints of both spaces inside ``space_a``'s domain, near-duplicates (closer than
+    1e-13 of the domain) dropped, the last one the domain's end exactly."""
+    lo, hi = space_a.domain
     merged = np.union1d(space_a.breakpoints, space_b.breakpoints)
-    merged = merged[(merged >= dom_a[0]) & (merged <= dom_a[1])]
-    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-13 * (dom_a[1] - dom_a[0])])]
-    merged[-1] = dom_a[1]
+    merged = merged[(merged >= lo) & (merged <= hi)]
+    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-13 * (hi - lo)])]
+    merged[-1] = hi
+    return merged
+
+
+def interval_products(space_a, space_b, merged, nu=0):
+    r"""Exact :math:`\int_I \phi_i^{(\nu)} \psi_j^{(\nu)}` over each interval ``I`` of
+    ``merged`` (breakpoints of both spaces, :func:`merged_breakpoints`), for the
+    :math:`p + 1` functions of each space non-zero there.
+
+    Returns
+    -------
+    rows : ndarray of int, shape (s, p_a + 1)
+    cols : ndarray of int, shape (s, p_b + 1)
+        Indices of those functions in ``space_a`` and ``space_b``.
+    products : ndarray, shape (s, p_a + 1, p_b + 1)
+    """
     degree = max(space_a.degree + space_b.degree - 2 * nu, 0)
     per_interval = degree // 2 + 1
     nodes, weights = quadrature_rule(merged, per_interval)
@@ -99,15 +130,7 @@ def gram_matrix(space_a, space_b=None, nu=0):
     s = merged.size - 1
     weighted = (weights[:, None] * values_a).reshape(s, per_interval, -1).transpose(0, 2, 1)
     products = np.matmul(weighted, values_b.reshape(s, per_interval, -1))
-    rows, cols = rows[::per_interval], cols[::per_interval]
-    shape = products.shape
-    coo = sp.coo_matrix(
-        (products.ravel(),
-         (np.broadcast_to(rows[:, :, None], shape).ravel(),
-          np.broadcast_to(cols[:, None, :], shape).ravel())),
-        shape=(space_a.dimension, space_b.dimension),
-    )
-    return coo.tocsr()  # sums the contributions of intervals that share basis functions
+    return rows[::per_interval], cols[::per_interval], products
 
 
 def _local_basis(space, nodes, nu):

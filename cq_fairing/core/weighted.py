@@ -28,25 +28,10 @@ is one polynomial.
 import numpy as np
 import scipy.sparse as sp
 
-from .gram import quadrature_rule
-from .spaces import basis_functions, find_spans
+from .gram import interval_products, merged_breakpoints
+from .spaces import find_spans
 
 __all__ = ["SpanWeightedProjection"]
-
-
-def _merged_breakpoints(source, target):
-    """Breakpoints of both spaces (one domain), near-duplicates dropped."""
-    lo, hi = source.domain
-    merged = np.union1d(source.breakpoints, target.breakpoints)
-    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-13 * (hi - lo)])]
-    merged[-1] = hi
-    return merged
-
-
-def _local_values(space, nodes):
-    """First index and values of the ``p + 1`` basis functions non-zero at each node."""
-    spans = find_spans(space, nodes)
-    return spans - space.degree, basis_functions(space, nodes, spans, 0)[0]
 
 
 class _Direction:
@@ -63,49 +48,31 @@ class _Direction:
     """
 
     def __init__(self, target, source):
-        p, ps, k = target.degree, source.degree, target.dimension
-        merged = _merged_breakpoints(source, target)
-        intervals = merged.size - 1
-        mid = 0.5 * (merged[:-1] + merged[1:])
+        merged = merged_breakpoints(source, target)
         inner = source.breakpoints
+        mid = 0.5 * (merged[:-1] + merged[1:])
         sigma = np.clip(np.searchsorted(inner, mid, side="right") - 1, 0, inner.size - 2)
         self.n_spans = inner.size - 1
-        self.first_source = find_spans(source, 0.5 * (inner[:-1] + inner[1:])) - ps
-        self.k, self.p = k, p
-        self.band = self._band(target, merged, sigma).reshape(self.n_spans, -1)
-        self.cross = self._cross(target, source, merged, sigma)
+        self.first_source = find_spans(source, 0.5 * (inner[:-1] + inner[1:])) - source.degree
+        self.k, self.p = target.dimension, target.degree
+        self.band = self._per_span(*interval_products(target, target, merged), sigma,
+                                   band=True).reshape(self.n_spans, -1)
+        self.cross = self._per_span(*interval_products(target, source, merged), sigma,
+                                    band=False)
 
-    def _band(self, target, merged, sigma):
-        p, intervals = target.degree, merged.size - 1
-        per = p + 1                                  # exact for degree 2p
-        nodes, weights = quadrature_rule(merged, per)
-        first, values = _local_values(target, nodes)
-        weighted = (weights[:, None] * values).reshape(intervals, per, p + 1)
-        local = np.einsum("sna,snb->sab", weighted, values.reshape(intervals, per, p + 1))
-        a = np.arange(p + 1)
-        rows = np.broadcast_to(first[::per, None, None] + a[:, None], local.shape)
-        offsets = np.broadcast_to(a[None, :] - a[:, None] + p, local.shape)
-        band = np.zeros((self.n_spans, self.k, 2 * p + 1))
-        np.add.at(band, (np.broadcast_to(sigma[:, None, None], local.shape), rows, offsets),
-                  local)
-        return band
-
-    def _cross(self, target, source, merged, sigma):
-        p, ps, intervals = target.degree, source.degree, merged.size - 1
-        per = (p + ps) // 2 + 1                      # exact for degree p + p_s
-        nodes, weights = quadrature_rule(merged, per)
-        first, values = _local_values(target, nodes)
-        _, source_values = _local_values(source, nodes)
-        weighted = (weights[:, None] * values).reshape(intervals, per, p + 1)
-        local = np.einsum("sna,snc->sac", weighted,
-                          source_values.reshape(intervals, per, ps + 1))
-        rows = np.broadcast_to(first[::per, None, None] + np.arange(p + 1)[:, None],
-                               local.shape)
-        cols = np.broadcast_to(np.arange(ps + 1)[None, None, :], local.shape)
-        cross = np.zeros((self.n_spans, self.k, ps + 1))
-        np.add.at(cross, (np.broadcast_to(sigma[:, None, None], local.shape), rows, cols),
-                  local)
-        return cross
+    def _per_span(self, rows, cols, products, sigma, band):
+        """Sum the products of the merged intervals into their source spans: columns as
+        offsets ``j - i + p`` (``band``) or as the local index of the source function."""
+        p = self.p
+        columns = cols[:, None, :] - rows[:, :, None] + p if band else \
+            np.arange(cols.shape[1])[None, None, :]
+        width = 2 * p + 1 if band else cols.shape[1]
+        out = np.zeros((self.n_spans, self.k, width))
+        shape = products.shape
+        np.add.at(out, (np.broadcast_to(sigma[:, None, None], shape),
+                        np.broadcast_to(rows[:, :, None], shape),
+                        np.broadcast_to(columns, shape)), products)
+        return out
 
 
 class SpanWeightedProjection:
