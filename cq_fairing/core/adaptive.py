@@ -957,8 +957,9 @@ def _constrained_stages(fit, spaces, faired, lam):
     .. math:: \min_C \sum_{\sigma\tau} w_{\sigma\tau}\,\|S - S_{src}\|^2_{\sigma\times\tau}
         + \lambda\, E(S),
 
-    raising :math:`w` by :math:`(e_{\sigma\tau} / (0.97\,tol))^4` on the patches whose
-    largest search-grid deviation :math:`e_{\sigma\tau}` exceeds ``WEIGHT_AIM`` tol,
+    raising :math:`w` by :math:`(e_{\sigma\tau} / (a\,tol))^q` (``a = WEIGHT_AIM``,
+    ``q = WEIGHT_POWER``) on the patches whose largest search-grid deviation
+    :math:`e_{\sigma\tau}` exceeds ``a tol``,
     until the trial is within tol (iteratively reweighted least squares; the weights
     carry over to the next stage).  The stages approach
     :math:`\min E(S)` subject to the deviation limit at the samples.  They stop when a
