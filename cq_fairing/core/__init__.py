@@ -9,6 +9,15 @@ wavelets       compact wavelets as the null space of <Phi_n|Phi_S>
 decomposition  one ARWFA/DWFA step: projection, details, exact reconstruction
 schedule       direct, dyadic and hybrid schedules
 geometry       immutable curve and surface objects
+taylor         spline pieces in Taylor form: fast evaluation at scattered parameters
 fairing        fair_curve / fair_surface and their results
 interpolation  data points to control points
+measures       deviation (true closest-point distance) and fairness measures
+accuracy       accuracy control: the fewest poles within a tolerance
+adaptive       adaptive (non-uniform) targets, energy polish and constrained stages
+weighted       span-weighted L2 projections
+fidelity       noise level and the discrepancy principle
+energy         Eck-Hadenfeld energy fairing
+robustness     conditioning reports and local frames
+examples       synthetic geometry with a noise-free truth
 """

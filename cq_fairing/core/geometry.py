@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from .spaces import SplineSpace
+from .taylor import TaylorSurface
 
 __all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles"]
 
@@ -103,6 +104,13 @@ class BSplineSurface:
     @property
     def is_rational(self):
         return self.weights is not None
+
+    @cached_property
+    def taylor(self):
+        """:class:`~cq_fairing.core.taylor.TaylorSurface` of the (homogeneous) poles,
+        built on first use: fast evaluation at scattered parameters."""
+        coefficients = self.homogeneous() if self.is_rational else self.poles
+        return TaylorSurface(self.u_space, self.v_space, coefficients)
 
     @property
     def shape(self):

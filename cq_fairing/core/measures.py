@@ -127,6 +127,9 @@ def _rational_curve(h):
 def surface_derivatives(surface, u, v, order):
     """Partial derivatives ``{(a, b): S_{u^a v^b}}`` with ``a + b <= order`` at points (u_i, v_i).
 
+    Evaluated from the surface's Taylor form (:attr:`BSplineSurface.taylor`), the
+    quotient rule applied for a rational surface.
+
     Returns
     -------
     dict of ndarray, each shape (len(u), d)
@@ -135,23 +138,8 @@ def surface_derivatives(surface, u, v, order):
 
     u = np.asarray(u, dtype=float).ravel()
     v = np.asarray(v, dtype=float).ravel()
-    us, vs = surface.u_space, surface.v_space
-    coeffs = surface.homogeneous() if surface.is_rational else surface.poles
-    su, sv = find_spans(us, u), find_spans(vs, v)
-    bu = basis_functions(us, u, su, order)
-    bv = basis_functions(vs, v, sv, order)
-    iu = su[:, None] - us.degree + np.arange(us.degree + 1)[None, :]
-    iv = sv[:, None] - vs.degree + np.arange(vs.degree + 1)[None, :]
-    flat = iu[:, :, None] * coeffs.shape[1] + iv[:, None, :]   # (q, pu+1, pv+1)
-    keys = [(a, b) for a in range(order + 1) for b in range(order + 1 - a)]
-    h = {key: np.empty((u.size, coeffs.shape[2])) for key in keys}
-    # one coordinate plane at a time, v contracted before u: gathers and two-operand
-    # einsums are several times faster than one three-operand einsum on (q, i, j, d)
-    for c in range(coeffs.shape[2]):
-        local = np.ascontiguousarray(coeffs[:, :, c]).ravel().take(flat)
-        rows = [np.einsum("qj,qij->qi", bv[b], local) for b in range(order + 1)]
-        for a, b in keys:
-            h[(a, b)][:, c] = np.einsum("qi,qi->q", bu[a], rows[b])
+    h = surface.taylor.derivatives(u, v, order)
+    keys = list(h)
     if not surface.is_rational:
         return h
     w = {key: val[:, -1:] for key, val in h.items()}

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidTargetError
 
-__all__ = ["SplineSpace", "basis_functions", "find_spans"]
+__all__ = ["SplineSpace", "basis_functions", "find_spans", "require_in_domain"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,7 +238,14 @@ def find_spans(space, x):
     -------
     ndarray of int, shape (q,), values in ``[p, k - 1]``.
     """
-    t, p, k = space.knots, space.degree, space.dimension
+    require_in_domain(space, x)
+    spans = np.searchsorted(space.knots, x, side="right") - 1
+    return np.clip(spans, space.degree, space.dimension - 1)
+
+
+def require_in_domain(space, x):
+    """Raise :class:`InvalidInputError` unless every parameter ``x`` lies in the domain
+    (up to a relative 1e-12)."""
     lo, hi = space.domain
     if x.size and (np.nanmin(x) < lo - 1e-12 * max(1.0, abs(lo))
                    or np.nanmax(x) > hi + 1e-12 * max(1.0, abs(hi))):
@@ -246,8 +253,6 @@ def find_spans(space, x):
             f"parameters must lie in the domain [{lo}, {hi}], got "
             f"[{np.nanmin(x)}, {np.nanmax(x)}]; clip or rescale them."
         )
-    spans = np.searchsorted(t, x, side="right") - 1
-    return np.clip(spans, p, k - 1)
 
 
 def basis_functions(space, x, spans, nu=0):
