@@ -70,6 +70,8 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     impeller blade face the compact net drops from 9 x 12 to 8 x 12 poles.
 """
 
+from collections import OrderedDict
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -102,6 +104,7 @@ REWEIGHTS = 12       # reweighting rounds per stage
 WEIGHT_AIM = 0.97    # patches above this fraction of tol get more weight ...
 WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
+TRIAL_CACHE_BYTES = 64 * 2**20  # deviation grids of recent surface trials kept for revisits
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -499,6 +502,7 @@ class _SurfaceFit:
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._cache = {}
+        self._trials = OrderedDict()
 
     def _cached(self, key, build):
         """Per-space operators, kept while the searches revisit a space (at most 64)."""
@@ -652,10 +656,23 @@ class _SurfaceFit:
         return self._span_starts[0].size, self._span_starts[1].size
 
     def trial(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
+        """``(faired, search-grid deviations, their maximum)`` of one setting.
+
+        The three starts of the compact search and the bisections' scans revisit
+        settings (a tenth to a sixth of all trials on the real faces): the recent
+        results are kept, up to ``TRIAL_CACHE_BYTES`` of deviation grids."""
+        key = (tu.key, tv.key, lam, None if weights is None else weights.tobytes(),
+               edge_lam, self.pinned)
+        if key in self._trials:
+            self._trials.move_to_end(key)
+            return self._trials[key]
         net = self.project(tu, tv, lam, weights, edge_lam)
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
-        return faired, values, float(values.max())
+        result = self._trials[key] = faired, values, float(values.max())
+        while len(self._trials) > max(1, TRIAL_CACHE_BYTES // values.nbytes):
+            self._trials.popitem(last=False)
+        return result
 
 
 def _held_ends(matrix):

@@ -246,9 +246,13 @@ def find_spans(space, x):
 def require_in_domain(space, x):
     """Raise :class:`InvalidInputError` unless every parameter ``x`` lies in the domain
     (up to a relative 1e-12)."""
+    if not x.size:
+        return
     lo, hi = space.domain
-    if x.size and (np.nanmin(x) < lo - 1e-12 * max(1.0, abs(lo))
-                   or np.nanmax(x) > hi + 1e-12 * max(1.0, abs(hi))):
+    least, largest = x.min(), x.max()
+    if np.isnan(least):   # NaN parameters pass (they evaluate to NaN), as they always did
+        least, largest = np.nanmin(x), np.nanmax(x)
+    if least < lo - 1e-12 * max(1.0, abs(lo)) or largest > hi + 1e-12 * max(1.0, abs(hi)):
         raise InvalidInputError(
             f"parameters must lie in the domain [{lo}, {hi}], got "
             f"[{np.nanmin(x)}, {np.nanmax(x)}]; clip or rescale them."
