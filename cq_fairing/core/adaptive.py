@@ -104,7 +104,7 @@ REWEIGHTS = 12       # reweighting rounds per stage
 WEIGHT_AIM = 0.97    # patches above this fraction of tol get more weight ...
 WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
-TRIAL_CACHE_BYTES = 64 * 2**20  # deviation grids of recent surface trials kept for revisits
+TRIAL_CACHE_BYTES = 16 * 2**20  # deviation grids of recent surface trials kept for revisits
 
 
 # -- knot families ----------------------------------------------------------------------------
