@@ -14,19 +14,20 @@ A tensor-product surface with control points :math:`P_{ij}` is then, on the span
 
 .. math::
 
-    S(u, v) = \sum_{k} r^k \sum_{j} N_j(v)\, A_{a,k,j}, \qquad
+    S(u, v) = \sum_{k} r^k \sum_{j} N_j(v)\, A_{a,k,j}
+            = \sum_{k,l} r^k s^l A_{a,b,k,l}, \qquad
     A_{a,k,j} = \sum_{i} T^u_{a,i,k}\, P_{ij}, \qquad
-    N_j(v) = \sum_l T^v_{b,j,l}\, s^l.
+    A_{a,b,k,l} = \sum_j T^v_{b,j,l}\, A_{a,k,j}.
 
-The coefficients :math:`A` (one matrix product per u span) are computed once per
-surface.  Evaluating :math:`S` and its partial derivatives at :math:`q` scattered points
-is then two gathers and a few contractions, where the recurrences of The NURBS Book
-(A2.3) take :math:`O(p^2)` vector operations per call: the closest-point Newton
-iterations of a tolerance search evaluate small batches of points hundreds of times per
-fit.  (The full tensor :math:`A_{a,b,k,l}` would save one contraction per call but costs
-:math:`(p_u+1)(p_v+1)` numbers per span pair: 136 MB and a second to build on a
-400 x 400 degree-5 net.)  The centred local parameters keep the powers within
-:math:`[-1, 1]`.
+The coefficients are computed once per surface: :math:`A_{a,k,j}` always (one matrix
+product per u span), the full :math:`A_{a,b,k,l}` when it is small enough
+(:class:`TaylorSurface`: it costs :math:`(p_u+1)(p_v+1)` numbers per span pair, 136 MB
+and about a second to build on a 400 x 400 degree-5 net).  Evaluating :math:`S` and its
+partial derivatives at :math:`q` scattered points is then a gather and a few
+contractions, where the recurrences of The NURBS Book (A2.3) take :math:`O(p^2)` vector
+operations per call: the closest-point Newton iterations of a tolerance search evaluate
+small batches of points hundreds of times per fit.  The centred local parameters keep the
+powers within :math:`[-1, 1]`.
 
 This module imports numpy only.
 """
