@@ -1060,8 +1060,10 @@ def _pinned_below(fit, spaces):
 
 
 def _faithful_net(fit, family, dens, tops):
-    """Smallest net whose residual is within the noise level: the diagonal, then each
-    direction (the larger first) bisected with the other held; and the noise level."""
+    """Smallest net whose residual is within the noise level: the diagonal (bracketed by
+    doubling from a small net, as for curves: the large projections a bisection from the
+    top starts with cost more than all the small ones), then each direction (the larger
+    first) bisected with the other held; and the noise level."""
     residual = SurfaceResidual(fit.surface)
 
     def variance(spaces):
@@ -1071,7 +1073,12 @@ def _faithful_net(fit, family, dens, tops):
 
     sigma = noise_level(lambda fraction: variance(family(fraction)), extent(fit.surface.poles))
     steps = max(tops)
-    k = _bisect_count(0, steps, lambda k: within_noise(variance(family(k / steps)), sigma))
+
+    def quiet(k):
+        return within_noise(variance(family(k / steps)), sigma)
+
+    fails, k = _doubling(quiet, steps)
+    k = steps if k is None else _bisect_count(fails, k, quiet)
     spaces = family(k / steps)
     for axis in np.argsort([-s.dimension for s in spaces]):
         b, rho = dens[axis]

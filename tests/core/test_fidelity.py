@@ -10,7 +10,7 @@ from scipy.interpolate import BSpline
 
 import cq_fairing as cf
 from cq_fairing.core import examples
-from cq_fairing.core.adaptive import (equidistributed_space, fair_curve_adaptive,
+from cq_fairing.core.adaptive import (_SurfaceFit, equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive)
 from cq_fairing.core.decomposition import refinement_matrix
 from cq_fairing.core.fidelity import DISCREPANCY
@@ -85,6 +85,26 @@ def test_faithful_surface_removes_the_noise_within_tol():
     assert deviation(b.surface, result.surface, per_span=4).max <= 0.05
     assert deviation(b.truth, result.surface, per_span=2).rms < 0.5 * sigma
     assert result.poles.shape[0] * result.poles.shape[1] < 0.05 * b.surface.poles[..., 0].size
+
+
+def test_the_faithful_surface_search_projects_onto_small_nets_only(monkeypatch):
+    """The diagonal count is bracketed by doubling from a small net: apart from the
+    noise-level target (a third of the source per direction), no projection is larger than
+    the answer's count doubled in both directions (a bisection from the top would start
+    with half the source)."""
+    b = examples.blade_surface((40, 50), noise=0.01, span=50.0, chord=15.0)
+    sizes, project = [], _SurfaceFit.project
+
+    def counting(self, tu, tv, *args, **kwargs):
+        sizes.append(tu.n_spans * tv.n_spans)
+        return project(self, tu, tv, *args, **kwargs)
+
+    monkeypatch.setattr(_SurfaceFit, "project", counting)
+    result = fair_surface_adaptive(b.surface, 0.05, target_degree=5, objective="faithful")
+    answer = result.surface.u_space.n_spans * result.surface.v_space.n_spans
+    third = int(np.ceil(b.surface.u_space.n_spans / 3)) * int(np.ceil(b.surface.v_space.n_spans / 3))
+    assert sizes[0] == third and dict(result.table)["lambda"] == 0.0
+    assert max(sizes[1:]) <= 4 * answer < third
 
 
 def test_tolerance_below_the_noise_falls_back_to_the_compact_search():
