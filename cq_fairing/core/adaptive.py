@@ -71,6 +71,7 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
 """
 
 from collections import OrderedDict
+from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -669,10 +670,12 @@ class _SurfaceFit:
         net = self.project(tu, tv, lam, weights, edge_lam)
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
-        result = self._trials[key] = faired, values, float(values.max())
+        # kept without the evaluation caches the measurement attached to ``faired``
+        # (its Taylor form can outweigh the deviation grid)
+        self._trials[key] = replace(faired), values, float(values.max())
         while len(self._trials) > max(1, TRIAL_CACHE_BYTES // values.nbytes):
             self._trials.popitem(last=False)
-        return result
+        return faired, values, float(values.max())
 
 
 def _held_ends(matrix):
