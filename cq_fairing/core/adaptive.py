@@ -70,9 +70,6 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     impeller blade face the compact net drops from 9 x 12 to 8 x 12 poles.
 """
 
-from collections import OrderedDict
-from dataclasses import replace
-
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -105,7 +102,6 @@ REWEIGHTS = 12       # reweighting rounds per stage
 WEIGHT_AIM = 0.97    # patches above this fraction of tol get more weight ...
 WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
-TRIAL_CACHE_BYTES = 16 * 2**20  # deviation grids of recent surface trials kept for revisits
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -503,7 +499,6 @@ class _SurfaceFit:
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._cache = {}
-        self._trials = OrderedDict()
 
     def _cached(self, key, build):
         """Per-space operators, kept while the searches revisit a space (at most 64)."""
@@ -657,24 +652,9 @@ class _SurfaceFit:
         return self._span_starts[0].size, self._span_starts[1].size
 
     def trial(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
-        """``(faired, search-grid deviations, their maximum)`` of one setting.
-
-        The three starts of the compact search and the bisections' scans revisit
-        settings (a tenth to a sixth of all trials on the real faces): the recent
-        results are kept, up to ``TRIAL_CACHE_BYTES`` of deviation grids."""
-        key = (tu.key, tv.key, lam, None if weights is None else weights.tobytes(),
-               edge_lam, self.pinned)
-        if key in self._trials:
-            self._trials.move_to_end(key)
-            return self._trials[key]
         net = self.project(tu, tv, lam, weights, edge_lam)
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
-        # kept without the evaluation caches the measurement attached to ``faired``
-        # (its Taylor form can outweigh the deviation grid)
-        self._trials[key] = replace(faired), values, float(values.max())
-        while len(self._trials) > max(1, TRIAL_CACHE_BYTES // values.nbytes):
-            self._trials.popitem(last=False)
         return faired, values, float(values.max())
 
 

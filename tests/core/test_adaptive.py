@@ -8,7 +8,7 @@ import scipy.sparse.linalg as spla
 from hypothesis import given, strategies as st
 
 import cq_fairing as cf
-from cq_fairing.core import adaptive, examples
+from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
 from cq_fairing.core.adaptive import (_SurfaceFit, _constrained_stages, _net_solve, _polish,
@@ -353,27 +353,6 @@ def test_unit_span_weights_give_the_plain_penalised_projection(blade, borders):
         plain = fit.project(tu, tv, lam)
         assert np.allclose(fit.project(tu, tv, lam, ones), plain, rtol=0,
                            atol=1e-9 * np.abs(plain).max())
-
-
-def test_a_revisited_trial_is_not_evaluated_again(blade, monkeypatch):
-    """A setting tried before returns the kept result without a new evaluation; any
-    change of setting (lambda, borders) is a new trial; the cache keeps at most
-    TRIAL_CACHE_BYTES of deviation grids, the oldest leaving first."""
-    tu, tv = cf.SplineSpace.quasi_uniform(7, 3), cf.SplineSpace.quasi_uniform(5, 3)
-    fit = _SurfaceFit(blade, 0.05, (3, 3), 4, 100_000)
-    first = fit.trial(tu, tv)
-    again = fit.trial(tu, tv)
-    assert again[0].poles is first[0].poles and again[1] is first[1] and fit.evaluations == 1
-    fresh = _SurfaceFit(blade, 0.05, (3, 3), 4, 100_000).trial(tu, tv)
-    assert np.array_equal(fresh[1], first[1]) and fresh[2] == first[2]
-    fit.trial(tu, tv, 0.3)
-    fit.pinned = True
-    fit.trial(tu, tv)
-    assert fit.evaluations == 3
-    monkeypatch.setattr(adaptive, "TRIAL_CACHE_BYTES", 2 * first[1].nbytes)
-    fit.pinned = False
-    fit.trial(cf.SplineSpace.quasi_uniform(6, 3), tv)
-    assert fit.trial(tu, tv)[1] is not first[1] and fit.evaluations == 5
 
 
 @pytest.mark.parametrize("shape", [(6, 9), (9, 6)])
