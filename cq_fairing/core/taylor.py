@@ -152,9 +152,9 @@ class TaylorSurface:
             along_u.reshape(m_u, p_u + 1, self.n_v, -1).transpose(0, 2, 1, 3))  # (a, j, k, D)
         self._along_u = along_u.reshape(m_u * self.n_v, p_u + 1, -1)
         self._by_pair = None
-        size = along_u.size // self.n_v * self.v.centres.size * (v_space.degree + 1)
-        if size <= full_limit:
-            iv = self.v.first[:, None] + np.arange(v_space.degree + 1)
+        m_v, p_v, dim = self.v.centres.size, v_space.degree, along_u.shape[-1]
+        if m_u * m_v * (p_u + 1) * (p_v + 1) * dim <= full_limit:
+            iv = self.v.first[:, None] + np.arange(p_v + 1)
             by_pair = np.einsum("bjl,abjkd->ablkd", self.v.coefficients, along_u[:, iv])
             self._by_pair = by_pair.reshape((-1,) + by_pair.shape[2:])
 

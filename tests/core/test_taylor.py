@@ -12,15 +12,16 @@ from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.core.taylor import SpanTaylor, TaylorSurface
 from cq_fairing.errors import InvalidInputError
 
+from .naive import random_clamped_knots
 from .test_measures import rational_sphere
 
 
 def random_knots(rng, k, p, lo=-3.0, hi=4.0, double=False):
     """Clamped knots on [lo, hi] with ``k`` basis functions; optionally one double knot."""
-    inner = np.sort(rng.uniform(lo, hi, k - p - 1))
-    if double and p >= 2 and inner.size >= 2:
-        inner[1] = inner[0]
-    return np.r_[[lo] * (p + 1), inner, [hi] * (p + 1)]
+    knots = lo + (hi - lo) * random_clamped_knots(rng, k, p)
+    if double and p >= 2 and k - p - 1 >= 2:
+        knots[p + 2] = knots[p + 1]
+    return knots
 
 
 def scipy_basis(knots, degree, x, nu):
