@@ -1128,7 +1128,7 @@ def _final_check(surface, per_span, max_samples):
     def check(faired, search=None):
         uv = (sample_parameters(surface.u_space, faired.u_space, per_span=per_span),
               sample_parameters(surface.v_space, faired.v_space, per_span=per_span))
-        probe = SurfaceProbe(surface, uv=uv)
+        probe = SurfaceProbe(surface, uv=uv, hold_grid=False)
         if search is not None:
             probe.adopt_feet(search)
         return probe.max_deviation(faired)[0]

@@ -258,7 +258,7 @@ def fair_surface_energy(surface, tol, *, rtol=1e-6, max_sweeps=200):
             break
     faired = type(surface)(poles.reshape(ku, kv, d), surface.u_knots, surface.v_knots,
                            surface.u_degree, surface.v_degree, None)
-    deviation = SurfaceProbe(surface).max_deviation(faired)[0]
+    deviation = SurfaceProbe(surface, hold_grid=False).max_deviation(faired)[0]
     n = (surface.u_space.n_spans, surface.v_space.n_spans)
     return SurfaceFairResult(source=surface, surface=faired, scales=(n,), n=n,
                              schedule="energy", steps=(), max_deviation=deviation,

@@ -139,6 +139,34 @@ class BSplineSurface:
             raise InvalidInputError("rational surfaces evaluate derivatives up to order 2.")
         return _rational_grid(self, u, v, nu, nv)
 
+    def grid_rows(self, u, v):
+        r"""``rows(start, stop)``: the points on the grid ``u[start:stop] x v``, the bases
+        built once: :math:`W_a(v_j) = \sum_b N_b(v_j) P_{ab}` (homogeneous poles for a
+        rational surface), then :math:`S(u_i, v_j) = \sum_a N_a(u_i) W_a(v_j)` for the
+        rows asked.  A tolerance check walks a million-sample grid in blocks of rows this
+        way, without holding the whole grid.
+
+        Returns
+        -------
+        callable
+            ``rows(start, stop)`` returns a view of shape (stop - start, len(v), d),
+            ordered (u, coordinate, v) in memory: each coordinate's v samples are
+            contiguous, as the u samples of :meth:`evaluate_grid` are.
+        """
+        u = np.asarray(u, dtype=float).ravel()
+        v = np.asarray(v, dtype=float).ravel()
+        net = self.poles if self.weights is None else self.homogeneous()
+        ku, kv, dim = net.shape
+        along_v = self.v_space.collocation(v) @ net.transpose(1, 2, 0).reshape(kv, dim * ku)
+        along_v = along_v.reshape(v.size, dim, ku).transpose(2, 1, 0).reshape(ku, dim * v.size)
+        mu = self.u_space.collocation(u)
+
+        def rows(start, stop):
+            block = (mu[start:stop] @ along_v).reshape(-1, dim, v.size).transpose(0, 2, 1)
+            return block if self.weights is None else block[..., :-1] / block[..., -1:]
+
+        return rows
+
     @property
     def domain(self):
         """``((u0, u1), (v0, v1))``."""

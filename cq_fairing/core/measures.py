@@ -64,6 +64,7 @@ __all__ = [
 
 DEVIATIONS = ("geometric", "parametric")
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
+BLOCK_SAMPLES = 65_536  # grid samples per block of rows when a probe does not hold its grid
 
 
 # -- samples and evaluation ---------------------------------------------------------------
@@ -490,14 +491,21 @@ class SurfaceProbe:
     keep_feet : bool
         Keep each sample's last foot parameters, the Newton starts of the next candidate
         (a search that measures many nearby candidates on the same grid).
+    hold_grid : bool
+        Keep the source's grid points (a probe that measures many candidates).  Without,
+        a measurement walks the grid in blocks of rows and evaluates points only where the
+        exact distance is needed (:class:`_LazyGrid`): a single check of a million-sample
+        grid then holds a few MB instead of about 90.
     """
 
-    def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False):
+    def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False,
+                 hold_grid=True):
         _check_method(method)
         self.source = source
         self.method = method
         self.per_span = per_span
         self.keep_feet = keep_feet
+        self.hold_grid = hold_grid
         self._prior = None
         self._fixed = uv is not None
         if uv is None:
@@ -507,7 +515,8 @@ class SurfaceProbe:
 
     def _set_samples(self, u, v):
         self.u, self.v = u, v
-        self.points = self.source.evaluate_grid(u, v)
+        self.points = (self.source.evaluate_grid(u, v) if self.hold_grid
+                       else _LazyGrid(self.source, u, v))
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._feet = {}
 
@@ -550,8 +559,19 @@ class SurfaceProbe:
         self._prior = other
 
     def bound(self, faired):
-        other = faired.evaluate_grid(self.u, self.v)
-        return other, _distance(other, self.points)
+        """Faired points on the grid (a :class:`_LazyGrid` without ``hold_grid``) and the
+        same-parameter distance at every sample, shape (len(u), len(v))."""
+        if self.hold_grid:
+            other = faired.evaluate_grid(self.u, self.v)
+            return other, _distance(other, self.points)
+        source_rows = self.source.grid_rows(self.u, self.v)
+        faired_rows = faired.grid_rows(self.u, self.v)
+        bound = np.empty((self.u.size, self.v.size))
+        step = max(1, BLOCK_SAMPLES // self.v.size)
+        for start in range(0, self.u.size, step):
+            stop = min(start + step, self.u.size)
+            bound[start:stop] = _distance(faired_rows(start, stop), source_rows(start, stop))
+        return _LazyGrid(faired, self.u, self.v), bound
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
         """Two-sided true distance at flat grid indices ``flat_idx``.
@@ -623,6 +643,20 @@ class SurfaceProbe:
             return float(flat[k]), k
         return _pruned_max(flat, lambda idx, below: self.true_distance(faired, other, idx,
                                                                         tol=below), tol)
+
+
+class _LazyGrid:
+    """The points of ``surface`` on the grid ``u x v``, evaluated only where indexed:
+    ``grid[i, j]`` with index arrays gives shape (len(i), d).  A tolerance check needs
+    the exact distance at a few hundred of a million samples (and their neighbours)."""
+
+    def __init__(self, surface, u, v):
+        self.surface, self.u, self.v = surface, u, v
+        self.shape = (u.size, v.size, surface.poles.shape[-1])
+
+    def __getitem__(self, index):
+        i, j = index
+        return surface_derivatives(self.surface, self.u[i], self.v[j], 0)[(0, 0)]
 
 
 def _pruned_max(bound, exact, tol):
@@ -809,18 +843,17 @@ def _cell(x, xq):
 
 
 def _window_start(here, there, i, j, u, v, window=2):
-    """Parameters of the nearest ``there`` sample within +-window of each (i, j)."""
+    """Parameters of the nearest ``there`` sample within +-window of each (i, j) (the
+    first of equals in row-major window order), all neighbours read in one indexing."""
     nu, nv = here.shape[:2]
-    best = np.full(i.size, np.inf)
-    bi, bj = i.copy(), j.copy()
-    p = here[i, j]
-    for di in range(-window, window + 1):
-        for dj in range(-window, window + 1):
-            ii, jj = np.clip(i + di, 0, nu - 1), np.clip(j + dj, 0, nv - 1)
-            d = np.linalg.norm(there[ii, jj] - p, axis=1)
-            better = d < best
-            best[better], bi[better], bj[better] = d[better], ii[better], jj[better]
-    return u[bi], v[bj]
+    offsets = np.arange(-window, window + 1)
+    ii = np.clip(i[:, None, None] + offsets[None, :, None], 0, nu - 1)
+    jj = np.clip(j[:, None, None] + offsets[None, None, :], 0, nv - 1)
+    ii, jj = (x.reshape(i.size, -1) for x in np.broadcast_arrays(ii, jj))
+    near = there[ii.ravel(), jj.ravel()].reshape(ii.shape + (-1,))
+    k = np.argmin(np.linalg.norm(near - here[i, j][:, None, :], axis=2), axis=1)
+    rows = np.arange(i.size)
+    return u[ii[rows, k]], v[jj[rows, k]]
 
 
 def _principal_normal(d1, d2):

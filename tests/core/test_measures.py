@@ -111,6 +111,43 @@ def test_surface_deviation_matches_brute_force():
     assert np.allclose(np.abs(dmap.signed), dmap.values)
 
 
+@given(seed=st.integers(0, 2**31 - 1), block=st.sampled_from([1, 37, 10_000]))
+@settings(max_examples=15, deadline=None)
+def test_a_probe_without_its_grid_measures_what_one_holding_it_does(seed, block):
+    """``hold_grid=False`` walks the grid in blocks of rows (one row, a few, all at once)
+    and evaluates points only where needed: the same two-sided maximum, with and
+    without a tolerance, at the same sample."""
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 9), indexing="ij")
+    pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
+    source = cf.make_surface(pts + rng.normal(0, 0.01, pts.shape))
+    fair = project_surface(source, target_space(source.u_space, 3), target_space(source.v_space, 2))
+    held, lazy = M.SurfaceProbe(source), M.SurfaceProbe(source, hold_grid=False)
+    _, bound = held.bound(fair.surface)
+    value, at = held.max_deviation(fair.surface)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(M, "BLOCK_SAMPLES", block)
+        assert np.allclose(lazy.bound(fair.surface)[1], bound, rtol=1e-12, atol=1e-15)
+        assert lazy.max_deviation(fair.surface) == (pytest.approx(value, rel=1e-10), at)
+        assert lazy.max_deviation(fair.surface, 0.9 * value)[0] > 0.9 * value
+        assert lazy.max_deviation(fair.surface, 1.1 * value)[0] <= 1.1 * value
+
+
+@pytest.mark.parametrize("rational", [False, True])
+def test_grid_rows_are_the_rows_of_the_grid(rational):
+    rng = np.random.default_rng(7)
+    knots = [np.r_[[0.0] * 4, np.sort(rng.random(5)), [1.0] * 4],
+             np.r_[[0.0] * 3, np.sort(rng.random(60)), [1.0] * 3]]
+    poles = rng.normal(size=(9, 63, 3))
+    weights = rng.uniform(0.5, 2.0, size=(9, 63)) if rational else None
+    surface = cf.BSplineSurface(poles, knots[0], knots[1], 3, 2, weights=weights)
+    u, v = np.sort(rng.random(41)), np.sort(rng.random(29))
+    rows = surface.grid_rows(u, v)
+    grid = surface.evaluate_grid(u, v)
+    assert np.allclose(rows(0, 41), grid, rtol=1e-12, atol=1e-12)
+    assert np.allclose(rows(5, 17), grid[5:17], rtol=1e-12, atol=1e-12)
+
+
 def _reparametrised(surface, phi, degree):
     """Poles of ``S(phi(u), v)`` for a Bezier patch ``S`` and a polynomial ``phi`` of
     degree ``degree / surface.u_degree``: Bernstein collocation, exact for polynomials."""
