@@ -15,8 +15,6 @@ from ..errors import InvalidInputError
 from .spaces import SplineSpace
 from .taylor import TaylorSurface
 
-DENSE_GRID_POLES = 48  # grid evaluation with a dense v collocation matrix up to this many v poles
-
 __all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles"]
 
 
@@ -175,23 +173,21 @@ class BSplineSurface:
 
 def _grid(u_space, v_space, net, u, v, nu, nv):
     r""":math:`S_{u^{nu} v^{nv}}` on the grid ``u x v`` as :math:`M_u\,P\,M_v^T` per
-    coordinate with the collocation matrices :math:`M_u, M_v` (``p + 1`` non-zeros per
-    row).
+    coordinate with the sparse collocation matrices (``p + 1`` non-zeros per row):
+    :math:`O((N_u k_v + N_u N_v)(p + 1))` work, where dense factors cost
+    :math:`O(N_u k_u k_v + N_u N_v k_v)` (a second on a 400 x 400 net).
 
-    The second product, :math:`N_u N_v` outputs per coordinate, dominates.  Sparse it
-    costs :math:`O(N_u N_v (p + 1))` with a large constant; with :math:`M_v` dense,
-    :math:`O(N_u N_v k_v)` in BLAS, which is faster up to ``DENSE_GRID_POLES`` poles
-    along v (3-8x at 8 poles, still faster at 48; measured on an 801 x 1265 grid,
-    degrees 3-7).  The result is a view of memory ordered (v, coordinate, u): each
-    coordinate's u samples are contiguous, which halves the time of the distance
-    between two such grids against the (v, u, coordinate) order.
+    The result is a view of memory ordered (v, coordinate, u): each coordinate's u
+    samples are contiguous, which halves the time of the distance between two such grids
+    against the (v, u, coordinate) order (6 against 13 ms on an 801 x 1265 grid).  A
+    dense BLAS product is up to 3x faster alone for nets of a few poles, but on two cores
+    its threads slowed the rest of a fit down more than that.
     """
     mu = u_space.collocation(u, nu)
     mv = v_space.collocation(v, nv)
     ku, kv, d = net.shape
     rows = (mu @ net.reshape(ku, kv * d)).reshape(len(u), kv, d)
-    by_coordinate = rows.transpose(1, 2, 0).reshape(kv, d * len(u))
-    planes = (mv.toarray() if kv <= DENSE_GRID_POLES else mv) @ by_coordinate
+    planes = mv @ rows.transpose(1, 2, 0).reshape(kv, d * len(u))
     return planes.reshape(len(v), d, len(u)).transpose(2, 0, 1)
 
 

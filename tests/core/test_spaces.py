@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.interpolate import BSpline
 
 from cq_fairing import InvalidInputError, SplineSpace
-from cq_fairing.core.geometry import DENSE_GRID_POLES, BSplineSurface
+from cq_fairing.core.geometry import BSplineSurface
 
 from .naive import basis_matrix, random_clamped_knots
 
@@ -54,22 +54,6 @@ def test_surface_grid_evaluation_matches_dense_scipy_bases(degrees, extra, ratio
                         basis_matrix(knots[1], degrees[1], v, b))
         assert np.allclose(surface.evaluate_grid(u, v, a, b), ref, rtol=1e-9,
                            atol=1e-9 * max(np.abs(ref).max(), 1.0)), (a, b)
-
-
-@pytest.mark.parametrize("v_poles", [DENSE_GRID_POLES, DENSE_GRID_POLES + 1])
-def test_surface_grid_evaluation_on_both_sides_of_the_dense_product_limit(v_poles):
-    """Up to ``DENSE_GRID_POLES`` v poles the grid is a dense product, above it a sparse
-    one: both against the dense scipy bases, with derivatives."""
-    rng = np.random.default_rng(v_poles)
-    knots = [random_clamped_knots(rng, 9, 3), random_clamped_knots(rng, v_poles, 5)]
-    poles = rng.normal(size=(9, v_poles, 3))
-    surface = BSplineSurface(poles, knots[0], knots[1], 3, 5)
-    u, v = np.linspace(0.0, 1.0, 37), np.concatenate([rng.random(300), [0.0, 1.0]])
-    for a, b in ((0, 0), (1, 0), (0, 2)):
-        ref = np.einsum("ui,ijd,vj->uvd", basis_matrix(knots[0], 3, u, a), poles,
-                        basis_matrix(knots[1], 5, v, b))
-        assert np.allclose(surface.evaluate_grid(u, v, a, b), ref, rtol=1e-9,
-                           atol=1e-9 * np.abs(ref).max()), (a, b)
 
 
 def test_collocation_rows_are_a_partition_of_unity():
