@@ -30,7 +30,7 @@ def test_evaluation_and_derivatives_match_scipy(degree, extra, seed):
        extra=st.tuples(st.integers(0, 12), st.integers(0, 12)), rational=st.booleans(),
        seed=st.integers(0, 2**31 - 1))
 def test_surface_grid_evaluation_matches_dense_scipy_bases(degrees, extra, rational, seed):
-    r"""``evaluate_grid`` (collocation products) against :math:`B_u^{(a)} P B_v^{(b)T}`
+    r"""``evaluate_grid`` (sparse collocation products) against :math:`B_u^{(a)} P B_v^{(b)T}`
     with dense scipy bases, every partial up to order 2, and the quotient
     :math:`(B_u W P B_v^T) / (B_u W B_v^T)` for a rational net."""
     rng = np.random.default_rng(seed)
