@@ -463,7 +463,7 @@ def _surface_error(surface, degrees, schedule, deviation):
     chain_v = _Chain(surface.v_space, degrees[1], schedule)
     probe = SurfaceProbe(surface, method=deviation,
                          uv=(sample_parameters(surface.u_space), sample_parameters(surface.v_space)))
-    strict = SurfaceProbe(surface, method=deviation)
+    strict = SurfaceProbe(surface, method=deviation, hold_grid=False)
     net = _coefficients(surface)
 
     def geometry(nu, nv):
