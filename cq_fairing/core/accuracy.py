@@ -461,7 +461,7 @@ def fair_curve_to_tolerance(curve, tol, *, target_degree=None, schedule="auto",
 def _surface_error(surface, degrees, schedule, deviation):
     chain_u = _Chain(surface.u_space, degrees[0], schedule)
     chain_v = _Chain(surface.v_space, degrees[1], schedule)
-    probe = SurfaceProbe(surface, method=deviation,
+    probe = SurfaceProbe(surface, method=deviation, hold_grid=False,
                          uv=(sample_parameters(surface.u_space), sample_parameters(surface.v_space)))
     strict = SurfaceProbe(surface, method=deviation, hold_grid=False)
     net = _coefficients(surface)

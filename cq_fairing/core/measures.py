@@ -492,10 +492,13 @@ class SurfaceProbe:
         Keep each sample's last foot parameters, the Newton starts of the next candidate
         (a search that measures many nearby candidates on the same grid).
     hold_grid : bool
-        Keep the source's grid points (a probe that measures many candidates).  Without,
-        a measurement walks the grid in blocks of rows and evaluates points only where the
-        exact distance is needed (:class:`_LazyGrid`): a single check of a million-sample
-        grid then holds a few MB instead of about 90.
+        Keep the source's grid points and each candidate's in full (the adaptive search's
+        probe, capped at 400k samples, whose path depends on the rounding of those
+        grids).  Without, a measurement walks the grid in blocks of rows and evaluates
+        points only where the exact distance is needed (:class:`_LazyGrid`): a check of
+        a million-sample grid then holds a few MB instead of about 90, and the uniform
+        search on the 400 x 400 blade (10 million samples per check) peaks at 214 MB
+        instead of 1151 MB.
     """
 
     def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False,
