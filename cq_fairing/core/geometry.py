@@ -142,7 +142,9 @@ class BSplineSurface:
         built once: :math:`W_a(v_j) = \sum_b N_b(v_j) P_{ab}` (homogeneous poles for a
         rational surface), then :math:`S(u_i, v_j) = \sum_a N_a(u_i) W_a(v_j)` for the
         rows asked.  A tolerance check walks a million-sample grid in blocks of rows this
-        way, without holding the whole grid.
+        way, without holding the whole grid.  :meth:`evaluate_grid` contracts u first, so
+        the two agree to rounding only; it stays as it is because the adaptive search's
+        path depends on the rounding of its grids.
 
         Returns
         -------
