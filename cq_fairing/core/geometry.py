@@ -15,7 +15,14 @@ from ..errors import InvalidInputError
 from .spaces import SplineSpace
 from .taylor import TaylorSurface
 
-__all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles"]
+__all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles", "extent"]
+
+
+def extent(poles):
+    """Bounding-box diagonal of a pole array (any leading shape, last axis = coordinates):
+    the size of a geometry, which scales a converged Newton step or a noise floor."""
+    flat = np.asarray(poles).reshape(-1, np.asarray(poles).shape[-1])
+    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,6 +49,11 @@ class BSplineCurve:
     def space(self):
         """The :class:`SplineSpace` of the curve."""
         return SplineSpace(self.degree, self.knots)
+
+    @cached_property
+    def size(self):
+        """:func:`extent` of the poles, kept: every closest-point search asks for it."""
+        return extent(self.poles)
 
     @property
     def is_rational(self):
@@ -98,6 +110,11 @@ class BSplineSurface:
         return SplineSpace(self.u_degree, self.u_knots)
 
     @cached_property
+    def size(self):
+        """:func:`extent` of the poles, kept: every closest-point search asks for it."""
+        return extent(self.poles)
+
+    @cached_property
     def v_space(self):
         return SplineSpace(self.v_degree, self.v_knots)
 
@@ -138,20 +155,23 @@ class BSplineSurface:
         return _rational_grid(self, u, v, nu, nv)
 
     def grid_rows(self, u, v):
-        r"""``rows(start, stop)``: the points on the grid ``u[start:stop] x v``, the bases
+        r"""``rows(index)``: the points on the grid rows ``u[index] x v``, the bases
         built once: :math:`W_a(v_j) = \sum_b N_b(v_j) P_{ab}` (homogeneous poles for a
         rational surface), then :math:`S(u_i, v_j) = \sum_a N_a(u_i) W_a(v_j)` for the
         rows asked.  A tolerance check walks a million-sample grid in blocks of rows this
-        way, without holding the whole grid.  :meth:`evaluate_grid` contracts u first, so
-        the two agree to rounding only; it stays as it is because the adaptive search's
-        path depends on the rounding of its grids.
+        way, without holding the whole grid.  Each row is summed on its own, so a row
+        comes out the same bit for bit whichever rows are asked with it.
+        :meth:`evaluate_grid` contracts u first, so the two agree to rounding only; it
+        stays as it is because the adaptive search's path depends on the rounding of its
+        grids.
 
         Returns
         -------
         callable
-            ``rows(start, stop)`` returns a view of shape (stop - start, len(v), d),
-            ordered (u, coordinate, v) in memory: each coordinate's v samples are
-            contiguous, as the u samples of :meth:`evaluate_grid` are.
+            ``rows(index)`` (a slice or an integer array) returns a view of shape
+            (number of rows, len(v), d), ordered (u, coordinate, v) in memory: each
+            coordinate's v samples are contiguous, as the u samples of
+            :meth:`evaluate_grid` are.
         """
         u = np.asarray(u, dtype=float).ravel()
         v = np.asarray(v, dtype=float).ravel()
@@ -161,8 +181,8 @@ class BSplineSurface:
         along_v = along_v.reshape(v.size, dim, ku).transpose(2, 1, 0).reshape(ku, dim * v.size)
         mu = self.u_space.collocation(u)
 
-        def rows(start, stop):
-            block = (mu[start:stop] @ along_v).reshape(-1, dim, v.size).transpose(0, 2, 1)
+        def rows(index):
+            block = (mu[index] @ along_v).reshape(-1, dim, v.size).transpose(0, 2, 1)
             return block if self.weights is None else block[..., :-1] / block[..., -1:]
 
         return rows

@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
-from .geometry import BSplineCurve, BSplineSurface
+from .geometry import BSplineCurve, BSplineSurface, extent
 from .gram import gram_matrix, quadrature_rule
 from .spaces import basis_functions, find_spans
 
@@ -187,7 +187,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
     dist = _distance(curve_derivatives(curve, t, 0)[0], points)
     active = np.arange(t.size)
-    size = extent(curve.poles)
+    size = curve.size
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
@@ -220,13 +220,6 @@ def _distance(a, b):
     on the million-sample grids of a tolerance check)."""
     d = a - b
     return np.sqrt(np.einsum("...k,...k->...", d, d))
-
-
-def extent(poles):
-    """Bounding-box diagonal of a pole array (any leading shape, last axis = coordinates):
-    the size of a geometry, which scales a converged Newton step or a noise floor."""
-    flat = np.asarray(poles).reshape(-1, np.asarray(poles).shape[-1])
-    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
 
 
 def _above(active, dist, stop_below):
@@ -289,7 +282,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     dist = _distance(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
-    size = extent(surface.poles)
+    size = surface.size
     for _ in range(iterations):
         active = _above(active, dist, stop_below)
         if active.size == 0:
@@ -471,9 +464,9 @@ class CurveProbe:
         """
         self._adapt(faired)
         other, bound = self.bound(faired)
+        bound = _FlatBound(bound)
         if self.method == "parametric":
-            i = int(np.argmax(bound))
-            return float(bound[i]), i
+            return bound.argmax()
         return _pruned_max(bound, lambda idx, below: self.true_distance(faired, other, idx, below),
                            tol)
 
@@ -567,14 +560,22 @@ class SurfaceProbe:
         if self.hold_grid:
             other = faired.evaluate_grid(self.u, self.v)
             return other, _distance(other, self.points)
+        rows = self._bound_rows(faired)
+        return _LazyGrid(faired, self.u, self.v), np.concatenate(
+            [rows(np.arange(start, min(start + rows.step, self.u.size)))
+             for start in range(0, self.u.size, rows.step)])
+
+    def _bound_rows(self, faired):
+        """``rows(index)``: the same-parameter distance on the grid rows ``index``, shape
+        (len(index), len(v)); ``rows.step`` rows make a block of about ``BLOCK_SAMPLES``."""
         source_rows = self.source.grid_rows(self.u, self.v)
         faired_rows = faired.grid_rows(self.u, self.v)
-        bound = np.empty((self.u.size, self.v.size))
-        step = max(1, BLOCK_SAMPLES // self.v.size)
-        for start in range(0, self.u.size, step):
-            stop = min(start + step, self.u.size)
-            bound[start:stop] = _distance(faired_rows(start, stop), source_rows(start, stop))
-        return _LazyGrid(faired, self.u, self.v), bound
+
+        def rows(index):
+            return _distance(faired_rows(index), source_rows(index))
+
+        rows.step = max(1, BLOCK_SAMPLES // self.v.size)
+        return rows
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
         """Two-sided true distance at flat grid indices ``flat_idx``.
@@ -639,13 +640,17 @@ class SurfaceProbe:
                 return value, int(np.ravel_multi_index((i * stride, j * stride),
                                                        self.points.shape[:2]))
         self._adapt(faired)
-        other, bound = self.bound(faired)
-        flat = bound.ravel()
+        if self.hold_grid:
+            other, bound = self.bound(faired)
+            bound = _FlatBound(bound.ravel())
+        else:
+            other = _LazyGrid(faired, self.u, self.v)
+            bound = _RowBound(self._bound_rows(faired), self.u.size, self.v.size,
+                              None if self.method == "parametric" else tol)
         if self.method == "parametric":
-            k = int(np.argmax(flat))
-            return float(flat[k]), k
-        return _pruned_max(flat, lambda idx, below: self.true_distance(faired, other, idx,
-                                                                        tol=below), tol)
+            return bound.argmax()
+        return _pruned_max(bound, lambda idx, below: self.true_distance(faired, other, idx,
+                                                                         tol=below), tol)
 
 
 class _LazyGrid:
@@ -662,38 +667,130 @@ class _LazyGrid:
         return surface_derivatives(self.surface, self.u[i], self.v[j], 0)[(0, 0)]
 
 
+class _FlatBound:
+    """The same-parameter bound of every sample, held in full (flat sample index)."""
+
+    def __init__(self, values):
+        self.values = values
+        self.size = values.size
+
+    def argmax(self):
+        """``(largest bound, its flat index)``, the first one on ties."""
+        k = int(np.argmax(self.values))
+        return float(self.values[k]), k
+
+    def top(self, k):
+        """Flat indices of the ``k`` largest bounds (any ``k`` of them on ties)."""
+        return np.argpartition(self.values, -k)[-k:]
+
+    def above(self, threshold):
+        """``(flat indices, bounds)`` of the samples whose bound exceeds ``threshold``,
+        indices ascending."""
+        idx = np.flatnonzero(self.values > threshold)
+        return idx, self.values[idx]
+
+
+class _RowBound:
+    """The same-parameter bound on a grid, held as each row's maximum only.
+
+    One pass over the rows in blocks keeps the maximum of each row and where it sits,
+    and with ``tol`` the samples above ``tol`` (those a tolerance check can ask for).
+    Any other samples asked for are recomputed from their rows, which give the same
+    values bit for bit (each row of a sparse product is summed on its own).  A final
+    check on a million-sample grid then holds no grid-sized array: on this machine the
+    page faults of a fresh 8 MB array cost as much as the arithmetic that fills it.
+
+    Parameters
+    ----------
+    rows : callable
+        ``rows(index)``: the bound on the grid rows ``index``, shape (len(index), n_v);
+        ``rows.step`` rows per block.
+    n_u, n_v : int
+        Grid shape.
+    tol : float or None
+    """
+
+    def __init__(self, rows, n_u, n_v, tol):
+        self._rows, self._n_v, self._tol = rows, n_v, tol
+        self.size = n_u * n_v
+        self.row_max, self._row_arg = np.empty(n_u), np.empty(n_u, dtype=np.intp)
+        kept = []
+        for start in range(0, n_u, rows.step):
+            index = np.arange(start, min(start + rows.step, n_u))
+            block = rows(index)
+            self._row_arg[index] = np.argmax(block, axis=1)
+            self.row_max[index] = block[np.arange(index.size), self._row_arg[index]]
+            if tol is not None:
+                kept.append(self._flat_above(index, block, tol))
+        if tol is not None:
+            self._kept = tuple(np.concatenate(part) for part in zip(*kept))
+
+    def _flat_above(self, index, block, threshold):
+        i, j = np.nonzero(block > threshold)
+        return index[i] * self._n_v + j, block[i, j]
+
+    def argmax(self):
+        i = int(np.argmax(self.row_max))
+        return float(self.row_max[i]), i * self._n_v + int(self._row_arg[i])
+
+    def top(self, k):
+        """The ``k`` largest bounds lie in the ``k`` rows of largest maximum (a sample
+        beaten by fewer than ``k`` others has fewer than ``k`` rows above its own)."""
+        rows = np.sort(np.argpartition(self.row_max, -min(k, self.row_max.size))[-k:])
+        idx, values = self._recomputed(rows, -np.inf)
+        return idx[np.argpartition(values, -k)[-k:]]
+
+    def above(self, threshold):
+        if self._tol is not None and threshold >= self._tol:
+            idx, values = self._kept
+            keep = values > threshold
+            return idx[keep], values[keep]
+        return self._recomputed(np.flatnonzero(self.row_max > threshold), threshold)
+
+    def _recomputed(self, rows, threshold):
+        """``(flat indices, bounds)`` above ``threshold`` on ``rows`` (ascending)."""
+        parts = [self._flat_above(rows[s:s + self._rows.step],
+                                  self._rows(rows[s:s + self._rows.step]), threshold)
+                 for s in range(0, rows.size, self._rows.step)]
+        if not parts:
+            return np.zeros(0, dtype=np.intp), np.zeros(0)
+        return tuple(np.concatenate(part) for part in zip(*parts))
+
+
 def _pruned_max(bound, exact, tol):
     """Max of the true distance over all samples, computing it only where ``bound`` can win.
 
-    ``bound >= exact`` holds sample-wise.  ``exact(idx, below)`` returns the true distance
-    at samples ``idx`` where it exceeds ``below`` and an upper bound ``<= below`` elsewhere
-    (its Newton iterations stop there); ``below=None`` asks for every value exactly.
-    Candidates (bound above the tolerance, or above the true distance at the 64 largest
-    bounds) are processed in decreasing order of the bound, in doubling batches, each with
-    ``below`` the running maximum (a sample that cannot beat it needs no exact value),
-    until the next bound cannot beat the running maximum.  Without ``tol`` the exact
-    maximum is returned.  With ``tol`` the search also stops as soon as the maximum
-    exceeds ``tol`` (the value returned is then an exact sample distance ``> tol``, a lower
-    bound of the maximum) or once no remaining bound exceeds ``tol`` (the value returned is
-    then an upper bound ``<= tol``).
+    ``bound`` (:class:`_FlatBound` or :class:`_RowBound`) is ``>= exact`` sample-wise.
+    ``exact(idx, below)`` returns the true distance at samples ``idx`` where it exceeds
+    ``below`` and an upper bound ``<= below`` elsewhere (its Newton iterations stop
+    there); ``below=None`` asks for every value exactly.  Candidates (bound above the
+    tolerance, or above the true distance at the 64 largest bounds) are processed in
+    decreasing order of the bound, in doubling batches, each with ``below`` the running
+    maximum (a sample that cannot beat it needs no exact value), until the next bound
+    cannot beat the running maximum.  Without ``tol`` the exact maximum is returned.
+    With ``tol`` the search also stops as soon as the maximum exceeds ``tol`` (the value
+    returned is then an exact sample distance ``> tol``, a lower bound of the maximum)
+    or once no remaining bound exceeds ``tol`` (the value returned is then an upper
+    bound ``<= tol``).
     """
-    best, best_i = -1.0, int(np.argmax(bound))
+    best, best_i = -1.0, bound.argmax()[1]
     if tol is not None:
-        candidates = np.flatnonzero(bound > tol)
+        candidates, values = bound.above(tol)
         if candidates.size == 0:
-            return float(bound[best_i]), best_i
+            return bound.argmax()
     else:
-        top = np.argpartition(bound, -min(64, bound.size))[-min(64, bound.size):]
+        top = bound.top(min(64, bound.size))
         d = exact(top, None)
         k = int(np.argmax(d))
         best, best_i = float(d[k]), int(top[k])
-        beaten = bound > best
-        beaten[top] = False
-        candidates = np.flatnonzero(beaten)
-    order = candidates[np.argsort(bound[candidates])[::-1]]
+        candidates, values = bound.above(best)
+        keep = ~np.isin(candidates, top)
+        candidates, values = candidates[keep], values[keep]
+    by_bound = np.argsort(values)[::-1]
+    order, values = candidates[by_bound], values[by_bound]
     start, batch = 0, 256
     while start < order.size:
-        next_bound = float(bound[order[start]])
+        next_bound = float(values[start])
         if next_bound <= best:
             break
         if tol is not None and next_bound <= tol:
@@ -708,7 +805,7 @@ def _pruned_max(bound, exact, tol):
         start += batch
         batch *= 2
     if tol is not None and best <= tol:
-        rest = float(bound[order[start]]) if start < order.size else tol
+        rest = float(values[start]) if start < order.size else tol
         return max(best, min(rest, tol)), best_i
     return best, best_i
 

@@ -144,8 +144,10 @@ def test_grid_rows_are_the_rows_of_the_grid(rational):
     u, v = np.sort(rng.random(41)), np.sort(rng.random(29))
     rows = surface.grid_rows(u, v)
     grid = surface.evaluate_grid(u, v)
-    assert np.allclose(rows(0, 41), grid, rtol=1e-12, atol=1e-12)
-    assert np.allclose(rows(5, 17), grid[5:17], rtol=1e-12, atol=1e-12)
+    assert np.allclose(rows(slice(0, 41)), grid, rtol=1e-12, atol=1e-12)
+    assert np.allclose(rows(slice(5, 17)), grid[5:17], rtol=1e-12, atol=1e-12)
+    picked = np.array([3, 7, 8, 30])
+    assert np.array_equal(rows(picked), rows(slice(0, 41))[picked])
 
 
 def _reparametrised(surface, phi, degree):
