@@ -9,6 +9,7 @@ Each fitter returns ``(geometry, setting)`` with ``geometry`` a core BSplineCurv
 BSplineSurface.
 """
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -290,10 +291,13 @@ def wavelet_uniform(case):
 
 
 def wavelet_adaptive(case, degree=None, objective="compact", borders=None):
+    # a fresh source object per run: its evaluation caches (Taylor form, extent) are part
+    # of the work, as they are for a user fairing a face once
+    source = dataclasses.replace(case.source)
     if case.kind == "curve":
-        r = fair_curve_adaptive(case.source, case.tol, target_degree=degree, objective=objective)
+        r = fair_curve_adaptive(source, case.tol, target_degree=degree, objective=objective)
     else:
-        r = fair_surface_adaptive(case.source, case.tol, target_degree=degree,
+        r = fair_surface_adaptive(source, case.tol, target_degree=degree,
                                   objective=objective, borders=borders or "auto")
     table = dict(r.table)
     noise = f" noise={table['noise']:.2g}" if "noise" in table else ""
