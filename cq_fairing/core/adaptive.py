@@ -77,6 +77,7 @@ from scipy.linalg import solveh_banded
 
 from ..errors import InvalidInputError, ToleranceNotMetError, UnsupportedGeometryError
 from .accuracy import check_tolerance
+from .banded import BandedSPD
 from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
 from .fidelity import CurveResidual, SurfaceResidual, noise_level, within_noise
@@ -517,10 +518,10 @@ class _SurfaceFit:
         return self._cached(("half", space_u.key), build)
 
     def _gram(self, space):
-        """Gram matrix of a target space and its sparse LU factors."""
+        """Gram matrix of a target space and its banded Cholesky factor."""
         def build():
             g = gram_matrix(space)
-            return g, spla.splu(sp.csc_matrix(g))
+            return g, BandedSPD(g)
         return self._cached(("gram", space.key), build)
 
     def _inner(self, space):
@@ -690,12 +691,12 @@ def _net_solve(matrix, rhs, shape):
     return x
 
 
-def _tensor_solve(lu_u, lu_v, rhs):
+def _tensor_solve(g_u, g_v, rhs):
     r"""Solve :math:`(G_u \otimes G_v)\, x = r` for a net ``rhs`` (k_u, k_v, d) with the
-    LU factors of each direction's matrix."""
+    factors of each direction's matrix (:class:`~cq_fairing.core.banded.BandedSPD`)."""
     ku, kv = rhs.shape[:2]
-    x = lu_u.solve(rhs.reshape(ku, -1)).reshape(ku, kv, -1)
-    y = lu_v.solve(np.swapaxes(x, 0, 1).reshape(kv, -1))
+    x = g_u.solve(rhs.reshape(ku, -1)).reshape(ku, kv, -1)
+    y = g_v.solve(np.swapaxes(x, 0, 1).reshape(kv, -1))
     return np.swapaxes(y.reshape(kv, ku, -1), 0, 1)
 
 
