@@ -131,6 +131,38 @@ def test_a_probe_without_its_grid_measures_what_one_holding_it_does(seed, block)
         assert lazy.max_deviation(fair.surface) == (pytest.approx(value, rel=1e-10), at)
         assert lazy.max_deviation(fair.surface, 0.9 * value)[0] > 0.9 * value
         assert lazy.max_deviation(fair.surface, 1.1 * value)[0] <= 1.1 * value
+        parametric = M.SurfaceProbe(source, method="parametric", hold_grid=False)
+        same_k = int(np.argmax(bound))
+        assert parametric.max_deviation(fair.surface) == (pytest.approx(bound.max(), rel=1e-12),
+                                                          same_k)
+
+
+@given(seed=st.integers(0, 2**31 - 1), shape=st.tuples(st.integers(1, 40), st.integers(1, 30)),
+       step=st.integers(1, 50), levels=st.integers(2, 1000))
+@settings(max_examples=60, deadline=None)
+def test_a_bound_kept_by_rows_answers_as_the_whole_array(seed, shape, step, levels):
+    """``_RowBound`` keeps row maxima (and the samples above ``tol``) and recomputes rows
+    on demand: its largest value, its samples above any threshold and its ``k`` largest
+    are those of the whole array (values drawn from few levels, so ties are common)."""
+    rng = np.random.default_rng(seed)
+    values = rng.integers(0, levels, size=shape) / levels
+    tol = float(rng.choice(values.ravel()))
+
+    def rows(index):
+        return values[index]
+
+    rows.step = step
+    flat = M._FlatBound(values.ravel())
+    for kept in (None, tol):
+        by_rows = M._RowBound(rows, *shape, kept)
+        assert by_rows.argmax() == flat.argmax()
+        for threshold in (tol, 0.5 * tol, tol + 0.25, -1.0):
+            idx, got = by_rows.above(threshold)
+            want_idx, want = flat.above(threshold)
+            assert np.array_equal(idx, want_idx) and np.array_equal(got, want)
+        k = min(64, values.size)
+        top = np.sort(values.ravel()[by_rows.top(k)])
+        assert np.array_equal(top, np.sort(values.ravel())[-k:])
 
 
 @pytest.mark.parametrize("rational", [False, True])
