@@ -609,12 +609,16 @@ class SurfaceProbe:
             slid = (np.abs(lu - u0) > self._half_step[0][i]) | \
                 (np.abs(lv - v0) > self._half_step[1][j])
             u0, v0 = np.where(slid, lu, u0), np.where(slid, lv, v0)
+        if tol is None:
+            u0, v0, d = self._from_both_starts(target, here, there, p, i, j, u0, v0, window)
+            self._keep(key, i, j, u0, v0)
+            return d
         d = _distance(there[i, j], p)
-        todo = np.flatnonzero(d > tol) if tol is not None else np.arange(d.size)
+        todo = np.flatnonzero(d > tol)
         if todo.size:
             u0[todo], v0[todo], d[todo] = closest_points_surface(
                 target, p[todo], u0[todo], v0[todo], stop_below=tol)
-            todo = todo[d[todo] > tol] if tol is not None else todo
+            todo = todo[d[todo] > tol]
         if todo.size:
             wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
             fu, fv, fd = closest_points_surface(target, p[todo], wu, wv, stop_below=tol)
@@ -623,6 +627,19 @@ class SurfaceProbe:
             u0[k], v0[k], d[k] = fu[better], fv[better], fd[better]
         self._keep(key, i, j, u0, v0)
         return d
+
+    def _from_both_starts(self, target, here, there, p, i, j, u0, v0, window):
+        """Feet and distances of ``p`` on ``target`` from both starts (``(u0, v0)`` and the
+        nearest ``there`` sample within ``window``), the smaller distance kept (the first
+        start's on ties).  One Newton run over both sets of starts: each point iterates
+        on its own, so the values are those of two runs, in half the vector operations'
+        calls (which is what a few hundred points cost)."""
+        wu, wv = _window_start(here, there, i, j, self.u, self.v, window)
+        n = p.shape[0]
+        fu, fv, fd = closest_points_surface(target, np.concatenate([p, p]),
+                                            np.concatenate([u0, wu]), np.concatenate([v0, wv]))
+        pick = np.where(fd[n:] < fd[:n], np.arange(n, 2 * n), np.arange(n))
+        return fu[pick], fv[pick], fd[pick]
 
     def max_deviation(self, faired, tol=None, stride=4):
         """As :meth:`CurveProbe.max_deviation`; the index is flat over the grid.
