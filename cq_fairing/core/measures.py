@@ -562,12 +562,12 @@ class SurfaceProbe:
             return other, _distance(other, self.points)
         rows = self._bound_rows(faired)
         return _LazyGrid(faired, self.u, self.v), np.concatenate(
-            [rows(np.arange(start, min(start + rows.step, self.u.size)))
-             for start in range(0, self.u.size, rows.step)])
+            [rows(slice(start, start + rows.step)) for start in range(0, self.u.size, rows.step)])
 
     def _bound_rows(self, faired):
-        """``rows(index)``: the same-parameter distance on the grid rows ``index``, shape
-        (len(index), len(v)); ``rows.step`` rows make a block of about ``BLOCK_SAMPLES``."""
+        """``rows(index)``: the same-parameter distance on the grid rows ``index`` (a slice
+        or an integer array), shape (number of rows, len(v)); ``rows.step`` rows make a
+        block of about ``BLOCK_SAMPLES``."""
         source_rows = self.source.grid_rows(self.u, self.v)
         faired_rows = faired.grid_rows(self.u, self.v)
 
@@ -720,8 +720,8 @@ class _RowBound:
     Parameters
     ----------
     rows : callable
-        ``rows(index)``: the bound on the grid rows ``index``, shape (len(index), n_v);
-        ``rows.step`` rows per block.
+        ``rows(index)``: the bound on the grid rows ``index`` (a slice or an integer
+        array), shape (number of rows, n_v); ``rows.step`` rows per block.
     n_u, n_v : int
         Grid shape.
     tol : float or None
@@ -733,12 +733,12 @@ class _RowBound:
         self.row_max, self._row_arg = np.empty(n_u), np.empty(n_u, dtype=np.intp)
         kept = []
         for start in range(0, n_u, rows.step):
-            index = np.arange(start, min(start + rows.step, n_u))
-            block = rows(index)
-            self._row_arg[index] = np.argmax(block, axis=1)
-            self.row_max[index] = block[np.arange(index.size), self._row_arg[index]]
+            stop = min(start + rows.step, n_u)
+            block = rows(slice(start, stop))
+            self._row_arg[start:stop] = np.argmax(block, axis=1)
+            self.row_max[start:stop] = block[np.arange(stop - start), self._row_arg[start:stop]]
             if tol is not None:
-                kept.append(self._flat_above(index, block, tol))
+                kept.append(self._flat_above(np.arange(start, stop), block, tol))
         if tol is not None:
             self._kept = tuple(np.concatenate(part) for part in zip(*kept))
 
