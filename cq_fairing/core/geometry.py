@@ -110,13 +110,13 @@ class BSplineSurface:
         return SplineSpace(self.u_degree, self.u_knots)
 
     @cached_property
+    def v_space(self):
+        return SplineSpace(self.v_degree, self.v_knots)
+
+    @cached_property
     def size(self):
         """:func:`extent` of the poles, kept: every closest-point search asks for it."""
         return extent(self.poles)
-
-    @cached_property
-    def v_space(self):
-        return SplineSpace(self.v_degree, self.v_knots)
 
     @property
     def is_rational(self):

@@ -714,8 +714,9 @@ class _RowBound:
     and with ``tol`` the samples above ``tol`` (those a tolerance check can ask for).
     Any other samples asked for are recomputed from their rows, which give the same
     values bit for bit (each row of a sparse product is summed on its own).  A final
-    check on a million-sample grid then holds no grid-sized array: on this machine the
-    page faults of a fresh 8 MB array cost as much as the arithmetic that fills it.
+    check then holds no grid-sized array and runs no partition over one (85 MB and
+    10.7 million samples on the terrain; the 400 x 400 blade's uniform search peaks at
+    147 MB instead of 225 MB).
 
     Parameters
     ----------
