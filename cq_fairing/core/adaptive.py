@@ -83,7 +83,7 @@ from .fairing import FairResult, SurfaceFairResult
 from .fidelity import CurveResidual, SurfaceResidual, noise_level, within_noise
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
-from .measures import CurveProbe, SurfaceProbe, extent, sample_parameters
+from .measures import CurveProbe, SurfaceProbe, sample_parameters
 from .spaces import SplineSpace
 from .weighted import SpanWeightedProjection
 
@@ -426,7 +426,7 @@ def _faithful_count(fit, family, top):
         return residual.variance(fit.geometry(space, fit.project(space)))
 
     sigma = noise_level(lambda fraction: variance(max(1, int(round(fraction * top)))),
-                        extent(fit.curve.poles))
+                        fit.curve.size)
 
     def quiet(n):
         return within_noise(variance(n), sigma)
@@ -1055,7 +1055,7 @@ def _faithful_net(fit, family, dens, tops):
         return residual.variance(BSplineSurface(net, spaces[0].knots, spaces[1].knots,
                                                 *fit.degrees))
 
-    sigma = noise_level(lambda fraction: variance(family(fraction)), extent(fit.surface.poles))
+    sigma = noise_level(lambda fraction: variance(family(fraction)), fit.surface.size)
     steps = max(tops)
 
     def quiet(k):
