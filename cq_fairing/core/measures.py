@@ -515,6 +515,7 @@ class SurfaceProbe:
                        else _LazyGrid(self.source, u, v))
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._feet = {}
+        self._source_blocks = None
 
     def _keep(self, key, i, j, u, v):
         """Remember the feet ``(u, v)`` of samples ``(i, j)`` on the ``"source"`` or on
@@ -560,22 +561,17 @@ class SurfaceProbe:
         if self.hold_grid:
             other = faired.evaluate_grid(self.u, self.v)
             return other, _distance(other, self.points)
-        rows = self._bound_rows(faired)
+        blocks = self._bound_blocks(faired)
         return _LazyGrid(faired, self.u, self.v), np.concatenate(
-            [rows(slice(start, start + rows.step)) for start in range(0, self.u.size, rows.step)])
+            [blocks.block(b) for b in range(blocks.n_blocks)])
 
-    def _bound_rows(self, faired):
-        """``rows(index)``: the same-parameter distance on the grid rows ``index`` (a slice
-        or an integer array), shape (number of rows, len(v)); ``rows.step`` rows make a
-        block of about ``BLOCK_SAMPLES``."""
-        source_rows = self.source.grid_rows(self.u, self.v)
-        faired_rows = faired.grid_rows(self.u, self.v)
-
-        def rows(index):
-            return _distance(faired_rows(index), source_rows(index))
-
-        rows.step = max(1, BLOCK_SAMPLES // self.v.size)
-        return rows
+    def _bound_blocks(self, faired):
+        """:class:`_BoundBlocks` of ``faired`` on this grid, about ``BLOCK_SAMPLES`` per
+        block."""
+        step = max(1, BLOCK_SAMPLES // self.v.size)
+        if self._source_blocks is None or self._source_blocks.step != step:
+            self._source_blocks = self.source.grid_blocks(self.u, self.v, step)
+        return _BoundBlocks(self._source_blocks, faired.grid_blocks(self.u, self.v, step))
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None):
         """Two-sided true distance at flat grid indices ``flat_idx``.
@@ -662,7 +658,7 @@ class SurfaceProbe:
             bound = _FlatBound(bound.ravel())
         else:
             other = _LazyGrid(faired, self.u, self.v)
-            bound = _RowBound(self._bound_rows(faired), self.u.size, self.v.size,
+            bound = _RowBound(self._bound_blocks(faired), self.v.size,
                               None if self.method == "parametric" else tol)
         if self.method == "parametric":
             return bound.argmax()
@@ -696,8 +692,9 @@ class _FlatBound:
         k = int(np.argmax(self.values))
         return float(self.values[k]), k
 
-    def top(self, k):
-        """Flat indices of the ``k`` largest bounds (any ``k`` of them on ties)."""
+    def leaders(self, k):
+        """Flat indices of ``k`` samples of large bound: here the ``k`` largest (any
+        ``k`` of them on ties)."""
         return np.argpartition(self.values, -k)[-k:]
 
     def above(self, threshold):
@@ -707,39 +704,53 @@ class _FlatBound:
         return idx, self.values[idx]
 
 
+class _BoundBlocks:
+    """The same-parameter distance of a faired surface from its source on a grid, a block
+    of rows at a time (two :class:`~cq_fairing.core.geometry.GridBlocks` with the same
+    grid and ``step``)."""
+
+    def __init__(self, source, faired):
+        self._source, self._faired = source, faired
+        self.step, self.n_blocks, self.n_u = source.step, source.n_blocks, source.n_u
+        self.rows_of = source.rows_of
+
+    def block(self, b):
+        """Shape (rows of block ``b``, n_v)."""
+        return _distance(self._faired.block(b), self._source.block(b))
+
+
 class _RowBound:
     """The same-parameter bound on a grid, held as each row's maximum only.
 
-    One pass over the rows in blocks keeps the maximum of each row and where it sits,
+    One pass over the blocks of rows keeps the maximum of each row and where it sits,
     and with ``tol`` the samples above ``tol`` (those a tolerance check can ask for).
-    Any other samples asked for are recomputed from their rows, which give the same
-    values bit for bit (each row of a sparse product is summed on its own).  A final
+    Any other samples asked for are recomputed with their whole blocks, which give the
+    same values bit for bit (:class:`~cq_fairing.core.geometry.GridBlocks`).  A final
     check then holds no grid-sized array and runs no partition over one (85 MB and
     10.7 million samples on the terrain; the 400 x 400 blade's uniform search peaks at
     147 MB instead of 225 MB).
 
     Parameters
     ----------
-    rows : callable
-        ``rows(index)``: the bound on the grid rows ``index`` (a slice or an integer
-        array), shape (number of rows, n_v); ``rows.step`` rows per block.
-    n_u, n_v : int
-        Grid shape.
+    blocks : _BoundBlocks
+    n_v : int
+        Samples per row.
     tol : float or None
     """
 
-    def __init__(self, rows, n_u, n_v, tol):
-        self._rows, self._n_v, self._tol = rows, n_v, tol
+    def __init__(self, blocks, n_v, tol):
+        self._blocks, self._n_v, self._tol = blocks, n_v, tol
+        n_u = blocks.n_u
         self.size = n_u * n_v
         self.row_max, self._row_arg = np.empty(n_u), np.empty(n_u, dtype=np.intp)
         kept = []
-        for start in range(0, n_u, rows.step):
-            stop = min(start + rows.step, n_u)
-            block = rows(slice(start, stop))
-            self._row_arg[start:stop] = np.argmax(block, axis=1)
-            self.row_max[start:stop] = block[np.arange(stop - start), self._row_arg[start:stop]]
+        for b in range(blocks.n_blocks):
+            rows = blocks.rows_of(b)
+            block = blocks.block(b)
+            self._row_arg[rows] = np.argmax(block, axis=1)
+            self.row_max[rows] = block[np.arange(block.shape[0]), self._row_arg[rows]]
             if tol is not None:
-                kept.append(self._flat_above(np.arange(start, stop), block, tol))
+                kept.append(self._flat_above(np.arange(n_u)[rows], block, tol))
         if tol is not None:
             self._kept = tuple(np.concatenate(part) for part in zip(*kept))
 
@@ -751,12 +762,11 @@ class _RowBound:
         i = int(np.argmax(self.row_max))
         return float(self.row_max[i]), i * self._n_v + int(self._row_arg[i])
 
-    def top(self, k):
-        """The ``k`` largest bounds lie in the ``k`` rows of largest maximum (a sample
-        beaten by fewer than ``k`` others has fewer than ``k`` rows above its own)."""
-        rows = np.sort(np.argpartition(self.row_max, -min(k, self.row_max.size))[-k:])
-        idx, values = self._recomputed(rows, -np.inf)
-        return idx[np.argpartition(values, -k)[-k:]]
+    def leaders(self, k):
+        """Flat indices of the largest bound of each of the ``k`` rows of largest maximum
+        (all rows if fewer): the largest bound is among them, and no row is recomputed."""
+        rows = np.argpartition(self.row_max, -min(k, self.row_max.size))[-k:]
+        return rows * self._n_v + self._row_arg[rows]
 
     def above(self, threshold):
         if self._tol is not None and threshold >= self._tol:
@@ -766,10 +776,14 @@ class _RowBound:
         return self._recomputed(np.flatnonzero(self.row_max > threshold), threshold)
 
     def _recomputed(self, rows, threshold):
-        """``(flat indices, bounds)`` above ``threshold`` on ``rows`` (ascending)."""
-        parts = [self._flat_above(rows[s:s + self._rows.step],
-                                  self._rows(rows[s:s + self._rows.step]), threshold)
-                 for s in range(0, rows.size, self._rows.step)]
+        """``(flat indices, bounds)`` above ``threshold`` on ``rows`` (ascending), each
+        recomputed with its block."""
+        parts = []
+        for b in np.unique(rows // self._blocks.step):
+            start = self._blocks.rows_of(b).start
+            picked = rows[rows // self._blocks.step == b]
+            parts.append(self._flat_above(picked, self._blocks.block(b)[picked - start],
+                                          threshold))
         if not parts:
             return np.zeros(0, dtype=np.intp), np.zeros(0)
         return tuple(np.concatenate(part) for part in zip(*parts))
@@ -782,7 +796,8 @@ def _pruned_max(bound, exact, tol):
     ``exact(idx, below)`` returns the true distance at samples ``idx`` where it exceeds
     ``below`` and an upper bound ``<= below`` elsewhere (its Newton iterations stop
     there); ``below=None`` asks for every value exactly.  Candidates (bound above the
-    tolerance, or above the true distance at the 64 largest bounds) are processed in
+    tolerance, or above the largest true distance at 64 samples of large bound,
+    ``bound.leaders(64)``) are processed in
     decreasing order of the bound, in doubling batches, each with ``below`` the running
     maximum (a sample that cannot beat it needs no exact value), until the next bound
     cannot beat the running maximum.  Without ``tol`` the exact maximum is returned.
@@ -797,7 +812,7 @@ def _pruned_max(bound, exact, tol):
         if candidates.size == 0:
             return bound.argmax()
     else:
-        top = bound.top(min(64, bound.size))
+        top = bound.leaders(min(64, bound.size))
         d = exact(top, None)
         k = int(np.argmax(d))
         best, best_i = float(d[k]), int(top[k])

@@ -137,36 +137,58 @@ def test_a_probe_without_its_grid_measures_what_one_holding_it_does(seed, block)
                                                           same_k)
 
 
+class _ArrayBlocks:
+    """An array served a block of ``step`` rows at a time, as ``_BoundBlocks`` serves a
+    bound."""
+
+    def __init__(self, values, step):
+        self.values, self.step = values, step
+        self.n_u = values.shape[0]
+        self.n_blocks = -(-self.n_u // step)
+        self.asked = 0
+
+    def rows_of(self, b):
+        return slice(b * self.step, min((b + 1) * self.step, self.n_u))
+
+    def block(self, b):
+        self.asked += 1
+        return self.values[self.rows_of(b)]
+
+
 @given(seed=st.integers(0, 2**31 - 1), shape=st.tuples(st.integers(1, 40), st.integers(1, 30)),
        step=st.integers(1, 50), levels=st.integers(2, 1000))
 @settings(max_examples=60, deadline=None)
 def test_a_bound_kept_by_rows_answers_as_the_whole_array(seed, shape, step, levels):
-    """``_RowBound`` keeps row maxima (and the samples above ``tol``) and recomputes rows
-    on demand: its largest value, its samples above any threshold and its ``k`` largest
-    are those of the whole array (values drawn from few levels, so ties are common)."""
+    """``_RowBound`` keeps row maxima (and the samples above ``tol``) and recomputes
+    blocks on demand: its largest value and its samples above any threshold are those of
+    the whole array (values drawn from few levels, so ties are common), and its ``k``
+    leaders are the largest of the ``k`` rows of largest maximum, found without a block."""
     rng = np.random.default_rng(seed)
     values = rng.integers(0, levels, size=shape) / levels
     tol = float(rng.choice(values.ravel()))
-
-    def rows(index):
-        return values[index]
-
-    rows.step = step
     flat = M._FlatBound(values.ravel())
     for kept in (None, tol):
-        by_rows = M._RowBound(rows, *shape, kept)
+        blocks = _ArrayBlocks(values, step)
+        by_rows = M._RowBound(blocks, shape[1], kept)
+        assert blocks.asked == blocks.n_blocks
         assert by_rows.argmax() == flat.argmax()
         for threshold in (tol, 0.5 * tol, tol + 0.25, -1.0):
             idx, got = by_rows.above(threshold)
             want_idx, want = flat.above(threshold)
             assert np.array_equal(idx, want_idx) and np.array_equal(got, want)
-        k = min(64, values.size)
-        top = np.sort(values.ravel()[by_rows.top(k)])
-        assert np.array_equal(top, np.sort(values.ravel())[-k:])
+        k = min(8, shape[0])
+        asked = blocks.asked
+        leaders = by_rows.leaders(k)
+        assert blocks.asked == asked
+        assert np.array_equal(np.sort(values.ravel()[leaders]), np.sort(values.max(axis=1))[-k:])
+        assert values.max() in values.ravel()[leaders]
+        assert np.all(values.ravel()[leaders] == values.max(axis=1)[leaders // shape[1]])
 
 
 @pytest.mark.parametrize("rational", [False, True])
-def test_grid_rows_are_the_rows_of_the_grid(rational):
+def test_grid_blocks_are_the_rows_of_the_grid(rational):
+    """Blocks of any size hold the grid's rows (to rounding: ``evaluate_grid`` contracts u
+    first), and a block asked again comes out the same bit for bit."""
     rng = np.random.default_rng(7)
     knots = [np.r_[[0.0] * 4, np.sort(rng.random(5)), [1.0] * 4],
              np.r_[[0.0] * 3, np.sort(rng.random(60)), [1.0] * 3]]
@@ -174,12 +196,14 @@ def test_grid_rows_are_the_rows_of_the_grid(rational):
     weights = rng.uniform(0.5, 2.0, size=(9, 63)) if rational else None
     surface = cf.BSplineSurface(poles, knots[0], knots[1], 3, 2, weights=weights)
     u, v = np.sort(rng.random(41)), np.sort(rng.random(29))
-    rows = surface.grid_rows(u, v)
     grid = surface.evaluate_grid(u, v)
-    assert np.allclose(rows(slice(0, 41)), grid, rtol=1e-12, atol=1e-12)
-    assert np.allclose(rows(slice(5, 17)), grid[5:17], rtol=1e-12, atol=1e-12)
-    picked = np.array([3, 7, 8, 30])
-    assert np.array_equal(rows(picked), rows(slice(0, 41))[picked])
+    for step in (1, 5, 41, 100):
+        blocks = surface.grid_blocks(u, v, step)
+        assert blocks.n_blocks == -(-41 // step)
+        whole = np.concatenate([blocks.block(b) for b in range(blocks.n_blocks)])
+        assert np.allclose(whole, grid, rtol=1e-12, atol=1e-12)
+        last = blocks.n_blocks - 1
+        assert np.array_equal(blocks.block(last), whole[blocks.rows_of(last)])
 
 
 def _reparametrised(surface, phi, degree):
