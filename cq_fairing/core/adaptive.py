@@ -70,6 +70,8 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     impeller blade face the compact net drops from 9 x 12 to 8 x 12 poles.
 """
 
+from functools import cached_property
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -494,12 +496,18 @@ class _SurfaceFit:
             per_span -= 1
             u = sample_parameters(surface.u_space, per_span=per_span)
             v = sample_parameters(surface.v_space, per_span=per_span)
-        self.probe = SurfaceProbe(surface, uv=(u, v), keep_feet=True)
+        self._uv = (u, v)
         self._span_starts = (np.searchsorted(u, surface.u_space.breakpoints[:-1]),
                              np.searchsorted(v, surface.v_space.breakpoints[:-1]))
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._cache = {}
+
+    @cached_property
+    def probe(self):
+        """The search grid's :class:`~cq_fairing.core.measures.SurfaceProbe`, built on
+        first use (a faithful fit that passes never measures on it)."""
+        return SurfaceProbe(self.surface, uv=self._uv, keep_feet=True)
 
     def _cached(self, key, build):
         """Per-space operators, kept while the searches revisit a space (at most 64)."""
