@@ -3,7 +3,7 @@
 Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
-[--method wavelet|adaptive|energy] [--objective compact|faithful]
+[--method wavelet|adaptive|energy] [--objective compact|faithful|fair]
 [--borders auto|free|pinned] [--jobs N]
 [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``
@@ -11,7 +11,8 @@ Subcommands
     ``--method adaptive`` lets the knots follow the error (fewer poles at the same
     tolerance; polynomial faces only, rational ones are skipped) and takes
     ``--objective faithful`` to stop at the estimated noise level instead of at the
-    fewest poles, and ``--borders free|pinned`` to choose the target's border rows
+    fewest poles, or ``--objective fair`` for the fairest of the fewest poles and a few
+    more, and ``--borders free|pinned`` to choose the target's border rows
     (default ``auto``: pinned where that gives fewer poles).
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
     up on a face after S seconds (reported failed, kept unchanged).
@@ -127,9 +128,11 @@ def build_parser():
                       help="wavelet: uniform targets (default); adaptive: targets whose "
                            "knots follow the error, fewer poles (needs --tol or its "
                            "default, not --target)")
-    fair.add_argument("--objective", choices=("compact", "faithful"),
+    fair.add_argument("--objective", choices=("compact", "faithful", "fair"),
                       help="with --method adaptive: compact = fewest poles within --tol "
-                           "(default), faithful = stop at the estimated noise level")
+                           "(default), faithful = stop at the estimated noise level, "
+                           "fair = the fairest of the fewest poles and up to two more "
+                           "spans per direction (slower)")
     fair.add_argument("--borders", choices=("auto", "free", "pinned"),
                       help="with --method adaptive: the target's border rows; auto = "
                            "pinned (corners kept) where that gives fewer poles (default), "

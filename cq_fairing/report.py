@@ -260,7 +260,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
     -------
     dict
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
-        ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"`` for the
+        ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
         for the adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
         worst deviation, max gap between faces, validity, time), ``maps`` (name ->

@@ -332,4 +332,6 @@ METHODS = {
     "ours wavelet adaptive p5": lambda case: wavelet_adaptive(case, degree=5),
     "ours wavelet faithful p5": lambda case: wavelet_adaptive(case, 5, "faithful"),
     "ours wavelet faithful p7": lambda case: wavelet_adaptive(case, 7, "faithful"),
+    "ours wavelet fair": lambda case: wavelet_adaptive(case, objective="fair"),
+    "ours wavelet fair p5": lambda case: wavelet_adaptive(case, 5, "fair"),
 }

@@ -98,7 +98,10 @@ BORDERS = ("auto", "free", "pinned")  # surface border rows (fair_surface_adapti
 FINAL_MIN_PER_SPAN = 8  # the final surface check never samples coarser than deviation() does
 ROUNDS = 4           # redistribution rounds per count
 FLOOR = 0.25         # density floor, fraction of the mean density
-OBJECTIVES = ("compact", "faithful")
+OBJECTIVES = ("compact", "faithful", "fair")
+# objective "fair": spans added to the compact net (per direction for surfaces)
+FAIR_GROWTHS = ((1, 0), (0, 1), (1, 1), (2, 1), (1, 2), (2, 2))
+FAIR_CURVE_GROWTHS = (1, 2)
 GROWTH = 8.0         # the constrained polish multiplies lambda by this per stage
 STAGES = 4           # at most this many stages
 REWEIGHTS = 12       # reweighting rounds per stage
@@ -347,11 +350,16 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
         Largest allowed true (closest-point, two-sided) deviation, model units, ``> 0``.
     target_degree : int, optional
         Default ``min(3, curve.degree)``.
-    objective : {"compact", "faithful"}
+    objective : {"compact", "faithful", "fair"}
         ``"compact"``: the fewest poles within ``tol``, the rest of the budget spent on
         fairness (polish).  ``"faithful"``: the fewest poles whose residual is down to
         the source's noise level (discrepancy principle), or more if ``tol`` needs
         them; no polish (it would add bias).  Removes the noise and keeps the shape.
+        ``"fair"``: the compact answer and the compact space with ``FAIR_CURVE_GROWTHS``
+        more spans (knots from its error density), each polished and checked; the one of
+        least :math:`\int \|C^{(3)}\|^2` wins (polynomial curves of degree >= 3 with
+        ``polish``; otherwise as ``"compact"``).  At the fewest poles the polish has
+        little tolerance left to spend; one or two spans more give it some.
     polish : bool
         Spend the remaining tolerance on the ``G^{(3)}`` energy (polynomial curves,
         ``"compact"`` only).
@@ -378,6 +386,7 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
     tol = check_tolerance(tol)
     faithful = _objective(objective) == "faithful"
     degree = _degree(target_degree, curve.degree)
+    fair = objective == "fair" and polish and not curve.is_rational and degree >= 3
     fit = _CurveFit(curve, SAFETY * tol, degree, per_span)
     b0, rho0 = _source_density(curve.space)
     top = curve.space.n_spans
@@ -405,6 +414,9 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
             (faired, values, e), lam = _polish(lambda x: fit.trial(space, x), fit.tol,
                                                (faired, values, e))
     faired, e, lam = _final_curve_check(curve, fit, space, faired, lam, per_span, tol)
+    if fair:
+        space, faired, e, lam = _fairest_curve(curve, fit, (space, faired, e, lam), values,
+                                               per_span, tol)
     step = decomposition(curve.space, space)
     return FairResult(curve, faired, (top, space.n_spans), space.n_spans, "adaptive",
                       (step,), max_deviation=e, evaluations=fit.evaluations,
@@ -415,7 +427,8 @@ def _objective(value):
     if value not in OBJECTIVES:
         raise InvalidInputError(
             f"objective must be one of {OBJECTIVES}, got {value!r}: 'compact' for the fewest "
-            "poles within tol, 'faithful' to stop where the residual reaches the noise.")
+            "poles within tol, 'faithful' to stop where the residual reaches the noise, "
+            "'fair' for the fairest of the compact net and a few slightly larger ones.")
     return value
 
 
@@ -449,6 +462,37 @@ def _compact_curve(fit, family, check, cache, top, start, tol):
             tolerance=tol, best_deviation=cache[top][2])
     n = _scan_below(_bisect_count(fails, n, check), check)
     return _reduce(family(n), cache[n], fit.probe.u, fit.tol, fit.degree, fit.trial)
+
+
+def _fairest_curve(curve, fit, compact, values, per_span, tol):
+    """Objective ``"fair"``: the ``compact`` answer ``(space, faired, deviation, lambda)``
+    or the compact space with ``FAIR_CURVE_GROWTHS`` more spans (knots equidistributing
+    the error density of the search-grid deviations ``values``), polished and checked,
+    whichever has the least :func:`_curve_energy`."""
+    space = compact[0]
+    breaks = space.breakpoints
+    rho = error_density(breaks, _span_max(breaks, fit.probe.u, values), fit.tol, fit.degree)
+    best, best_energy = compact, _curve_energy(space, compact[1])
+    for extra in FAIR_CURVE_GROWTHS:
+        grown = equidistributed_space(breaks, rho, space.n_spans + extra, fit.degree)
+        trial = fit.trial(grown)
+        if trial[2] > fit.tol:
+            continue
+        (faired, _, _), lam = _polish(lambda x, grown=grown: fit.trial(grown, x), fit.tol, trial)
+        try:
+            faired, e, lam = _final_curve_check(curve, fit, grown, faired, lam, per_span, tol)
+        except ToleranceNotMetError:
+            continue
+        energy = _curve_energy(grown, faired)
+        if energy < best_energy:
+            best, best_energy = (grown, faired, e, lam), energy
+    return best
+
+
+def _curve_energy(space, curve):
+    r""":math:`\int \|C^{(3)}(t)\|^2 dt = \mathrm{tr}(c^T G^{(3)} c)` of a polynomial
+    curve: unscaled, so comparable between spaces on one domain."""
+    return float(np.einsum("id,id->", curve.poles, gram_matrix(space, nu=3) @ curve.poles))
 
 
 def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
@@ -809,8 +853,10 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         Largest allowed true (two-sided, closest-point) deviation, ``> 0``.
     target_degree : int or (int, int), optional
         Default ``min(3, source degree)`` per direction.
-    objective : {"compact", "faithful"}
-        As for :func:`fair_curve_adaptive`.
+    objective : {"compact", "faithful", "fair"}
+        As for :func:`fair_curve_adaptive`; ``"fair"`` grows the compact net by the
+        ``FAIR_GROWTHS`` spans per direction and keeps the net of least
+        curvature-variation energy (:func:`_fairest_grown`).
     polish : bool
         Spend the remaining tolerance on the curvature-variation energy
         (:func:`variation_energy_matrix`, penalised projection, then span-weighted
@@ -874,6 +920,8 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     if found is None:
         found = _checked_compact(fit, family, dens, tops, polish, tol, check,
                                  borders == "auto")
+        if objective == "fair" and found[2] <= tol:
+            found = _fairest_grown(fit, found, polish, tol, check)
     spaces, faired, e, lam, span_weight = found
     if e > tol and _safety > 0.9:
         return fair_surface_adaptive(surface, tol, target_degree=target_degree,
@@ -910,6 +958,39 @@ def _checked_compact(fit, family, dens, tops, polish, tol, check, try_pinned):
         if found[2] <= tol:
             return found
     return _grown_and_checked(fit, spaces, result, polish, tol, check) or found
+
+
+def _fairest_grown(fit, compact, polish, tol, check):
+    r"""Objective ``"fair"``: the ``compact`` answer ``(spaces, faired, deviation, lambda,
+    largest span weight)`` or the compact net with ``FAIR_GROWTHS`` more spans along u
+    and v (knots from its error density, as :func:`_grown_and_checked`), each polished
+    and checked (:func:`_polished_and_checked`), whichever has the least
+    :func:`_surface_energy`.  The compact net leaves the polish little tolerance to
+    spend (none on the 400 x 400 blade); a few spans more give it some, and the energy
+    picks how many (at most 2 more per direction)."""
+    spaces = compact[0]
+    values = fit.trial(*spaces)[1]
+    best, best_energy = compact, _surface_energy(fit, spaces, compact[1])
+    for growth in FAIR_GROWTHS:
+        pair = [_redistributed(fit, spaces[axis].breakpoints, axis, values,
+                               spaces[axis].n_spans + extra, fit.tol) if extra else spaces[axis]
+                for axis, extra in enumerate(growth)]
+        trial = fit.trial(*pair)
+        if trial[2] > fit.tol:
+            continue
+        found = _polished_and_checked(fit, pair, trial, polish, tol, check)
+        energy = _surface_energy(fit, pair, found[1])
+        if found[2] <= tol and energy < best_energy:
+            best, best_energy = found, energy
+    return best
+
+
+def _surface_energy(fit, spaces, surface):
+    r""":math:`c^T K c` with :math:`K` = :func:`variation_energy_matrix` in the source
+    net's physical scale, unscaled: comparable between target spaces on one domain."""
+    c = surface.poles.reshape(-1, surface.poles.shape[-1])
+    k = variation_energy_matrix(*spaces, fit.lengths)
+    return float(np.einsum("id,id->", c, k @ c))
 
 
 def _grown_and_checked(fit, spaces, result, polish, tol, check):

@@ -483,11 +483,13 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
         ``details``/``reconstruct`` still work.  ``"energy"``: Eck-Hadenfeld local
         energy fairing (:mod:`cq_fairing.core.energy`, derivative ``l = 3``) that keeps
         the poles and moves none farther than ``tol``.  Both need ``tol`` and no ``n``.
-    objective : {"compact", "faithful"}
+    objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``, the
         rest of the budget spent on fairness.  ``"faithful"``: stop where the residual
         is down to the source's estimated noise (:mod:`cq_fairing.core.fidelity`), or
-        later if ``tol`` needs it: the noise removed, the shape kept.
+        later if ``tol`` needs it: the noise removed, the shape kept.  ``"fair"``: the
+        fairest of the compact answer and a few slightly larger targets, each polished
+        (:func:`~cq_fairing.core.adaptive.fair_curve_adaptive`).
 
     Returns
     -------
@@ -574,7 +576,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         error (:mod:`cq_fairing.core.adaptive`; polynomial surfaces).  ``"energy"``:
         local thin-plate energy fairing within ``tol`` that keeps the net size
         (:mod:`cq_fairing.core.energy`).  Both need ``tol`` and no ``n``.
-    objective : {"compact", "faithful"}
+    objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only, as for :func:`fair_curve`.
     borders : {"auto", "free", "pinned"}
         ``method="adaptive"`` only: the target's border rows, see

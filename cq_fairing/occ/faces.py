@@ -50,7 +50,7 @@ __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tole
            "check_options"]
 
 METHODS = ("wavelet", "adaptive")
-OBJECTIVES = ("compact", "faithful")
+OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "fixed")
 SEARCHES = ("local", "core")
 MARGIN = 0.9
@@ -176,10 +176,12 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         follow the error (``cq_fairing.fair_surface(method="adaptive")``), usually
         fewer poles at the same ``tol``; needs ``tol`` (or the default), refuses ``n``,
         ignores ``search``; polynomial faces only (rational ones: ``'skipped-rational'``).
-    objective : {"compact", "faithful"}
+    objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
         ``"faithful"``: stop where the residual reaches the net's estimated noise level
-        (more poles, closer to the noise-free shape), within ``tol``.
+        (more poles, closer to the noise-free shape), within ``tol``; ``"fair"``: the
+        fairest of the compact net and that net with up to two more spans per direction
+        (:func:`cq_fairing.core.adaptive.fair_surface_adaptive`).
     convert : bool, optional
         Convert a non-B-spline face to NURBS (``BRepBuilderAPI_NurbsConvert``, exact)
         instead of skipping it.

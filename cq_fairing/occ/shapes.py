@@ -111,7 +111,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
     method, objective, borders, boundary, target_degree, density
         As in :func:`~cq_fairing.occ.fair_face` (``method="adaptive"``: the core's
-        adaptive targets per face, ``objective`` ``"compact"`` or ``"faithful"``,
+        adaptive targets per face, ``objective`` ``"compact"``, ``"faithful"`` or ``"fair"``,
         ``borders`` ``"auto"``, ``"free"`` or ``"pinned"``; the
         faces next to a too-large gap are faired again the same way with half ``tol``).
     convert : bool, optional

@@ -30,8 +30,9 @@ PROPERTIES = (
      "wavelet (ARWFA/DWFA), energy (keeps the net) or adaptive (knots follow the error, "
      "fewer control points; Tolerance mode, polynomial faces)", False),
     ("App::PropertyEnumeration", "Objective", "Fairing",
-     "adaptive method only: compact (fewest control points within Tolerance) or faithful "
-     "(stop where the residual reaches the source's estimated noise)", False),
+     "adaptive method only: compact (fewest control points within Tolerance), faithful "
+     "(stop where the residual reaches the source's estimated noise) or fair (the fairest "
+     "of the compact net and up to two more spans per direction)", False),
     ("App::PropertyEnumeration", "Borders", "Fairing",
      "adaptive method only: auto (pinned corners where that gives fewer control points), "
      "free (plain projection, often a faster search) or pinned", False),

@@ -28,7 +28,7 @@ __all__ = ["make_fairing", "fair_face", "fair_edge", "FairedShape", "MODES", "ME
 
 MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
-OBJECTIVES = ("compact", "faithful")
+OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "corners", "edges")
 SEARCHES = ("linear", "guaranteed", "polyfit")
 MEASURES = ("parametric", "geometric")
@@ -74,7 +74,9 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
     both need a tolerance, so target mode is refused in plain words.  ``objective``
     belongs to ``adaptive``: ``compact`` spends the tolerance on the fewest poles,
     ``faithful`` stops at the smallest net whose residual is down to the source's
-    estimated noise (discrepancy principle, ``cq_fairing.core.fidelity``).  So do
+    estimated noise (discrepancy principle, ``cq_fairing.core.fidelity``), ``fair``
+    keeps the fairest of the compact net and that net with up to two more spans per
+    direction.  So do
     ``borders``: the target's border rows (``cq_fairing.core.adaptive``).
     """
     if method not in METHODS or objective not in OBJECTIVES:
@@ -235,11 +237,13 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         Accuracy-control strategy (tolerance mode), see :func:`fair_surface_net`.
     measure : {"parametric", "geometric"}
         Deviation measured by the search (tolerance mode).
-    objective : {"compact", "faithful"}
+    objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only: ``compact`` is the fewest poles within ``tolerance``;
         ``faithful`` the smallest net whose residual variance is down to the source's
         estimated noise, :math:`\|r\|^2/(N-k) \le (1+\delta)^2\hat\sigma^2`
-        (falls back to ``compact`` if that net exceeds ``tolerance``).
+        (falls back to ``compact`` if that net exceeds ``tolerance``); ``fair`` the
+        least curvature-variation energy among the compact net and that net with up to
+        two more spans per direction.
     borders : {"auto", "free", "pinned"}
         ``method="adaptive"`` only: the border rows of the target.  ``auto`` pins them
         (corners kept, each edge fitted to its own border curve) where that gives fewer

@@ -94,7 +94,9 @@ class FairSurfacePanel:
         self.objective = _row(layout, "Objective:", QtWidgets.QComboBox(), "fairing_objective")
         self.objective.addItems(list(make.OBJECTIVES))
         self.objective.setToolTip("compact: fewest control points within the tolerance; "
-                                  "faithful: stop where the residual reaches the noise")
+                                  "faithful: stop where the residual reaches the noise; "
+                                  "fair: the fairest of the compact net and a few more "
+                                  "spans")
         self.borders = _row(layout, "Borders:", QtWidgets.QComboBox(), "fairing_borders")
         self.borders.addItems(list(make.BORDERS))
         self.borders.setToolTip("auto: pinned corners where that gives fewer control points; "

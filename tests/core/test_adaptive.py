@@ -420,3 +420,40 @@ def test_below_the_noise_the_constrained_stages_come_closer_to_the_truth():
     assert deviation(blade.surface, staged).max <= 0.02
     assert to_truth["staged"] < 0.9 * to_truth["single"], to_truth
     assert to_truth["staged"] < to_truth["energy"], to_truth
+
+
+def _curve_jerk_by_quadrature(curve, nodes=12):
+    """int |C'''(t)|^2 dt by scipy's BSpline derivative and Gauss-Legendre per knot cell."""
+    t, w = _gauss(np.unique(curve.knots), nodes)
+    d = BSpline(curve.knots, curve.poles, curve.degree).derivative(3)(t)
+    return float(np.sum(np.sum(d * d, axis=1) * w))
+
+
+def test_fair_objective_on_a_curve_is_no_rougher_than_compact(seed, seed_result):
+    """``objective="fair"`` keeps the least int |C'''|^2 of the compact answer and the
+    compact space with one or two more spans, each polished and checked: within tol by
+    the true distance, at most two poles more, and on the seed curve a grown space wins
+    (energy by an independent quadrature)."""
+    fair = fair_curve_adaptive(seed.curve, 0.02, objective="fair")
+    assert deviation(seed.curve, fair.curve, per_span=16).max <= 0.02
+    assert seed_result.poles.shape[0] < fair.poles.shape[0] <= seed_result.poles.shape[0] + 2
+    assert _curve_jerk_by_quadrature(fair.curve) < _curve_jerk_by_quadrature(seed_result.curve)
+
+
+def test_fair_objective_on_a_surface_is_no_rougher_than_compact(blade):
+    """The surface counterpart: the compact net and that net with up to two more spans
+    per direction, polished; the least curvature-variation energy (independent
+    quadrature of the third derivatives) within tol."""
+    compact = fair_surface_adaptive(blade, 0.05)
+    fair = fair_surface_adaptive(blade, 0.05, objective="fair")
+    assert deviation(blade, fair.surface).max <= 0.05
+    lengths = net_lengths(blade.poles)
+    assert (_variation_energy_by_quadrature(fair.surface, lengths)
+            <= _variation_energy_by_quadrature(compact.surface, lengths) * (1 + 1e-9))
+    (cu, cv), (fu, fv) = compact.poles.shape[:2], fair.poles.shape[:2]
+    assert cu <= fu <= cu + 2 and cv <= fv <= cv + 2
+
+
+def test_fair_objective_is_offered_and_unknown_ones_are_refused(seed):
+    with pytest.raises(InvalidInputError, match="'fair'"):
+        fair_curve_adaptive(seed.curve, 0.02, objective="fairest")

@@ -17,21 +17,24 @@ TOL = 0.1  # mm; the blade is 100 x 30 mm, its net carries 0.02 mm of Gaussian n
 
 @pytest.fixture(scope="module")
 def blade():
-    """A noisy 22 x 32 blade face, its noise-free truth, and the three fairings."""
+    """A noisy 22 x 32 blade face, its noise-free truth, and the four fairings."""
     example = blade_surface(shape=(20, 30), noise=0.02)
     face = surface_to_natural_face(example.surface)
     runs = {name: fair_face(face, tol=TOL, details=False, **kw) for name, kw in (
         ("wavelet", dict(method="wavelet")),
         ("compact", dict(method="adaptive")),
-        ("faithful", dict(method="adaptive", objective="faithful")))}
+        ("faithful", dict(method="adaptive", objective="faithful")),
+        ("fair", dict(method="adaptive", objective="fair")))}
     return face, surface_to_natural_face(example.truth), runs
 
 
 def test_adaptive_meets_tol_with_no_more_poles_than_wavelet(blade):
     face, _, runs = blade
-    for name in ("compact", "faithful"):
+    for name in ("compact", "faithful", "fair"):
         check_within(runs[name], face, TOL)
     assert np.prod(runs["compact"].poles_after) <= np.prod(runs["wavelet"].poles_after)
+    (cu, cv), (fu, fv) = runs["compact"].poles_after, runs["fair"].poles_after
+    assert cu <= fu <= cu + 2 and cv <= fv <= cv + 2  # the compact net, grown by <= 2 spans
     assert np.prod(runs["compact"].poles_after) < np.prod(runs["compact"].poles_before) / 4
     assert runs["compact"].result.table[0][0] == "lambda"  # the core's adaptive result
 

@@ -32,6 +32,7 @@ def faired(face):
                 "wavelet guaranteed": dict(search="guaranteed"),
                 "adaptive compact": dict(method="adaptive", objective="compact"),
                 "adaptive faithful": dict(method="adaptive", objective="faithful"),
+                "adaptive fair": dict(method="adaptive", objective="fair"),
                 "adaptive free": dict(method="adaptive", borders="free")}
     return {name: make.fair_face(face, tolerance=TOL, **kw) for name, kw in settings.items()}
 
@@ -60,7 +61,7 @@ def _ok(obj):
     return obj.isValid() and "Invalid" not in obj.State and obj.Status == "OK"
 
 
-@pytest.mark.parametrize("objective", ["compact", "faithful"])
+@pytest.mark.parametrize("objective", ["compact", "faithful", "fair"])
 def test_adaptive_meets_the_tolerance_by_freecad_distance(face, faired, objective):
     result = faired[f"adaptive {objective}"]
     shape = result.shape.Faces[0]
