@@ -262,7 +262,7 @@ def test_adaptive_curve_meets_tol_when_it_succeeds(data, case):
     poles, knots, degree, weights = case
     size = _size(poles)
     tol = data.draw(tolerances(size), label="tol")
-    objective = data.draw(st.sampled_from(["compact", "faithful"]), label="objective")
+    objective = data.draw(st.sampled_from(["compact", "faithful", "fair"]), label="objective")
     result = _call(cf.fair_curve, poles, tol=tol, knots=knots, degree=degree, weights=weights,
                    method="adaptive", objective=objective)
     if result is None:
@@ -281,7 +281,7 @@ def test_adaptive_surface_meets_tol_when_it_succeeds(data, case):
     size = _size(poles)
     tol = data.draw(tolerances(size), label="tol")
     borders = data.draw(st.sampled_from(["auto", "free", "pinned"]), label="borders")
-    objective = data.draw(st.sampled_from(["compact", "faithful"]), label="objective")
+    objective = data.draw(st.sampled_from(["compact", "faithful", "fair"]), label="objective")
     result = _call(cf.fair_surface, poles, tol=tol, u_knots=u_knots, v_knots=v_knots,
                    degree=degree, weights=weights, method="adaptive", objective=objective,
                    borders=borders)
