@@ -969,7 +969,7 @@ def _fairest_grown(fit, compact, polish, tol, check):
     spend (none on the 400 x 400 blade); a few spans more give it some, and the energy
     picks how many (at most 2 more per direction)."""
     spaces = compact[0]
-    values = fit.trial(*spaces)[1]
+    values = fit.trial(*spaces)[1]  # the compact net's search-grid deviations
     best, best_energy = compact, _surface_energy(fit, spaces, compact[1])
     for growth in FAIR_GROWTHS:
         pair = [_redistributed(fit, spaces[axis].breakpoints, axis, values,
@@ -979,8 +979,10 @@ def _fairest_grown(fit, compact, polish, tol, check):
         if trial[2] > fit.tol:
             continue
         found = _polished_and_checked(fit, pair, trial, polish, tol, check)
+        if found[2] > tol:
+            continue
         energy = _surface_energy(fit, pair, found[1])
-        if found[2] <= tol and energy < best_energy:
+        if energy < best_energy:
             best, best_energy = found, energy
     return best
 

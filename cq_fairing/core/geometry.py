@@ -223,15 +223,21 @@ class GridBlocks:
         terms = self._basis.shape[1]
         out = np.empty((first.size, self._along_v.shape[1]))
         cuts = np.r_[0, np.flatnonzero(np.diff(first)) + 1, first.size]
-        width = out.shape[1]
         for lo, hi in zip(cuts[:-1], cuts[1:]):
             f = first[lo]
-            basis, along_v = self._basis[rows][lo:hi], self._along_v[f:f + terms]
-            chunk = max(1, min(ONE_THREAD_GEMM // ((hi - lo) * terms), ONE_THREAD_GEMV // terms))
-            for c in range(0, width, chunk):
-                np.matmul(basis, along_v[:, c:c + chunk], out=out[lo:hi, c:c + chunk])
+            _one_thread_matmul(self._basis[rows][lo:hi], self._along_v[f:f + terms],
+                               out[lo:hi])
         points = out.reshape(-1, self._dim, self.n_v).transpose(0, 2, 1)
         return points[..., :-1] / points[..., -1:] if self._rational else points
+
+
+def _one_thread_matmul(a, b, out):
+    """``out = a @ b`` in column chunks small enough that OpenBLAS computes each on one
+    thread (``ONE_THREAD_GEMM``, ``ONE_THREAD_GEMV``)."""
+    terms = a.shape[1]
+    chunk = max(1, min(ONE_THREAD_GEMM // (a.shape[0] * terms), ONE_THREAD_GEMV // terms))
+    for c in range(0, b.shape[1], chunk):
+        np.matmul(a, b[:, c:c + chunk], out=out[:, c:c + chunk])
 
 
 def _grid(u_space, v_space, net, u, v, nu, nv):
