@@ -972,9 +972,7 @@ def _fairest_grown(fit, compact, polish, tol, check):
     values = fit.trial(*spaces)[1]  # the compact net's search-grid deviations
     best, best_energy = compact, _surface_energy(fit, spaces, compact[1])
     for growth in FAIR_GROWTHS:
-        pair = [_redistributed(fit, spaces[axis].breakpoints, axis, values,
-                               spaces[axis].n_spans + extra, fit.tol) if extra else spaces[axis]
-                for axis, extra in enumerate(growth)]
+        pair = _grown(fit, spaces, values, growth)
         trial = fit.trial(*pair)
         if trial[2] > fit.tol:
             continue
@@ -995,18 +993,22 @@ def _surface_energy(fit, spaces, surface):
     return float(np.einsum("id,id->", c, k @ c))
 
 
+def _grown(fit, spaces, values, growth):
+    """``spaces`` with ``growth[axis]`` more spans along each axis, knots redistributed by
+    the error density of the search-grid deviations ``values`` (:func:`_redistributed`);
+    an axis that does not grow keeps its space."""
+    return [_redistributed(fit, space.breakpoints, axis, values, space.n_spans + extra,
+                           fit.tol) if extra else space
+            for axis, (space, extra) in enumerate(zip(spaces, growth))]
+
+
 def _grown_and_checked(fit, spaces, result, polish, tol, check):
     """A net the denser ``check`` refused, grown by one span along u or along v (knots
     from its error density, the smaller of the two nets first), polished and checked:
     the first that passes (as :func:`_polished_and_checked`), else ``None``.  One span
     more where the error is usually covers the excess between the search's samples, at
     the cost of two trials instead of a new search."""
-    grown = []
-    for axis in (0, 1):
-        pair = list(spaces)
-        pair[axis] = _redistributed(fit, spaces[axis].breakpoints, axis, result[1],
-                                    spaces[axis].n_spans + 1, fit.tol)
-        grown.append(pair)
+    grown = [_grown(fit, spaces, result[1], growth) for growth in ((1, 0), (0, 1))]
     for pair in sorted(grown, key=_net_size):
         trial = fit.trial(*pair)
         if trial[2] <= tol:

@@ -750,7 +750,7 @@ class _RowBound:
             self._row_arg[rows] = np.argmax(block, axis=1)
             self.row_max[rows] = block[np.arange(block.shape[0]), self._row_arg[rows]]
             if tol is not None:
-                kept.append(self._flat_above(np.arange(n_u)[rows], block, tol))
+                kept.append(self._flat_above(np.arange(rows.start, rows.stop), block, tol))
         if tol is not None:
             self._kept = tuple(np.concatenate(part) for part in zip(*kept))
 
