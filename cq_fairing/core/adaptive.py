@@ -276,6 +276,18 @@ def _doubling(check, top, start=4):
     return fails, n
 
 
+def _gallop_down(passes, check):
+    """Smallest passing count below a passing one, bracketed by stepping down 1, 2, 4, ...
+    (assumes monotone): the same answer as bisecting from 0, in fewer checks when it lies
+    close below ``passes``, as when a direction of a balanced net is lowered alone."""
+    step = 1
+    while passes - step >= 1:
+        if not check(passes - step):
+            return _bisect_count(passes - step, passes, check)
+        passes, step = passes - step, 2 * step
+    return _bisect_count(0, passes, check)
+
+
 def _scan_below(n, check, window=3):
     """Lower a bisected count further while fewer than ``window`` counts in a row fail."""
     best, misses = n, 0
@@ -1140,7 +1152,8 @@ def _faithful_net(fit, family, dens, tops):
     """Smallest net whose residual is within the noise level: the diagonal (bracketed by
     doubling from a small net, as for curves: the large projections a bisection from the
     top starts with cost more than all the small ones), then each direction (the larger
-    first) bisected with the other held; and the noise level."""
+    first) lowered with the other held (:func:`_gallop_down`: a balanced net seldom lowers
+    far); and the noise level."""
     residual = SurfaceResidual(fit.surface)
 
     def variance(spaces):
@@ -1165,8 +1178,8 @@ def _faithful_net(fit, family, dens, tops):
             pair[axis] = equidistributed_space(b, rho, n, fit.degrees[axis])
             return pair
 
-        n = _bisect_count(0, spaces[axis].n_spans,
-                          lambda n: within_noise(variance(with_count(n)), sigma))
+        n = _gallop_down(spaces[axis].n_spans,
+                         lambda n: within_noise(variance(with_count(n)), sigma))
         spaces = with_count(n)
     return spaces, sigma
 

@@ -11,7 +11,8 @@ import cq_fairing as cf
 from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
-from cq_fairing.core.adaptive import (_SurfaceFit, _constrained_stages, _net_solve, _polish,
+from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_stages,
+                                      _gallop_down, _net_solve, _polish,
                                       equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
@@ -291,6 +292,29 @@ def test_surface_polish_lowers_the_variation_energy_within_tol(blade):
 
     assert plain.surface.poles.shape == surface.poles.shape
     assert energy(surface) < energy(plain.surface)  # Tikhonov: E decreases with lambda
+
+
+@given(top=st.integers(1, 400), data=st.data())
+def test_count_searches_find_the_smallest_passing_count(top, data):
+    """Bisecting from 0 and galloping down from ``top`` agree with a linear scan on any
+    monotone check; galloping asks at most 3 counts when the answer lies within 2 of the
+    top (bisecting from 0 asks about log2(top))."""
+    answer = data.draw(st.integers(1, top))
+    asked = {"bisect": [], "gallop": []}
+
+    def check(name):
+        def passes(n):
+            asked[name].append(n)
+            return n >= answer
+        return passes
+
+    assert _bisect_count(0, top, check("bisect")) == answer
+    assert _gallop_down(top, check("gallop")) == answer
+    assert all(1 <= n < top for n in asked["gallop"])
+    if top - answer <= 2:
+        assert len(asked["gallop"]) <= 3
+        if top >= 8:
+            assert len(asked["gallop"]) <= len(asked["bisect"])
 
 
 def test_bad_tolerance_is_refused(seed):
