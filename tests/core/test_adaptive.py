@@ -12,7 +12,7 @@ from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
 from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_stages,
-                                      _gallop_down, _net_solve, _polish,
+                                      _doubling, _gallop_down, _interpolated_count, _net_solve, _polish,
                                       equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
@@ -315,6 +315,74 @@ def test_count_searches_find_the_smallest_passing_count(top, data):
         assert len(asked["gallop"]) <= 3
         if top >= 8:
             assert len(asked["gallop"]) <= len(asked["bisect"])
+
+
+@given(top=st.integers(2, 400), seed=st.integers(0, 2 ** 31), data=st.data())
+def test_interpolated_count_agrees_with_a_scan_on_any_falling_value(top, seed, data):
+    """Any non-increasing positive value (random drops, plateaus where half of them are
+    zero): the smallest count within the limit, as a linear scan finds it, asking only
+    counts inside the bracket or its ends."""
+    rng = np.random.default_rng(seed)
+    drops = rng.exponential(size=top) * (rng.random(top) < 0.5)
+    values = 1e-3 + np.cumsum(drops[::-1])[::-1]      # values[n - 1], non-increasing in n
+    limit = data.draw(st.floats(values[-1], 2.0 * values[0]))
+    expected = 1 + int(np.argmax(values <= limit))
+    fails = data.draw(st.integers(0, expected - 1))
+    asked = set()
+
+    def value(n):
+        asked.add(n)
+        return values[n - 1]
+
+    assert _interpolated_count(fails, top, value, limit) == expected
+    assert all(max(fails, 1) <= n <= top for n in asked)
+
+
+@pytest.mark.parametrize("power", [2.0, 4.0, 8.0])
+def test_interpolated_count_closes_a_power_law_bracket_in_two_values(power):
+    """On an exact power law the log-log chord lands on the answer, and its neighbour
+    closes the bracket: 2 new values where bisection needs 5-6."""
+    asked = set()
+
+    def value(n):
+        asked.add(n)
+        return 3e3 * n ** -power
+
+    for answer in (70, 99, 128):
+        limit = value(answer)
+        asked.clear()
+        assert _interpolated_count(67, 129, value, limit) == answer
+        assert len(asked - {67, 129}) == 2
+        asked.clear()
+        assert _bisect_count(67, 129, lambda n: value(n) <= limit) == answer
+        assert len(asked) >= 5
+
+
+def test_interpolated_count_is_cheaper_than_bisection_on_simulated_residuals():
+    """Residual variances of noisy data, :math:`s^2 (1 - n/N) + c\,n^{-p}`, bracketed by
+    doubling from 4 spans as the faithful search does: the same counts as bisection in at
+    most 80 % of its evaluations on average (3.3 against 5.1 when measured)."""
+    rng = np.random.default_rng(1)
+    counts = {"interpolated": [], "bisect": []}
+    for _ in range(200):
+        c, p = 10 ** rng.uniform(0, 4), rng.uniform(1.5, 8)
+        s2, big_n = 10 ** rng.uniform(-3, 0), rng.uniform(400, 4000)
+        values = s2 * (1 - np.arange(1, 401) / big_n) + c * np.arange(1, 401) ** -p
+        limit = 1.21 * values[400 // 3 - 1]
+        fails, passes = _doubling(lambda n: values[n - 1] <= limit, 400)
+        if passes is None or passes - fails < 16:
+            continue
+        found = {}
+        for name, search in (("interpolated", lambda ask: _interpolated_count(
+                                  fails, passes, ask, limit)),
+                             ("bisect", lambda ask: _bisect_count(
+                                  fails, passes, lambda n: ask(n) <= limit))):
+            asked = set()
+            found[name] = search(lambda n: asked.add(n) or values[n - 1])
+            counts[name].append(len(asked - {fails, passes}))
+        assert found["interpolated"] == found["bisect"]
+    assert len(counts["bisect"]) >= 50
+    assert np.mean(counts["interpolated"]) <= 0.8 * np.mean(counts["bisect"])
 
 
 def test_bad_tolerance_is_refused(seed):
