@@ -82,7 +82,8 @@ from .accuracy import check_tolerance
 from .banded import BandedSPD
 from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
-from .fidelity import CurveResidual, SurfaceResidual, noise_level, noise_limit
+from .fidelity import (NOISE_FRACTION, CurveResidual, SurfaceResidual, noise_level,
+                       noise_limit)
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
 from .measures import CurveProbe, SurfaceProbe, sample_parameters
@@ -497,8 +498,11 @@ def _objective(value):
 
 
 def _faithful_count(fit, family, top):
-    """Smallest count whose residual variance is within the noise level (doubling, then
-    :func:`_interpolated_count`), and that level."""
+    """Smallest count whose residual variance is within the noise level, and that level.
+
+    Doubling from a small count stops at the count the noise was measured on (its
+    variance is the noise level, so it passes); :func:`_interpolated_count` closes the
+    bracket."""
     residual = CurveResidual(fit.curve)
 
     @cache
@@ -506,10 +510,12 @@ def _faithful_count(fit, family, top):
         space = family(n)
         return residual.variance(fit.geometry(space, fit.project(space)))
 
-    sigma = noise_level(lambda fraction: variance(max(1, int(round(fraction * top)))),
-                        fit.curve.size)
+    def count(fraction):
+        return max(1, int(round(fraction * top)))
+
+    sigma = noise_level(lambda fraction: variance(count(fraction)), fit.curve.size)
     limit = noise_limit(sigma)
-    fails, n = _doubling(lambda n: variance(n) <= limit, top)
+    fails, n = _doubling(lambda n: variance(n) <= limit, count(1.0 / NOISE_FRACTION))
     return (top if n is None else _interpolated_count(fails, n, variance, limit)), sigma
 
 
@@ -1201,8 +1207,9 @@ def _pinned_below(fit, spaces):
 
 def _faithful_net(fit, family, dens, tops):
     """Smallest net whose residual is within the noise level: the diagonal (bracketed by
-    doubling from a small net, as for curves: the large projections a bisection from the
-    top starts with cost more than all the small ones; then :func:`_interpolated_count`),
+    doubling from a small net up to the one the noise was measured on, as for curves: the
+    large projections a bisection from the top starts with cost more than all the small
+    ones; then :func:`_interpolated_count`),
     then each direction (the larger first) lowered with the other held
     (:func:`_gallop_down`: a balanced net seldom lowers far); and the noise level."""
     residual = SurfaceResidual(fit.surface)
@@ -1212,14 +1219,17 @@ def _faithful_net(fit, family, dens, tops):
         return residual.variance(BSplineSurface(net, spaces[0].knots, spaces[1].knots,
                                                 *fit.degrees))
 
-    sigma = noise_level(lambda fraction: variance(family(fraction)), fit.surface.size)
+    @cache
+    def at_fraction(fraction):
+        return variance(family(fraction))
+
+    sigma = noise_level(at_fraction, fit.surface.size)
     steps, limit = max(tops), noise_limit(sigma)
 
-    @cache
     def diagonal(k):
-        return variance(family(k / steps))
+        return at_fraction(k / steps)
 
-    fails, k = _doubling(lambda k: diagonal(k) <= limit, steps)
+    fails, k = _doubling(lambda k: diagonal(k) <= limit, -(-steps // NOISE_FRACTION))
     k = steps if k is None else _interpolated_count(fails, k, diagonal, limit)
     spaces = family(k / steps)
     for axis in np.argsort([-s.dimension for s in spaces]):
