@@ -30,8 +30,7 @@ projections and evaluations.
 
 import numpy as np
 
-__all__ = ["DISCREPANCY", "CurveResidual", "SurfaceResidual", "noise_level", "noise_limit",
-           "within_noise"]
+__all__ = ["DISCREPANCY", "CurveResidual", "SurfaceResidual", "noise_level", "noise_limit"]
 
 DISCREPANCY = 0.10     # delta: residual variance within (1 + delta)^2 of the noise level
 NOISE_FRACTION = 3     # the noise is measured on a target 1/NOISE_FRACTION of the source
@@ -119,12 +118,7 @@ def noise_level(variance_at, size):
     return max(float(np.sqrt(variance_at(1.0 / NOISE_FRACTION))), NOISE_FLOOR * size)
 
 
-def within_noise(variance, sigma, delta=DISCREPANCY):
-    r"""Discrepancy test :math:`\mathrm{variance} \le (1+\delta)^2\hat\sigma^2`."""
-    return variance <= noise_limit(sigma, delta)
-
-
 def noise_limit(sigma, delta=DISCREPANCY):
-    r"""The largest residual variance :func:`within_noise` accepts,
-    :math:`(1+\delta)^2\hat\sigma^2`."""
+    r"""The discrepancy bound: a residual variance within the noise is
+    :math:`\le (1+\delta)^2\hat\sigma^2`."""
     return (1.0 + delta) ** 2 * sigma ** 2

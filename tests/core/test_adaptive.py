@@ -12,8 +12,8 @@ from cq_fairing.core import examples
 from scipy.interpolate import BSpline
 
 from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_stages,
-                                      _doubling, _gallop_down, _interpolated_count, _net_solve, _polish,
-                                      equidistributed_space, fair_curve_adaptive,
+                                      _doubling, _gallop_down, _interpolated_count,
+                                      _net_solve, _polish, equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
 from cq_fairing.core.energy import fair_surface_energy
