@@ -206,6 +206,26 @@ def test_grid_blocks_are_the_rows_of_the_grid(rational):
         assert np.array_equal(blocks.block(last), whole[blocks.rows_of(last)])
 
 
+@pytest.mark.parametrize("rational", [False, True])
+def test_grid_blocks_built_in_slices_are_the_same_bit_for_bit(rational, monkeypatch):
+    """``W_a(v_j)`` built a slice of v at a time (a few samples per slice here, as on a
+    3329-sample terrain grid) gives the blocks of one whole product exactly."""
+    from cq_fairing.core import geometry
+
+    rng = np.random.default_rng(11)
+    knots = [np.r_[[0.0] * 3, np.sort(rng.random(20)), [1.0] * 3],
+             np.r_[[0.0] * 4, np.sort(rng.random(30)), [1.0] * 4]]
+    weights = rng.uniform(0.5, 2.0, size=(23, 34)) if rational else None
+    surface = cf.BSplineSurface(rng.normal(size=(23, 34, 3)), knots[0], knots[1], 2, 3,
+                                weights=weights)
+    u, v = np.sort(rng.random(37)), np.sort(rng.random(301))
+    whole = surface.grid_blocks(u, v, 8)
+    monkeypatch.setattr(geometry, "ALONG_V_SLICE", 23 * 4 * 7)   # 7 samples per slice
+    sliced = surface.grid_blocks(u, v, 8)
+    for b in range(whole.n_blocks):
+        assert np.array_equal(sliced.block(b), whole.block(b))
+
+
 def _reparametrised(surface, phi, degree):
     """Poles of ``S(phi(u), v)`` for a Bezier patch ``S`` and a polynomial ``phi`` of
     degree ``degree / surface.u_degree``: Bernstein collocation, exact for polynomials."""
