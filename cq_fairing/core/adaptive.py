@@ -16,7 +16,8 @@ knots follow the error:
    a uniform source starts from uniform targets and the top of the family is the source
    space itself.
 2. **Count.**  Doubling from 4 spans, then bisection on ``N`` (on the pair
-   ``(N_u, N_v)`` along the diagonal and per direction for surfaces) for the smallest count whose measured deviation is within ``tol``.
+   ``(N_u, N_v)`` along the diagonal and per direction for surfaces) for the smallest
+   count whose measured deviation is within ``tol``.
 3. **Redistribution.**  From the per-span maximum deviation :math:`e_j` of the last
    candidate, a span of width :math:`h_j` would meet :math:`\theta\,\mathrm{tol}` at width
    :math:`h_j(\theta\,\mathrm{tol}/e_j)^{1/(p+1)}` (the :math:`O(h^{p+1})` error of a
@@ -26,7 +27,8 @@ knots follow the error:
 
    smoothed over neighbouring spans (slowly varying knot spacing keeps the curvature
    calm) and floored at a fraction of its mean.  The count is lowered one span at a
-   time (per direction for surfaces), each with a few redistribution rounds, while the
+   time (per direction for surfaces, by doubling strides while the last candidate
+   stays below half the tolerance), each with a few redistribution rounds, while the
    tolerance holds.
 4. **Polish.**  The remaining budget :math:`\mathrm{tol} - e_{\max}` is spent on fairness:
    the penalised projection
@@ -934,10 +936,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     ``"compact"``: the knot families start from the source's breakpoint densities.
     Three starts are bisected: along the diagonal :math:`N = \lceil t\, n_S\rceil`, u
     first (v at the source) then v, and v first then u.  From each, each direction is
-    lowered one span at a time with knots redistributed by the marginal error density
+    lowered one span at a time (by doubling strides while far below tol,
+    :func:`_reduce_surface`) with knots redistributed by the marginal error density
     (the largest deviation over the other direction), the larger net direction first;
     the smallest net wins.  See the module documentation.  ``"faithful"``: the diagonal
-    and then each direction are bisected for the smallest net whose residual is down to
+    and then each direction are lowered for the smallest net whose residual is down to
     the noise level (:mod:`cq_fairing.core.fidelity`); if that net exceeds ``tol`` the
     compact search takes over.
 
