@@ -1023,10 +1023,14 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
             found = _fairest_grown(fit, found, polish, tol, check)
     spaces, faired, e, lam, span_weight = found
     if e > tol and _safety > 0.9:
-        return fair_surface_adaptive(surface, tol, target_degree=target_degree,
-                                     objective=objective, polish=polish, borders=borders,
-                                     per_span=per_span,
-                                     max_samples=max_samples, _safety=_safety * tol / e - 0.005)
+        try:
+            return fair_surface_adaptive(surface, tol, target_degree=target_degree,
+                                         objective=objective, polish=polish,
+                                         borders=borders, per_span=per_span,
+                                         max_samples=max_samples,
+                                         _safety=_safety * tol / e - 0.005)
+        except ToleranceNotMetError:
+            pass  # nothing within the tighter working tolerance: this net's refusal says why
     if e > tol:
         raise ToleranceNotMetError(
             f"the adaptive target {spaces[0].dimension}x{spaces[1].dimension} passed the "
