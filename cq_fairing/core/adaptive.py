@@ -1205,7 +1205,8 @@ def _constrained_stages(fit, spaces, faired, lam):
 
 
 def _compact_net(fit, family, dens, tops, tol):
-    """Smallest net within tol from three starts: ``(spaces, trial)``."""
+    """Smallest net within tol from three starts: ``(spaces, trial)``.  Two starts on the
+    same net are reduced once (the IEA face's axis starts both stop at 17 x 31 poles)."""
     steps = max(tops)
     full = family(1.0)
     top_result = fit.trial(*full)
@@ -1217,9 +1218,12 @@ def _compact_net(fit, family, dens, tops, tol):
     starts = [_diagonal_start(fit, family, steps, top_result),
               _axis_start(fit, full, top_result, dens, tops, fit.degrees, (0, 1)),
               _axis_start(fit, full, top_result, dens, tops, fit.degrees, (1, 0))]
-    best = None
+    best, reduced = None, {}
     for spaces, result in starts:
-        spaces, result = _reduce_surface(fit, spaces, result, fit.tol)
+        key = (spaces[0].key, spaces[1].key)
+        if key not in reduced:  # the second walk from one net would repeat the first
+            reduced[key] = _reduce_surface(fit, spaces, result, fit.tol)
+        spaces, result = reduced[key]
         if best is None or _net_size(spaces) < _net_size(best[0]):
             best = (spaces, result)
     return best

@@ -294,6 +294,39 @@ def test_surface_polish_lowers_the_variation_energy_within_tol(blade):
     assert energy(surface) < energy(plain.surface)  # Tikhonov: E decreases with lambda
 
 
+def test_starts_on_one_net_are_reduced_once(monkeypatch):
+    """A strip with 3 spans across: both axis starts keep u at the source and land on one
+    net, which is reduced once; every distinct start is reduced."""
+    import cq_fairing.core.adaptive as adaptive
+
+    rng = np.random.default_rng(3)
+    u, v = np.linspace(0, 1, 4)[:, None], np.linspace(0, 1, 40)[None, :]
+    points = np.stack([np.broadcast_to(10 * u, (4, 40)), np.broadcast_to(50 * v, (4, 40)),
+                       3 * np.sin(6 * v) + 0.5 * u + 0.01 * rng.normal(size=(4, 40))], axis=-1)
+    strip = cf.interpolate_grid(points)
+    starts, reduced = [], []
+
+    def recorded(function, log):
+        def wrapper(*args, **kwargs):
+            result = function(*args, **kwargs)
+            log.append(result[0] if log is starts else args[1])
+            return result
+        return wrapper
+
+    for name in ("_diagonal_start", "_axis_start"):
+        monkeypatch.setattr(adaptive, name, recorded(getattr(adaptive, name), starts))
+    monkeypatch.setattr(adaptive, "_reduce_surface",
+                        recorded(adaptive._reduce_surface, reduced))
+    result = fair_surface_adaptive(strip, 0.05, borders="free")
+
+    def keys(nets):
+        return [(net[0].key, net[1].key) for net in nets]
+
+    assert len(starts) == 3 and len(set(keys(starts))) == 2
+    assert sorted(keys(reduced)) == sorted(set(keys(starts)))
+    assert deviation(strip, result.surface).max <= 0.05
+
+
 @pytest.mark.parametrize("tol", [0.05, 0.2, 0.5])
 def test_a_reduction_from_far_above_strides_down_in_half_the_trials(blade, tol, monkeypatch):
     """From the source's own 29 x 29 spans, far below tol, the reduction strides down in
