@@ -13,7 +13,8 @@ from scipy.interpolate import BSpline
 
 from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_stages,
                                       _doubling, _gallop_down, _interpolated_count,
-                                      _net_solve, _polish, equidistributed_space, fair_curve_adaptive,
+                                      _net_solve, _polish, _source_density,
+                                      equidistributed_space, fair_curve_adaptive,
                                       fair_surface_adaptive, net_lengths,
                                       variation_energy_matrix)
 from cq_fairing.core.energy import fair_surface_energy
@@ -306,17 +307,18 @@ def test_starts_on_one_net_are_reduced_once(monkeypatch):
     strip = cf.interpolate_grid(points)
     starts, reduced = [], []
 
-    def recorded(function, log):
+    def recorded(function, log, net):
         def wrapper(*args, **kwargs):
             result = function(*args, **kwargs)
-            log.append(result[0] if log is starts else args[1])
+            log.append(net(args, result))
             return result
         return wrapper
 
     for name in ("_diagonal_start", "_axis_start"):
-        monkeypatch.setattr(adaptive, name, recorded(getattr(adaptive, name), starts))
-    monkeypatch.setattr(adaptive, "_reduce_surface",
-                        recorded(adaptive._reduce_surface, reduced))
+        monkeypatch.setattr(adaptive, name, recorded(getattr(adaptive, name), starts,
+                                                     lambda args, result: result[0]))
+    monkeypatch.setattr(adaptive, "_reduce_surface", recorded(
+        adaptive._reduce_surface, reduced, lambda args, result: args[1]))
     result = fair_surface_adaptive(strip, 0.05, borders="free")
 
     def keys(nets):
@@ -337,8 +339,8 @@ def test_a_reduction_from_far_above_strides_down_in_half_the_trials(blade, tol, 
 
     def reduced():
         fit = _SurfaceFit(blade, tol, (3, 3), 4, 100_000)
-        full = [equidistributed_space(s.breakpoints, 1.0 / np.diff(s.breakpoints),
-                                      s.n_spans, 3) for s in (blade.u_space, blade.v_space)]
+        full = [equidistributed_space(*_source_density(s), s.n_spans, 3)
+                for s in (blade.u_space, blade.v_space)]
         top = fit.trial(*full)
         start = fit.evaluations
         spaces, result = adaptive._reduce_surface(fit, full, top, tol)
@@ -417,7 +419,7 @@ def test_interpolated_count_closes_a_power_law_bracket_in_two_values(power):
 
 
 def test_interpolated_count_is_cheaper_than_bisection_on_simulated_residuals():
-    """Residual variances of noisy data, :math:`s^2 (1 - n/N) + c\,n^{-p}`, bracketed by
+    r"""Residual variances of noisy data, :math:`s^2 (1 - n/N) + c\,n^{-p}`, bracketed by
     doubling from 4 spans as the faithful search does: the same counts as bisection in at
     most 80 % of its evaluations on average (3.3 against 5.1 when measured)."""
     rng = np.random.default_rng(1)
