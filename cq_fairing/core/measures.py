@@ -51,7 +51,7 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidInputError
 from .geometry import BSplineCurve, BSplineSurface, extent
 from .gram import gram_matrix, quadrature_rule
-from .spaces import basis_functions, find_spans
+from .spaces import basis_functions, find_spans, require_in_domain
 
 __all__ = [
     "Deviation", "DeviationMap", "sample_parameters", "extent", "curve_derivatives",
@@ -135,17 +135,24 @@ def surface_derivatives(surface, u, v, order):
     -------
     dict of ndarray, each shape (len(u), d)
     """
-    from math import comb
-
     u = np.asarray(u, dtype=float).ravel()
     v = np.asarray(v, dtype=float).ravel()
-    h = surface.taylor.derivatives(u, v, order)
-    keys = list(h)
+    require_in_domain(surface.u_space, u)
+    require_in_domain(surface.v_space, v)
+    return _derivatives_in_domain(surface, u, v, order)
+
+
+def _derivatives_in_domain(surface, u, v, order):
+    """:func:`surface_derivatives` at 1-d float parameters known to lie in the domain (the
+    clamped iterates of :func:`closest_points_surface`): no check."""
+    from math import comb
+
+    h = surface.taylor.derivatives_in_domain(u, v, order)
     if not surface.is_rational:
         return h
     w = {key: val[:, -1:] for key, val in h.items()}
     out = {}
-    for a, b in keys:
+    for a, b in h:
         val = h[(a, b)][:, :-1].copy()
         for i in range(a + 1):
             for j in range(b + 1):
@@ -279,7 +286,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     (ulo, uhi), (vlo, vhi) = surface.domain
     uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
                    np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
-    dist = _distance(surface_derivatives(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
+    dist = _distance(_derivatives_in_domain(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
     size = surface.size
@@ -287,7 +294,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         active = _above(active, dist, stop_below)
         if active.size == 0:
             break
-        s = surface_derivatives(surface, uv[active, 0], uv[active, 1], 2)
+        s = _derivatives_in_domain(surface, uv[active, 0], uv[active, 1], 2)
         r = s[(0, 0)] - points[active]
         su, sv = s[(1, 0)], s[(0, 1)]
         g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
@@ -319,7 +326,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
             new = uv[idx] + st
             new[:, 0] = np.clip(new[:, 0], ulo, uhi)
             new[:, 1] = np.clip(new[:, 1], vlo, vhi)
-            pts = surface_derivatives(surface, new[:, 0], new[:, 1], 0)[(0, 0)]
+            pts = _derivatives_in_domain(surface, new[:, 0], new[:, 1], 0)[(0, 0)]
             return new, _distance(pts, points[idx])
 
         new, d_new = _damped(trial, active, step, dist)
@@ -677,7 +684,7 @@ class _LazyGrid:
 
     def __getitem__(self, index):
         i, j = index
-        return surface_derivatives(self.surface, self.u[i], self.v[j], 0)[(0, 0)]
+        return _derivatives_in_domain(self.surface, self.u[i], self.v[j], 0)[(0, 0)]
 
 
 class _FlatBound:

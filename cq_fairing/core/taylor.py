@@ -33,6 +33,7 @@ This module imports numpy only.
 """
 
 from dataclasses import dataclass
+from functools import lru_cache
 from math import factorial
 
 import numpy as np
@@ -88,7 +89,12 @@ class SpanTaylor:
             If a parameter lies outside the domain.
         """
         require_in_domain(self.space, x)
-        a = np.clip(np.searchsorted(self.breaks, x, side="right") - 1, 0, self.centres.size - 1)
+        return self.locate_in_domain(x)
+
+    def locate_in_domain(self, x):
+        """As :meth:`locate`, for parameters already known to lie in the domain (the
+        clamped iterates of a Newton loop): no check."""
+        a = np.searchsorted(self.breaks[1:-1], x, side="right")   # interior breaks: no clip
         return a, (x - self.centres[a]) / self.halves[a]
 
     def powers(self, a, r, order):
@@ -96,27 +102,32 @@ class SpanTaylor:
 
         Returns
         -------
-        list of ndarray, each shape (q, p + 1)
-            Entry ``d`` holds :math:`\frac{k!}{(k-d)!} r^{k-d} / h_a^d` (zero for
+        ndarray, shape (q, order + 1, p + 1)
+            Entry ``[:, d, k]`` holds :math:`\frac{k!}{(k-d)!} r^{k-d} / h_a^d` (zero for
             ``k < d``).
         """
+        exponents, falling = _falling_table(self.space.degree, order)
         p = self.space.degree
-        plain = np.empty((r.size, p + 1))
-        plain[:, 0] = 1.0
-        for k in range(1, p + 1):
-            np.multiply(plain[:, k - 1], r, out=plain[:, k])
-        out = [plain]
-        inverse = 1.0 / self.halves[a]
-        falling = np.ones(p + 1)
-        k = np.arange(p + 1)
-        for d in range(1, order + 1):
-            falling = falling * np.maximum(k - d + 1, 0)
-            shifted = np.zeros_like(plain)
-            if d <= p:
-                shifted[:, d:] = plain[:, :p + 1 - d] * falling[d:]
-                shifted *= (inverse ** d)[:, None]
-            out.append(shifted)
-        return out
+        plain = np.empty((p + 1, r.size))
+        plain[0] = 1.0
+        np.multiply.accumulate(np.broadcast_to(r, (p, r.size)), axis=0, out=plain[1:])
+        plain = plain.T
+        if order == 0:
+            return plain[:, None, :]
+        inverse = (1.0 / self.halves[a])[:, None] ** np.arange(order + 1)
+        return plain[:, exponents] * falling * inverse[:, :, None]
+
+
+@lru_cache(maxsize=None)
+def _falling_table(degree, order):
+    """Exponents ``max(k - d, 0)`` and falling factorials ``k! / (k - d)!`` (zero for
+    ``k < d``), shape (order + 1, degree + 1): the ``d``-th derivative of ``r^k`` is
+    ``falling[d, k] * r ** exponents[d, k]``."""
+    k = np.arange(degree + 1)
+    d = np.arange(order + 1)[:, None]
+    falling = np.array([[factorial(j) // factorial(j - e) if j >= e else 0 for j in k]
+                        for e in range(order + 1)], dtype=float)
+    return np.maximum(k - d, 0), falling
 
 
 class TaylorSurface:
@@ -175,18 +186,40 @@ class TaylorSurface:
         Returns
         -------
         dict of ndarray, each shape (q, D)
+
+        Raises
+        ------
+        InvalidInputError
+            If a parameter lies outside the domain.
         """
-        a, r = self.u.locate(u)
-        b, s = self.v.locate(v)
+        require_in_domain(self.u.space, u)
+        require_in_domain(self.v.space, v)
+        return self.derivatives_in_domain(u, v, order)
+
+    def derivatives_in_domain(self, u, v, order):
+        r"""As :meth:`derivatives`, for parameters known to lie in the domain (no check).
+
+        Two batched matrix products per call, whatever the order: with
+        :math:`V_{q,j,l} = \partial_v^j s^l` and :math:`U_{q,i,k} = \partial_u^i r^k`,
+        :math:`\partial_u^i \partial_v^j S = \sum_k U_{q,i,k} \sum_l V_{q,j,l}
+        A_{a_q,b_q,k,l}` (a Newton step evaluates a few hundred points, and there the
+        number of numpy calls, not the arithmetic, sets the time).
+        """
+        a, r = self.u.locate_in_domain(u)
+        b, s = self.v.locate_in_domain(v)
         pu, pv = self.u.powers(a, r, order), self.v.powers(b, s, order)
         if self.is_full:
             local = self._by_pair.take(a * self.v.centres.size + b, axis=0)   # (q, l, k, D)
-            weights = pv
+            weights = pv                                                       # (q, j, l)
         else:
             poles = (a * self.n_v + self.v.first[b])[:, None] + np.arange(self.v.space.degree + 1)
-            local = self._along_u.take(poles, axis=0)                         # (q, j, k, D)
-            taylor_v = self.v.coefficients.take(b, axis=0)                     # (q, j, l)
-            weights = [np.einsum("qjl,ql->qj", taylor_v, power) for power in pv]
-        rows = [np.einsum("qnkd,qn->qkd", local, w) for w in weights]
-        return {(i, j): np.einsum("qk,qkd->qd", pu[i], rows[j])
+            local = self._along_u.take(poles, axis=0)                         # (q, n, k, D)
+            taylor_v = self.v.coefficients.take(b, axis=0)                     # (q, n, l)
+            weights = np.matmul(pv, taylor_v.transpose(0, 2, 1))              # (q, j, n)
+        q, n, k, dim = local.shape
+        rows = np.matmul(weights, local.reshape(q, n, k * dim))               # (q, j, k D)
+        rows = rows.reshape(q, order + 1, k, dim).transpose(0, 2, 1, 3)
+        table = np.matmul(pu, rows.reshape(q, k, (order + 1) * dim))          # (q, i, j D)
+        table = table.reshape(q, order + 1, order + 1, dim)
+        return {(i, j): table[:, i, j]
                 for i in range(order + 1) for j in range(order + 1 - i)}

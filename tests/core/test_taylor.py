@@ -95,3 +95,32 @@ def test_parameters_outside_the_domain_are_refused():
     surface = cf.make_surface(np.zeros((4, 4, 3)))
     with pytest.raises(InvalidInputError, match="domain"):
         surface_derivatives(surface, np.array([0.5, 1.2]), np.array([0.5, 0.5]), 1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(degree=st.integers(1, 9), order=st.integers(0, 4), seed=st.integers(0, 2**31 - 1))
+def test_powers_are_the_derivatives_of_the_monomials(degree, order, seed):
+    """Entry [:, d, k] is k!/(k-d)! r^(k-d) / h^d, zero for k < d (written out here one
+    term at a time)."""
+    rng = np.random.default_rng(seed)
+    k = degree + 1 + int(rng.integers(0, 5))
+    form = SpanTaylor.of(SplineSpace.from_knots(random_knots(rng, k, degree), degree))
+    x = rng.uniform(-3, 4, 25)
+    a, r = form.locate(x)
+    table = form.powers(a, r, order)
+    assert table.shape == (25, order + 1, degree + 1)
+    for d in range(order + 1):
+        for j in range(degree + 1):
+            expected = (np.prod(np.arange(j - d + 1, j + 1), dtype=float) * r ** (j - d)
+                        / form.halves[a] ** d if j >= d else np.zeros(25))
+            assert np.allclose(table[:, d, j], expected, rtol=1e-13, atol=0.0), (d, j)
+
+
+def test_every_parameter_falls_in_the_span_to_its_right():
+    """Breakpoints belong to the span on their right, the right end to the last span;
+    the local parameter is -1 at a span's start and +1 at the domain's end."""
+    space = SplineSpace.from_knots([0, 0, 0, 0, 0.2, 0.2, 0.7, 1, 1, 1, 1], 3)
+    form = SpanTaylor.of(space)
+    a, r = form.locate(np.array([0.0, 0.1, 0.2, 0.5, 0.7, 0.99, 1.0]))
+    assert a.tolist() == [0, 0, 1, 1, 2, 2, 2]
+    assert np.allclose(r[[0, 2, 4, 6]], [-1, -1, -1, 1])
