@@ -112,6 +112,8 @@ REWEIGHTS = 12       # reweighting rounds per stage
 WEIGHT_AIM = 0.97    # patches above this fraction of tol get more weight ...
 WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
+SCREEN_STRIDE = 4    # a verdict-only trial looks at every 4th search sample first ...
+SCREEN_SAMPLES = 16  # ... and the true distance at its 16 largest bounds
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -631,6 +633,16 @@ class _SurfaceFit:
         first use (a faithful fit that passes never measures on it)."""
         return SurfaceProbe(self.surface, uv=self._uv, keep_feet=True)
 
+    @cached_property
+    def coarse_probe(self):
+        """Every ``SCREEN_STRIDE``-th search sample per direction, starting Newton from
+        the search probe's last feet and keeping none of its own
+        (:meth:`screened_trial`)."""
+        u, v = self._uv
+        probe = SurfaceProbe(self.surface, uv=(u[::SCREEN_STRIDE], v[::SCREEN_STRIDE]))
+        probe.adopt_feet(self.probe)
+        return probe
+
     def _cached(self, key, build):
         """Per-space operators, kept while the searches revisit a space (at most 64)."""
         if key not in self._cache:
@@ -783,10 +795,46 @@ class _SurfaceFit:
         return self._span_starts[0].size, self._span_starts[1].size
 
     def trial(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
+        """``(faired, per-sample deviation on the search grid, its max)``."""
         net = self.project(tu, tv, lam, weights, edge_lam)
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         values = self.errors(faired)
         return faired, values, float(values.max())
+
+    def screened_trial(self, tu, tv, lam=0.0):
+        """:meth:`trial` for a search that reads only the verdict of a failing candidate
+        (the count bisections of the starts, the polish's bisection on lambda).
+
+        The candidate is first measured on the coarse grid (:attr:`coarse_probe`): the
+        true distance at its ``SCREEN_SAMPLES`` largest same-parameter bounds above tol.
+        If one exceeds tol the candidate fails, and ``(faired, None, e)`` comes back with
+        that distance ``e``, a lower bound of its maximum; the search grid is not
+        measured and keeps its feet.  Otherwise the full :meth:`trial` follows.  A
+        failing trial measured in full costs two to three passing ones on the IEA face
+        (its largest bounds all stay above tol, so each runs Newton from both starts to
+        convergence); half the trials of its starts fail.
+        """
+        net = self.project(tu, tv, lam)
+        faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+        excess = self._coarse_excess(faired)
+        if excess is not None:
+            self.evaluations += 1
+            return faired, None, excess
+        values = self.errors(faired)
+        return faired, values, float(values.max())
+
+    def _coarse_excess(self, faired):
+        """A true distance above tol among the ``SCREEN_SAMPLES`` largest bounds of the
+        coarse grid, or ``None``."""
+        probe = self.coarse_probe
+        other, bound = probe.bound(faired)
+        flat = bound.ravel()
+        above = np.flatnonzero(flat > self.tol)
+        if above.size == 0:
+            return None
+        largest = above[np.argsort(flat[above])[::-1][:SCREEN_SAMPLES]]
+        exact = probe.true_distance(faired, other, largest, tol=self.tol).max()
+        return float(exact) if exact > self.tol else None
 
 
 def _held_ends(matrix):
@@ -919,10 +967,11 @@ def _lowered(fit, spaces, result, axis, n, tol, rounds):
     """``(spaces, trial)`` with ``n`` spans along ``axis`` within tol, knots redistributed
     by the last trial's errors up to ``rounds`` times; ``None`` if none passes."""
     b, values = spaces[axis].breakpoints, result[1]
-    for _ in range(rounds):
+    for round_ in range(rounds):
         cand = _redistributed(fit, b, axis, values, n, tol)
         pair = [cand, spaces[1]] if axis == 0 else [spaces[0], cand]
-        trial = fit.trial(*pair)
+        last = round_ == rounds - 1   # nothing reads the last round's values if it fails
+        trial = fit.screened_trial(*pair) if last else fit.trial(*pair)
         if trial[2] <= tol:
             return pair, trial
         b, values = cand.breakpoints, trial[1]
@@ -1076,7 +1125,7 @@ def _fairest_grown(fit, compact, polish, tol, check):
     best, best_energy = compact, _surface_energy(fit, spaces, compact[1])
     for growth in FAIR_GROWTHS:
         pair = _grown(fit, spaces, values, growth)
-        trial = fit.trial(*pair)
+        trial = fit.screened_trial(*pair)
         if trial[2] > fit.tol:
             continue
         found = _polished_and_checked(fit, pair, trial, polish, tol, check)
@@ -1113,7 +1162,7 @@ def _grown_and_checked(fit, spaces, result, polish, tol, check):
     the cost of two trials instead of a new search."""
     grown = [_grown(fit, spaces, result[1], growth) for growth in ((1, 0), (0, 1))]
     for pair in sorted(grown, key=_net_size):
-        trial = fit.trial(*pair)
+        trial = fit.screened_trial(*pair)
         if trial[2] <= tol:
             found = _polished_and_checked(fit, pair, trial, polish, tol, check)
             if found[2] <= tol:
@@ -1129,7 +1178,8 @@ def _polished_and_checked(fit, spaces, result, polish, tol, check):
     span weight)``."""
     faired, lam = result[0], 0.0
     if polish and min(fit.degrees) >= 2:
-        (faired, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol, result, steps=8)
+        (faired, _, _), lam = _polish(lambda x: fit.screened_trial(*spaces, x), fit.tol, result,
+                                      steps=8)
         for staged, stage_lam, weights in reversed(_constrained_stages(fit, spaces, faired, lam)):
             e = check(staged, fit.probe)
             if e <= tol:
@@ -1234,7 +1284,7 @@ def _pinned_below(fit, spaces):
     borders: ``(spaces, trial)`` if that reaches a smaller net, else ``None``."""
     fit.pinned = True
     try:
-        trial = fit.trial(*spaces)
+        trial = fit.screened_trial(*spaces)
         if trial[2] > fit.tol:
             return None
         lower, reduced = _reduce_surface(fit, list(spaces), trial, fit.tol)
@@ -1292,7 +1342,7 @@ def _diagonal_start(fit, family, steps, top_result):
     cache = {steps: top_result}
 
     def check(k):
-        cache[k] = fit.trial(*family(k / steps))
+        cache[k] = fit.screened_trial(*family(k / steps))
         return cache[k][2] <= fit.tol
 
     k = _bisect_count(0, steps, check)
@@ -1309,7 +1359,7 @@ def _axis_start(fit, full, top_result, dens, tops, degrees, order):
         def check(n, axis=axis, b=b, rho=rho, cache=cache):
             pair = list(spaces)
             pair[axis] = equidistributed_space(b, rho, n, degrees[axis])
-            trial = fit.trial(*pair)
+            trial = fit.screened_trial(*pair)
             cache[n] = (pair, trial)
             return trial[2] <= fit.tol
 

@@ -612,3 +612,43 @@ def test_fair_objective_on_a_surface_is_no_rougher_than_compact(blade):
 def test_fair_objective_is_offered_and_unknown_ones_are_refused(seed):
     with pytest.raises(InvalidInputError, match="'fair'"):
         fair_curve_adaptive(seed.curve, 0.02, objective="fairest")
+
+
+def _blade_fit(blade, tol=0.05):
+    return _SurfaceFit(blade, tol, (3, 3), 4, 100_000)
+
+
+def _blade_spaces(blade, n_u, n_v):
+    return [equidistributed_space(*_source_density(s), n, 3)
+            for s, n in ((blade.u_space, n_u), (blade.v_space, n_v))]
+
+
+@pytest.mark.parametrize("counts", [(4, 4), (6, 5), (8, 12), (20, 20)])
+def test_a_screened_trial_gives_the_trials_verdict(blade, counts):
+    """On nets from far above tol to below it: where the coarse screen refuses a
+    candidate, the full trial refuses it too and the screen's distance exceeds tol (a
+    true distance of a sample the full grid also holds); where it does not, the screened
+    trial is the full trial, value for value."""
+    spaces = _blade_spaces(blade, *counts)
+    full = _blade_fit(blade).trial(*spaces)
+    faired, values, e = _blade_fit(blade).screened_trial(*spaces)
+    assert np.array_equal(faired.poles, full[0].poles)
+    if values is None:
+        assert 0.05 < e <= full[2] * (1 + 1e-9)
+    else:
+        assert np.array_equal(values, full[1]) and e == full[2]
+
+
+def test_a_screened_failure_leaves_the_search_grid_alone(blade):
+    """A candidate the screen refuses is not measured on the search grid: the search
+    probe keeps the feet of the last full trial, and the next full trial gives the same
+    values as if the refused candidate had never been tried."""
+    fit, twin = _blade_fit(blade), _blade_fit(blade)
+    passing, failing = _blade_spaces(blade, 20, 20), _blade_spaces(blade, 4, 4)
+    fit.trial(*passing), twin.trial(*passing)
+    feet = {key: value.copy() for key, value in fit.probe._feet.items()}
+    assert fit.screened_trial(*failing)[1] is None
+    assert fit.probe._feet.keys() == feet.keys()
+    assert all(np.array_equal(fit.probe._feet[key], feet[key]) for key in feet)
+    after = _blade_spaces(blade, 12, 12)
+    assert np.array_equal(fit.trial(*after)[1], twin.trial(*after)[1])
