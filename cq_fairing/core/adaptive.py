@@ -626,6 +626,7 @@ class _SurfaceFit:
         self.lengths = net_lengths(surface.poles)
         self.evaluations = 0
         self._cache = {}
+        self._refused = {}   # screened_trial's refusals, by candidate
 
     @cached_property
     def probe(self):
@@ -813,13 +814,21 @@ class _SurfaceFit:
         failing trial measured in full costs two to three passing ones on the IEA face
         (its largest bounds all stay above tol, so each runs Newton from both starts to
         convergence); half the trials of its starts fail.
+
+        A refusal changes nothing the next measurement starts from, so it is kept and
+        given again when a search asks for the same candidate (a count scan below a
+        bisection, the second axis start repeating the first's second direction).
         """
+        key = (tu.key, tv.key, lam, self.pinned)
+        if key in self._refused:
+            return self._refused[key]
         net = self.project(tu, tv, lam)
         faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
         excess = self._coarse_excess(faired)
         if excess is not None:
             self.evaluations += 1
-            return faired, None, excess
+            self._refused[key] = (faired, None, excess)
+            return self._refused[key]
         values = self.errors(faired)
         return faired, values, float(values.max())
 
@@ -833,7 +842,7 @@ class _SurfaceFit:
         if above.size == 0:
             return None
         largest = above[np.argsort(flat[above])[::-1][:SCREEN_SAMPLES]]
-        exact = probe.true_distance(faired, other, largest, tol=self.tol).max()
+        exact = probe.true_distance(faired, other, largest, tol=self.tol, verdict=True).max()
         return float(exact) if exact > self.tol else None
 
 

@@ -580,18 +580,26 @@ class SurfaceProbe:
             self._source_blocks = self.source.grid_blocks(self.u, self.v, step)
         return _BoundBlocks(self._source_blocks, faired.grid_blocks(self.u, self.v, step))
 
-    def true_distance(self, faired, other, flat_idx, window=2, tol=None):
+    def true_distance(self, faired, other, flat_idx, window=2, tol=None, verdict=False):
         """Two-sided true distance at flat grid indices ``flat_idx``.
 
         With ``tol``, the second Newton start is only tried where the first exceeds
         ``tol``, and values ``<= tol`` are upper bounds (the iterations stop there).
+        With ``verdict`` (and ``tol``) the distance from the faired points back to the
+        source is only measured where the source's distance to the faired surface is
+        within ``tol``: a value above ``tol`` is then one direction's, enough to refuse
+        the candidate.
         """
         if flat_idx.size == 0:
             return np.zeros(0)
         shape = self.points.shape[:2]
         i, j = np.unravel_index(flat_idx, shape)
         d_fs = self._one_way(faired, self.points, other, i, j, window, tol)
-        d_sf = self._one_way(self.source, other, self.points, i, j, window, tol)
+        back = d_fs <= tol if verdict else np.ones(d_fs.size, dtype=bool)
+        d_sf = np.zeros_like(d_fs)
+        if back.any():
+            d_sf[back] = self._one_way(self.source, other, self.points, i[back], j[back],
+                                       window, tol)
         return np.maximum(d_fs, d_sf)
 
     def _one_way(self, target, here, there, i, j, window, tol=None):

@@ -652,3 +652,23 @@ def test_a_screened_failure_leaves_the_search_grid_alone(blade):
     assert all(np.array_equal(fit.probe._feet[key], feet[key]) for key in feet)
     after = _blade_spaces(blade, 12, 12)
     assert np.array_equal(fit.trial(*after)[1], twin.trial(*after)[1])
+
+
+def test_a_refused_candidate_is_refused_again_without_a_measurement(blade, monkeypatch):
+    """Asking the screen for a refused candidate again returns the same refusal and
+    measures nothing: no new deviation measurement, no new Newton run."""
+    fit = _blade_fit(blade)
+    failing = _blade_spaces(blade, 4, 4)
+    first = fit.screened_trial(*failing)
+    assert first[1] is None
+    evaluations = fit.evaluations
+
+    def no_measurement(*args, **kwargs):
+        raise AssertionError("a refused candidate was measured again")
+
+    monkeypatch.setattr(fit, "_coarse_excess", no_measurement)
+    again = fit.screened_trial(*_blade_spaces(blade, 4, 4))
+    assert again[2] == first[2] and again[1] is None and fit.evaluations == evaluations
+    fit.pinned = True   # the same spaces with other borders are another candidate
+    with pytest.raises(AssertionError, match="measured again"):
+        fit.screened_trial(*failing)

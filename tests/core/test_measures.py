@@ -372,3 +372,26 @@ def test_fairness_summary_before_after():
     assert summary["bending_energy"]["after"] < summary["bending_energy"]["before"]
     assert summary["curvature_extrema"]["after"] < summary["curvature_extrema"]["before"]
     assert set(summary["inflections"]) == {"before", "after"}
+
+
+@given(seed=st.integers(0, 2**31 - 1), tol=st.sampled_from([0.005, 0.02, 0.08]))
+@settings(max_examples=15, deadline=None)
+def test_a_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(seed, tol):
+    """``verdict=True`` gives the two-sided value wherever the source's distance to the
+    candidate is within tol, and a value above tol (that one-sided distance) elsewhere:
+    the same samples exceed tol as with the full two-sided measure."""
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 9), indexing="ij")
+    pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
+    source = cf.make_surface(pts + rng.normal(0, 0.01, pts.shape))
+    fair = project_surface(source, target_space(source.u_space, 3), target_space(source.v_space, 2))
+    full, quick = M.SurfaceProbe(source), M.SurfaceProbe(source)
+    other, bound = full.bound(fair.surface)
+    idx = np.flatnonzero(bound.ravel() > tol)
+    both = full.true_distance(fair.surface, other, idx, tol=tol)
+    either = quick.true_distance(fair.surface, quick.bound(fair.surface)[0], idx, tol=tol,
+                                 verdict=True)
+    assert np.array_equal(both > tol, either > tol)
+    within = either <= tol
+    assert np.array_equal(either[within], both[within])
+    assert np.all(either[~within] <= both[~within])
