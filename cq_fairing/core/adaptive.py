@@ -842,7 +842,8 @@ class _SurfaceFit:
         if above.size == 0:
             return None
         largest = above[np.argsort(flat[above])[::-1][:SCREEN_SAMPLES]]
-        exact = probe.true_distance(faired, other, largest, tol=self.tol, verdict=True).max()
+        exact = probe.true_distance(faired, other, largest, window=0, tol=self.tol,
+                                    verdict=True).max()
         return float(exact) if exact > self.tol else None
 
 

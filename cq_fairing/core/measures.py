@@ -609,7 +609,7 @@ class SurfaceProbe:
         starts from the same parameter, or from the last foot (:meth:`_last_feet`) where
         that lies more than half a sample spacing away (the candidate slides along the
         source); where the result stays above ``tol`` it starts again from the nearest
-        ``there`` sample within ``window``.
+        ``there`` sample within ``window`` (with ``tol`` and ``window`` 0, it does not).
         """
         key = "source" if target is self.source else "faired"
         p = here[i, j]
@@ -630,7 +630,7 @@ class SurfaceProbe:
             u0[todo], v0[todo], d[todo] = closest_points_surface(
                 target, p[todo], u0[todo], v0[todo], stop_below=tol)
             todo = todo[d[todo] > tol]
-        if todo.size:
+        if todo.size and window:
             wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
             fu, fv, fd = closest_points_surface(target, p[todo], wu, wv, stop_below=tol)
             better = fd < d[todo]
