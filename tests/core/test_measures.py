@@ -379,7 +379,8 @@ def test_fairness_summary_before_after():
 def test_a_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(seed, tol):
     """``verdict=True`` gives the two-sided value wherever the source's distance to the
     candidate is within tol, and a value above tol (that one-sided distance) elsewhere:
-    the same samples exceed tol as with the full two-sided measure."""
+    the same samples exceed tol as with the full two-sided measure.  Without the second
+    Newton start (``window=0``) a value can only be larger."""
     rng = np.random.default_rng(seed)
     u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 9), indexing="ij")
     pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
@@ -395,3 +396,7 @@ def test_a_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(
     within = either <= tol
     assert np.array_equal(either[within], both[within])
     assert np.all(either[~within] <= both[~within])
+    first_start = M.SurfaceProbe(source)   # window 0: no second Newton start
+    once = first_start.true_distance(fair.surface, first_start.bound(fair.surface)[0], idx,
+                                     window=0, tol=tol, verdict=True)
+    assert np.all(once >= either) and np.array_equal(once[once <= tol], either[once <= tol])
