@@ -672,3 +672,26 @@ def test_a_refused_candidate_is_refused_again_without_a_measurement(blade, monke
     fit.pinned = True   # the same spaces with other borders are another candidate
     with pytest.raises(AssertionError, match="measured again"):
         fit.screened_trial(*failing)
+
+
+def test_fair_objective_leaves_pinned_borders_only_for_half_the_energy(blade, monkeypatch):
+    """At 0.02 the bump fixture's compact net has pinned borders.  The fair objective
+    keeps them (``FAIR_SWITCH = 0``), takes the free-border net's fairest growth
+    (``FAIR_SWITCH = inf``), or by default the free one only if its curvature-variation
+    energy (independent quadrature) is below half the pinned one's; every answer within
+    tol."""
+    import cq_fairing.core.adaptive as adaptive
+
+    lengths = net_lengths(blade.poles)
+
+    def fair(switch):
+        monkeypatch.setattr(adaptive, "FAIR_SWITCH", switch)
+        result = fair_surface_adaptive(blade, 0.02, objective="fair")
+        assert deviation(blade, result.surface).max <= 0.02
+        return (dict(result.table)["borders"],
+                _variation_energy_by_quadrature(result.surface, lengths), result.poles)
+
+    kept, switched, default = fair(0.0), fair(np.inf), fair(0.5)
+    assert kept[0] == "pinned" and switched[0] == "free"
+    expected = switched if switched[1] < 0.5 * kept[1] else kept
+    assert default[0] == expected[0] and np.array_equal(default[2], expected[2])
