@@ -65,7 +65,6 @@ __all__ = [
 DEVIATIONS = ("geometric", "parametric")
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
 BLOCK_SAMPLES = 65_536  # grid samples per block of rows when a probe does not hold its grid
-MERGED_STARTS = 512     # up to this many samples, both Newton starts run as one batch
 
 
 # -- samples and evaluation ---------------------------------------------------------------
@@ -627,11 +626,6 @@ class SurfaceProbe:
             return d
         d = _distance(there[i, j], p)
         todo = np.flatnonzero(d > tol)
-        if window and 0 < todo.size <= MERGED_STARTS:
-            u0[todo], v0[todo], d[todo] = self._first_start_within(
-                target, here, there, p, i, j, u0, v0, window, tol, todo)
-            self._keep(key, i, j, u0, v0)
-            return d
         if todo.size:
             u0[todo], v0[todo], d[todo] = closest_points_surface(
                 target, p[todo], u0[todo], v0[todo], stop_below=tol)
@@ -644,22 +638,6 @@ class SurfaceProbe:
             u0[k], v0[k], d[k] = fu[better], fv[better], fd[better]
         self._keep(key, i, j, u0, v0)
         return d
-
-    def _first_start_within(self, target, here, there, p, i, j, u0, v0, window, tol, todo):
-        """Feet and distances of ``p[todo]`` as the two runs of :meth:`_one_way` give them
-        (from ``(u0, v0)``, stopping within ``tol``; where that stays above ``tol``, the
-        window start's if smaller), in one Newton run over both sets of starts: each
-        point iterates on its own, so the values are the same (to rounding, as in
-        :meth:`_from_both_starts`), in about half the vector operations' calls.  For a few hundred points, where calls set the time (a failing
-        candidate's largest bounds mostly stay above tol and need both runs)."""
-        n = todo.size
-        wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
-        fu, fv, fd = closest_points_surface(
-            target, np.concatenate([p[todo], p[todo]]), np.concatenate([u0[todo], wu]),
-            np.concatenate([v0[todo], wv]), stop_below=tol)
-        second = (fd[:n] > tol) & (fd[n:] < fd[:n])
-        pick = np.where(second, np.arange(n, 2 * n), np.arange(n))
-        return fu[pick], fv[pick], fd[pick]
 
     def _from_both_starts(self, target, here, there, p, i, j, u0, v0, window):
         """Feet and distances of ``p`` on ``target`` from both starts (``(u0, v0)`` and the

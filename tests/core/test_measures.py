@@ -402,37 +402,3 @@ def test_a_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(
                                      window=0, tol=tol, verdict=True)
     assert np.all(once >= either * (1 - 1e-12))
     assert np.allclose(once[once <= tol], either[once <= tol], rtol=1e-12, atol=0.0)
-
-
-@given(seed=st.integers(0, 2**31 - 1), tol=st.sampled_from([0.003, 0.01, 0.04]))
-@settings(max_examples=15, deadline=None)
-def test_both_newton_starts_in_one_batch_give_the_two_runs_values(seed, tol):
-    """Up to ``MERGED_STARTS`` samples (here the 256 largest bounds), the first start and
-    the window start run as one Newton batch: the same distances and remembered feet as
-    the two separate runs, to rounding (each point iterates on its own; the vector
-    kernels may round a point's last bit differently in another batch), and the same
-    samples above tol."""
-    rng = np.random.default_rng(seed)
-    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 9), indexing="ij")
-    pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
-    source = cf.make_surface(pts + rng.normal(0, 0.01, pts.shape))
-    fair = project_surface(source, target_space(source.u_space, 3), target_space(source.v_space, 2))
-
-    def measured(merged):
-        kept, M.MERGED_STARTS = M.MERGED_STARTS, merged
-        try:
-            probe = M.SurfaceProbe(source, keep_feet=True)
-            other, bound = probe.bound(fair.surface)
-            flat = bound.ravel()
-            idx = np.flatnonzero(flat > tol)
-            idx = idx[np.argsort(flat[idx])[::-1][:256]]
-            return probe.true_distance(fair.surface, other, idx, tol=tol), probe._feet
-        finally:
-            M.MERGED_STARTS = kept
-
-    (together, feet), (apart, apart_feet) = measured(512), measured(0)
-    assert together.size > 0
-    assert np.allclose(together, apart, rtol=1e-12, atol=0.0)
-    assert np.array_equal(together > tol, apart > tol)
-    assert feet.keys() == apart_feet.keys()
-    assert all(np.allclose(feet[key], apart_feet[key], rtol=0.0, atol=1e-9) for key in feet)
