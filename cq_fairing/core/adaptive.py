@@ -1015,7 +1015,10 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     objective : {"compact", "faithful", "fair"}
         As for :func:`fair_curve_adaptive`; ``"fair"`` grows the compact net by the
         ``FAIR_GROWTHS`` spans per direction and keeps the net of least
-        curvature-variation energy (:func:`_fairest_grown`).
+        curvature-variation energy (:func:`_fairest_grown`); with ``borders="auto"``
+        and a pinned compact net, the free-border net grown the same way replaces it
+        when its energy is below ``FAIR_SWITCH`` (half) of the pinned one's
+        (:func:`_fairest_of`).
     polish : bool
         Spend the remaining tolerance on the curvature-variation energy
         (:func:`variation_energy_matrix`, penalised projection, then span-weighted

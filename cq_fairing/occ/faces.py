@@ -180,7 +180,8 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
         ``"faithful"``: stop where the residual reaches the net's estimated noise level
         (more poles, closer to the noise-free shape), within ``tol``; ``"fair"``: the
-        fairest of the compact net and that net with up to two more spans per direction
+        fairest of the compact net and that net with up to two more spans per direction,
+        pinned borders given up for a free-border net with half the energy or less
         (:func:`cq_fairing.core.adaptive.fair_surface_adaptive`).
     convert : bool, optional
         Convert a non-B-spline face to NURBS (``BRepBuilderAPI_NurbsConvert``, exact)
