@@ -595,12 +595,14 @@ class SurfaceProbe:
         shape = self.points.shape[:2]
         i, j = np.unravel_index(flat_idx, shape)
         d_fs = self._one_way(faired, self.points, other, i, j, window, tol)
-        back = d_fs <= tol if verdict else np.ones(d_fs.size, dtype=bool)
-        d_sf = np.zeros_like(d_fs)
+        if not verdict:
+            return np.maximum(d_fs, self._one_way(self.source, other, self.points, i, j,
+                                                  window, tol))
+        back = d_fs <= tol
         if back.any():
-            d_sf[back] = self._one_way(self.source, other, self.points, i[back], j[back],
-                                       window, tol)
-        return np.maximum(d_fs, d_sf)
+            d_fs[back] = np.maximum(d_fs[back], self._one_way(
+                self.source, other, self.points, i[back], j[back], window, tol))
+        return d_fs
 
     def _one_way(self, target, here, there, i, j, window, tol=None):
         """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid).
