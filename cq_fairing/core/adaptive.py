@@ -735,23 +735,26 @@ class _SurfaceFit:
         p = self.surface.poles
         net = np.zeros((tu.dimension, tv.dimension, p.shape[-1]))
         half = self._half(tu)
+        along_u = self._edge_factors(tu, lam)
         for j in (0, -1):
-            net[:, j] = self._edge(tu, half[:, j], p[[0, -1], j], lam)
+            net[:, j] = _held_solve(along_u, half[:, j], p[[0, -1], j])
         bv = self._cross_v(tv)
+        along_v = self._edge_factors(tv, lam)
         for i in (0, -1):
-            net[i, :] = self._edge(tv, bv @ p[i], p[i, [0, -1]], lam)
+            net[i, :] = _held_solve(along_v, bv @ p[i], p[i, [0, -1]])
         return net
 
-    def _edge(self, space, moments, ends, lam):
-        """Coefficients on ``space`` with ``ends`` kept; ``moments`` = <Phi_T|Phi_S> c."""
-        x = np.empty((space.dimension,) + ends.shape[1:])
-        x[0], x[-1] = ends
+    def _edge_factors(self, space, lam):
+        """:func:`_held_ends` of a border row's matrix on ``space``, shared by its two
+        edges: the Gram matrix (kept per space), plus ``lam`` times the curves' scaled
+        :math:`G^{(3)}` (kept per space) when ``lam > 0``; ``None`` when ``space`` has
+        only its two end functions."""
         if space.dimension <= 2:
-            return x
-        lu, columns = (self._inner(space) if lam <= 0.0 else
-                       _held_ends(self._gram(space)[0] + lam * _scaled_energy(space, 3)))
-        x[1:-1] = lu.solve(moments[1:-1] - columns @ ends)
-        return x
+            return None
+        if lam <= 0.0:
+            return self._inner(space)
+        energy = self._cached(("edge energy", space.key), lambda: _scaled_energy(space, 3))
+        return _held_ends(self._gram(space)[0] + lam * energy)
 
     def _interior(self, tu, tv, rhs, border, lam, weights=None):
         r"""Interior net of the (penalised, weighted) projection with the border rows held:
@@ -846,6 +849,17 @@ class _SurfaceFit:
         exact = probe.true_distance(faired, other, largest, window=0, tol=self.tol,
                                     verdict=True).max()
         return float(exact) if exact > self.tol else None
+
+
+def _held_solve(factors, moments, ends):
+    """Coefficients with the two ``ends`` kept, ``moments`` = <Phi_T|Phi_S> c: the
+    interior solved with ``factors`` (:func:`_held_ends`; ``None``: ends only)."""
+    x = np.empty((moments.shape[0],) + ends.shape[1:])
+    x[0], x[-1] = ends
+    if factors is not None:
+        lu, columns = factors
+        x[1:-1] = lu.solve(moments[1:-1] - columns @ ends)
+    return x
 
 
 def _held_ends(matrix):
