@@ -801,8 +801,14 @@ class _SurfaceFit:
 
     def trial(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
         """``(faired, per-sample deviation on the search grid, its max)``."""
+        return self._measured(self._faired(tu, tv, lam, weights, edge_lam))
+
+    def _faired(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
+        """The candidate surface: :meth:`project` onto ``tu x tv``."""
         net = self.project(tu, tv, lam, weights, edge_lam)
-        faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+        return BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+
+    def _measured(self, faired):
         values = self.errors(faired)
         return faired, values, float(values.max())
 
@@ -826,15 +832,13 @@ class _SurfaceFit:
         key = (tu.key, tv.key, lam, self.pinned)
         if key in self._refused:
             return self._refused[key]
-        net = self.project(tu, tv, lam)
-        faired = BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+        faired = self._faired(tu, tv, lam)
         excess = self._coarse_excess(faired)
         if excess is not None:
             self.evaluations += 1
             self._refused[key] = (faired, None, excess)
             return self._refused[key]
-        values = self.errors(faired)
-        return faired, values, float(values.max())
+        return self._measured(faired)
 
     def _coarse_excess(self, faired):
         """A true distance above tol among the ``SCREEN_SAMPLES`` largest bounds of the
