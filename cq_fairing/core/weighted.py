@@ -103,7 +103,12 @@ class SpanWeightedProjection:
         p = source.poles
         columns = self.v.first_source[:, None] + np.arange(source.v_degree + 1)
         gathered = p[:, columns]                     # (k_su, n_sv, p_sv + 1, d)
-        self._along_v = np.einsum("ated,tje->atjd", gathered, self.v.cross)
+        along_v = np.einsum("ated,tje->atjd", gathered, self.v.cross)
+        self._net_shape = along_v.shape[2:]
+        # contiguous (a copy: 6x faster than einsum writing C order), so that the rows of
+        # consecutive source functions are one view in :meth:`_source_rows`
+        self._along_v = np.ascontiguousarray(along_v).reshape(along_v.shape[:2] + (-1,))
+        self._consecutive = bool(np.all(np.diff(self.u.first_source) == 1))
         self._pattern = self._band_pattern()
 
     def _band_pattern(self):
@@ -130,8 +135,16 @@ class SpanWeightedProjection:
 
     def moments(self, weights):
         r""":math:`\sum w_{\sigma\tau} (X_u^\sigma\otimes X_v^\tau) P`, shape (k_u, k_v, d)."""
-        flat = self._along_v.reshape(self._along_v.shape[:2] + (-1,))
-        summed = np.stack([np.einsum("st,stq->sq", weights, flat[self.u.first_source + c])
+        summed = np.stack([np.einsum("st,stq->sq", weights, self._source_rows(c))
                            for c in range(self.u.cross.shape[2])], axis=1)
         out = np.einsum("sic,scq->iq", self.u.cross, summed)
-        return out.reshape((self.u.k,) + self._along_v.shape[2:])
+        return out.reshape((self.u.k,) + self._net_shape)
+
+    def _source_rows(self, c):
+        r""":math:`V[f_\sigma + c, \tau]` for every source u span :math:`\sigma`, shape
+        (n_su, n_sv, k_tv d): a view where the first functions of consecutive spans are
+        consecutive (simple interior knots), else a gathered copy."""
+        first = self.u.first_source
+        if self._consecutive:
+            return self._along_v[first[0] + c:first[-1] + c + 1]
+        return self._along_v[first + c]
