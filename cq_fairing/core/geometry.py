@@ -270,12 +270,18 @@ def _grid(u_space, v_space, net, u, v, nu, nv):
     dense BLAS product is up to 3x faster alone for nets of a few poles, but on two cores
     its threads slowed the rest of a fit down more than that.
     """
-    mu = u_space.collocation(u, nu)
-    mv = v_space.collocation(v, nv)
+    return grid_product(u_space.collocation(u, nu), v_space.collocation(v, nv), net)
+
+
+def grid_product(mu, mv, net):
+    r""":math:`M_u\,P\,M_v^T` per coordinate for collocation matrices ``mu`` (N_u, k_u)
+    and ``mv`` (N_v, k_v) and a net (k_u, k_v, d): the grid of :func:`_grid`, for
+    callers that keep the collocation matrices of the spaces they revisit."""
     ku, kv, d = net.shape
-    rows = (mu @ net.reshape(ku, kv * d)).reshape(len(u), kv, d)
-    planes = mv @ rows.transpose(1, 2, 0).reshape(kv, d * len(u))
-    return planes.reshape(len(v), d, len(u)).transpose(2, 0, 1)
+    n_u, n_v = mu.shape[0], mv.shape[0]
+    rows = (mu @ net.reshape(ku, kv * d)).reshape(n_u, kv, d)
+    planes = mv @ rows.transpose(1, 2, 0).reshape(kv, d * n_u)
+    return planes.reshape(n_v, d, n_u).transpose(2, 0, 1)
 
 
 def _rational_derivative(evaluate, homogeneous, u, nu):

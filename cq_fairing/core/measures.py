@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
-from .geometry import BSplineCurve, BSplineSurface, extent
+from .geometry import BSplineCurve, BSplineSurface, extent, grid_product
 from .gram import gram_matrix, quadrature_rule
 from .spaces import basis_functions, find_spans, require_in_domain
 
@@ -65,6 +65,7 @@ __all__ = [
 DEVIATIONS = ("geometric", "parametric")
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
 BLOCK_SAMPLES = 65_536  # grid samples per block of rows when a probe does not hold its grid
+COLLOCATIONS = 128     # collocation matrices a probe keeps (per target space and axis)
 
 
 # -- samples and evaluation ---------------------------------------------------------------
@@ -523,6 +524,7 @@ class SurfaceProbe:
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._feet = {}
         self._source_blocks = None
+        self._collocations = {}
 
     def _keep(self, key, i, j, u, v):
         """Remember the feet ``(u, v)`` of samples ``(i, j)`` on the ``"source"`` or on
@@ -566,11 +568,29 @@ class SurfaceProbe:
         """Faired points on the grid (a :class:`_LazyGrid` without ``hold_grid``) and the
         same-parameter distance at every sample, shape (len(u), len(v))."""
         if self.hold_grid:
-            other = faired.evaluate_grid(self.u, self.v)
+            other = self._grid_of(faired)
             return other, _distance(other, self.points)
         blocks = self._bound_blocks(faired)
         return _LazyGrid(faired, self.u, self.v), np.concatenate(
             [blocks.block(b) for b in range(blocks.n_blocks)])
+
+    def _grid_of(self, faired):
+        """``faired.evaluate_grid(u, v)``, the same values, with the collocation matrices
+        kept per space (at most ``COLLOCATIONS``): the adaptive search measures about
+        three candidates per distinct target space."""
+        if faired.is_rational:
+            return faired.evaluate_grid(self.u, self.v)
+        return grid_product(self._collocation(0, faired.u_space),
+                            self._collocation(1, faired.v_space), faired.poles)
+
+    def _collocation(self, axis, space):
+        """Collocation matrix of ``space`` at this grid's ``axis`` parameters, kept."""
+        key = (axis, space.key)
+        if key not in self._collocations:
+            if len(self._collocations) >= COLLOCATIONS:
+                self._collocations.clear()
+            self._collocations[key] = space.collocation((self.u, self.v)[axis])
+        return self._collocations[key]
 
     def _bound_blocks(self, faired):
         """:class:`_BoundBlocks` of ``faired`` on this grid, about ``BLOCK_SAMPLES`` per

@@ -137,6 +137,30 @@ def test_a_probe_without_its_grid_measures_what_one_holding_it_does(seed, block)
                                                           same_k)
 
 
+@given(seed=st.integers(0, 2**31 - 1), kept=st.sampled_from([1, 3, 128]))
+@settings(max_examples=10, deadline=None)
+def test_a_probe_keeping_collocations_evaluates_as_the_surface_does(seed, kept):
+    """The probe's grid of each candidate (collocation matrices kept per target space,
+    the store cleared when full) is ``evaluate_grid``'s bit for bit, for candidates
+    asked in any order and again."""
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(np.linspace(0, 1, 14), np.linspace(0, 1, 11), indexing="ij")
+    pts = np.stack([u * 4, v * 3, 0.4 * np.sin(3 * u) * np.cos(2 * v)], axis=2)
+    source = cf.make_surface(pts + rng.normal(0, 0.01, pts.shape))
+    candidates = [project_surface(source, target_space(source.u_space, a),
+                                  target_space(source.v_space, b)).surface
+                  for a, b in rng.integers(2, 5, size=(6, 2))]
+    probe = M.SurfaceProbe(source)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(M, "COLLOCATIONS", kept)
+        for c in candidates + candidates[::-1]:
+            other, bound = probe.bound(c)
+            expected = c.evaluate_grid(probe.u, probe.v)
+            assert np.array_equal(other, expected)
+            assert np.array_equal(bound, M._distance(expected, probe.points))
+            assert len(probe._collocations) <= kept
+
+
 class _ArrayBlocks:
     """An array served a block of ``step`` rows at a time, as ``_BoundBlocks`` serves a
     bound."""
