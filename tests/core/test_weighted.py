@@ -63,6 +63,11 @@ def test_weighted_normal_equations_match_a_dense_quadrature(source_degrees, targ
     matrix = np.einsum("ui,uk,uv,vj,vl->ijkl", bu, bu, omega, bv, bv)
     moments = np.einsum("ui,uv,vj,uvd->ijd", bu, omega, bv, values)
 
+    for direction in (projection.u, projection.v):   # every cross integral in its window
+        span, function = np.nonzero(np.abs(direction.cross).sum(axis=2))
+        offset = function - direction.start[span]
+        assert offset.min() >= 0 and offset.max() < direction.width <= direction.k
+
     n = kt[0] * kt[1]
     assert np.allclose(projection.matrix(weights).toarray(), matrix.reshape(n, n),
                        rtol=1e-10, atol=1e-12 * np.abs(matrix).max())
