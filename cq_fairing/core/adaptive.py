@@ -538,8 +538,9 @@ def _compact_curve(fit, family, check, cache, top, start, tol):
         what = ("give a non-positive weight" if np.isinf(cache[top][2])
                 else f"deviate by {cache[top][2]:.4g}")
         raise ToleranceNotMetError(
-            f"no adaptive target within tol={tol:g}: the source's own knots at degree "
-            f"{fit.degree} {what}; raise the tolerance or keep the degree.",
+            f"no adaptive target within tol={tol:g}: simple knots on the source's "
+            f"breakpoints at degree {fit.degree} {what}; raise the tolerance or keep the "
+            f"degree{_multiple_knots_hint(fit.curve.space)}.",
             tolerance=tol, best_deviation=cache[top][2])
     n = _scan_below(_bisect_count(fails, n, check), check)
     return _reduce(family(n), cache[n], fit.probe.u, fit.tol, fit.degree, fit.trial)
@@ -1327,8 +1328,9 @@ def _compact_net(fit, family, dens, tops, tol):
     top_result = fit.trial(*full)
     if top_result[2] > fit.tol:
         raise ToleranceNotMetError(
-            f"no adaptive target within tol={tol:g}: the source's own knots at degrees "
-            f"{fit.degrees} deviate by {top_result[2]:.4g}; raise the tolerance.",
+            f"no adaptive target within tol={tol:g}: simple knots on the source's "
+            f"breakpoints at degrees {fit.degrees} deviate by {top_result[2]:.4g}; raise "
+            f"the tolerance{_multiple_knots_hint(fit.surface.u_space, fit.surface.v_space)}.",
             tolerance=tol, best_deviation=top_result[2])
     starts = [_diagonal_start(fit, family, steps, top_result),
               _axis_start(fit, full, top_result, dens, tops, fit.degrees, (0, 1)),
@@ -1342,6 +1344,18 @@ def _compact_net(fit, family, dens, tops, tol):
         if best is None or _net_size(spaces) < _net_size(best[0]):
             best = (spaces, result)
     return best
+
+
+def _multiple_knots_hint(*spaces):
+    """Advice for a source whose ``spaces`` have multiple interior knots, so that its own
+    space has more poles than any adaptive target (simple knots on its breakpoints);
+    else ``""``."""
+    if all(s.dimension - s.degree == s.n_spans for s in spaces):
+        return ""
+    poles = " x ".join(str(s.dimension) for s in spaces)
+    spans = " x ".join(str(s.n_spans) for s in spaces)
+    return (f" or use method 'wavelet', whose uniform targets reach the source's own "
+            f"space: its {poles} poles sit on {spans} spans (multiple knots)")
 
 
 def _pinned_below(fit, spaces):

@@ -455,6 +455,31 @@ def test_unreachable_tolerance_raises(seed):
         fair_curve_adaptive(seed.curve, 1e-9, target_degree=1)
 
 
+def test_a_refusal_names_the_wavelet_targets_for_a_source_with_multiple_knots():
+    """A bicubic source with a crease and a cubic with a corner (a triple knot: C0 at
+    0.5) are out of reach of every adaptive target (simple knots on the breakpoints): the
+    refusal says so and names the uniform targets, which reach the source's own space.  A source with simple
+    knots refused at an unreachable tol gets no such hint."""
+    u = np.linspace(0.0, 1.0, 7)
+    poles = np.stack(np.meshgrid(u, np.linspace(0.0, 1.0, 4), indexing="ij"), axis=-1)
+    height = np.abs(u - 0.5)[:, None] * np.ones((1, 4))
+    creased = cf.make_surface(np.concatenate([poles, height[..., None]], axis=-1),
+                              u_knots=[0, 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1, 1])
+    with pytest.raises(ToleranceNotMetError) as refused:
+        fair_surface_adaptive(creased, 1e-4)
+    assert "method 'wavelet'" in str(refused.value)
+    assert "7 x 4 poles sit on 2 x 1 spans (multiple knots)" in str(refused.value)
+    corner = cf.make_curve(np.stack([u, np.abs(u - 0.5)], axis=1),
+                           [0, 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1, 1], 3)
+    with pytest.raises(ToleranceNotMetError) as refused:
+        fair_curve_adaptive(corner, 1e-4)
+    assert "its 7 poles sit on 2 spans (multiple knots)" in str(refused.value)
+    smooth = cf.make_surface(np.random.default_rng(2).normal(size=(9, 8, 3)), degree=(5, 5))
+    with pytest.raises(ToleranceNotMetError) as refused:
+        fair_surface_adaptive(smooth, 1e-9)
+    assert "wavelet" not in str(refused.value)
+
+
 def test_rational_surface_is_refused():
     poles = np.random.default_rng(1).normal(size=(6, 6, 3))
     surface = cf.make_surface(poles, weights=np.full((6, 6), 2.0))
