@@ -330,7 +330,7 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
     passes the check wins.  The OCCT check runs on the search grid plus the centres of
     its cells.
     """
-    measured = []
+    measured, refusals = [], []
     check = None
     for criterion, goal in criteria:
         try:
@@ -338,6 +338,7 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
                                              criterion)
         except ToleranceNotMetError as exc:
             measured.append(exc.best_deviation)
+            refusals.append((goal, str(exc)))
             continue
         if _is_identity(source, target, degree):
             return _unchanged(face, info, surface, "the finest admissible target is the "
@@ -361,10 +362,15 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
         measured.append(deviation["max"])
     best = min(d for d in measured if d is not None) if any(
         d is not None for d in measured) else float("inf")
+    where = "by OCCT's measure"
+    if len(refusals) == len(criteria):   # no candidate reached OCCT's check
+        if isinstance(criteria[0][0], AdaptiveTarget):   # the core's reason, at tol itself
+            raise ToleranceNotMetError(max(refusals, key=lambda r: r[0])[1], tolerance=tol,
+                                       best_deviation=best)
+        where = "by the search's estimate (no candidate reached OCCT's check)"
     raise ToleranceNotMetError(
-        f"no target keeps this face within tol={tol:g} by OCCT's measure (best found "
-        f"{best:.4g}); raise the tolerance or leave the face as is.",
-        tolerance=tol, best_deviation=best)
+        f"no target keeps this face within tol={tol:g} {where}, best found {best:.4g}; "
+        "raise the tolerance or leave the face as is.", tolerance=tol, best_deviation=best)
 
 
 def _keeps_every_pole(source, target, faired):

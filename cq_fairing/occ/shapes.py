@@ -31,8 +31,8 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
-from .convert import (as_shape, finish_edges, indexed_faces, replace_surface, surface_to_face,
-                      to_geom_surface)
+from .convert import (as_shape, face_info, finish_edges, indexed_faces, replace_surface,
+                      surface_to_face, to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
 from .parallel import FacePool
 
@@ -331,18 +331,36 @@ def fair_one_face(index, face, options):
     (``Standard_Failure`` and its kinds, see :func:`is_occt_error`) or a
     ``numpy.linalg.LinAlgError`` gives status ``'tolerance-not-met'`` (for
     :class:`~cq_fairing.errors.ToleranceNotMetError`) or ``'failed'`` with a one-line
-    message; the face is kept.  Any other exception is a bug and propagates.
+    message; the face is kept, and its report keeps the face's type, its poles (before and
+    after alike: the output holds the original) and the time spent.  Any other exception
+    is a bug and propagates.
     """
+    start = time.perf_counter()
     try:
         report = fair_face(face, **options)
     except Exception as exc:
         if not isinstance(exc, (FairingError, np.linalg.LinAlgError)) and not is_occt_error(exc):
             raise
         status = "tolerance-not-met" if isinstance(exc, ToleranceNotMetError) else "failed"
-        report = FaceFairReport(face, status, _one_line(exc), original=face,
-                                tolerance=options.get("tol"))
+        info = _info_if_readable(face)
+        poles = (info.n_poles_u, info.n_poles_v) if info and info.n_poles_u else None
+        report = FaceFairReport(face, status, _one_line(exc), original=face, info=info,
+                                poles_before=poles, poles_after=poles,
+                                tolerance=options.get("tol"),
+                                seconds=time.perf_counter() - start)
     report.index = index
     return report
+
+
+def _info_if_readable(face):
+    """:func:`~cq_fairing.occ.face_info` of a face whose fairing failed, ``None`` when
+    OCCT cannot read it either."""
+    try:
+        return face_info(face)
+    except Exception as exc:
+        if not is_occt_error(exc):
+            raise
+        return None
 
 
 def is_occt_error(exc):
