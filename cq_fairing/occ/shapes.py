@@ -241,8 +241,7 @@ class _Job:
         kind, payload = outcome
         original = self.originals[index]
         if kind == "failed":
-            return FaceFairReport(original, "failed", payload, original=original, index=index,
-                                  tolerance=self.tol[index])
+            return kept_face_report(original, "failed", payload, index, self.tol[index])
         report = FaceFairReport(original, original=original, **payload)
         if report.faired:
             report.face = surface_to_face(report.surface, original)
@@ -257,10 +256,10 @@ class _Job:
         copy, gaps, invalid = self._build_once()
         if invalid:
             for index in invalid:
-                original = self.originals[index]
-                self.reports[index] = FaceFairReport(
-                    original, "failed", "the faired face did not pass BRepCheck inside the "
-                    "shape; kept the original surface", original=original, index=index)
+                self.reports[index] = kept_face_report(
+                    self.originals[index], "failed", "the faired face did not pass BRepCheck "
+                    "inside the shape; kept the original surface", index, self.tol[index],
+                    self.reports[index].seconds)
             copy, gaps, _ = self._build_once()
         return copy, gaps
 
@@ -317,11 +316,10 @@ class _Job:
         return sorted(out)
 
     def _restore(self, index, max_gap):
-        original = self.originals[index]
-        self.reports[index] = FaceFairReport(
-            original, "unchanged", f"kept the original surface: fairing opened a gap larger "
-            f"than max_gap={max_gap:g} along a shared edge even at tol={self.tol[index]:g}",
-            original=original, index=index)
+        self.reports[index] = kept_face_report(
+            self.originals[index], "unchanged", f"kept the original surface: fairing opened "
+            f"a gap larger than max_gap={max_gap:g} along a shared edge even at "
+            f"tol={self.tol[index]:g}", index, self.tol[index], self.reports[index].seconds)
 
 
 def fair_one_face(index, face, options):
@@ -342,14 +340,21 @@ def fair_one_face(index, face, options):
         if not isinstance(exc, (FairingError, np.linalg.LinAlgError)) and not is_occt_error(exc):
             raise
         status = "tolerance-not-met" if isinstance(exc, ToleranceNotMetError) else "failed"
-        info = _info_if_readable(face)
-        poles = (info.n_poles_u, info.n_poles_v) if info and info.n_poles_u else None
-        report = FaceFairReport(face, status, _one_line(exc), original=face, info=info,
-                                poles_before=poles, poles_after=poles,
-                                tolerance=options.get("tol"),
-                                seconds=time.perf_counter() - start)
+        report = kept_face_report(face, status, _one_line(exc), tolerance=options.get("tol"),
+                                  seconds=time.perf_counter() - start)
     report.index = index
     return report
+
+
+def kept_face_report(original, status, message, index=None, tolerance=None, seconds=0.0):
+    """:class:`FaceFairReport` of a face kept as it was (refused, failed, or restored):
+    its type, its poles (before and after alike: the output holds the original) and the
+    time spent on it."""
+    info = _info_if_readable(original)
+    poles = (info.n_poles_u, info.n_poles_v) if info and info.n_poles_u else None
+    return FaceFairReport(original, status, message, original=original, info=info,
+                          poles_before=poles, poles_after=poles, tolerance=tolerance,
+                          seconds=seconds, index=index)
 
 
 def _info_if_readable(face):
