@@ -21,7 +21,7 @@ from OCP.BRepTools import BRepTools
 from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
 from OCP.Extrema import Extrema_GenLocateExtPS
 from OCP.GeomAdaptor import GeomAdaptor_Surface
-from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.TopAbs import TopAbs_IN, TopAbs_ON, TopAbs_REVERSED
 from OCP.gp import gp_Pnt, gp_Pnt2d
 
@@ -174,9 +174,15 @@ def _project(surface, points, uv, use_global):
 
     ``Extrema_GenLocateExtPS`` (Newton from the sample's parameters) for every point;
     with ``use_global`` also ``GeomAPI_ProjectPointOnSurf``, keeping the nearer point.
-    Where Newton fails the same-parameter point is used (an upper bound).
+    Where Newton fails, the nearest of the same-parameter point and the nearest points of
+    the four border curves (:class:`_Borders`) is used: the nearest point of a bounded
+    patch that is no orthogonal projection lies on its border (a candidate that slid
+    along the source: on a testtoler strip face Newton failed at a sample 5.2 from the
+    faired surface, whose same-parameter distance is 15.1).  Every candidate is a point
+    of the surface, so the distance is never below the true one.
     """
     adaptor = GeomAdaptor_Surface(surface)
+    borders = _Borders(surface)
     projector = None
     if use_global:
         s0, s1, t0, t1 = surface.Bounds()
@@ -188,7 +194,10 @@ def _project(surface, points, uv, use_global):
         p = gp_Pnt(float(x), float(y), float(z))
         local = Extrema_GenLocateExtPS(adaptor)
         local.Perform(p, float(uv[k, 0]), float(uv[k, 1]))
-        q = local.Point().Value() if local.IsDone() else surface.Value(*map(float, uv[k]))
+        if local.IsDone():
+            q = local.Point().Value()
+        else:
+            q = borders.nearer(p, surface.Value(*map(float, uv[k])))
         if projector is not None:
             projector.Perform(p)
             if projector.NbPoints() > 0 and projector.LowerDistance() < p.Distance(q):
@@ -196,3 +205,31 @@ def _project(surface, points, uv, use_global):
         distance[k] = p.Distance(q)
         projected[k] = (q.X(), q.Y(), q.Z())
     return distance, projected
+
+
+class _Borders:
+    """The four border curves of a bounded surface (iso-curves at its parameter bounds),
+    built on first use."""
+
+    def __init__(self, surface):
+        self.surface = surface
+        self._curves = None
+
+    def nearer(self, p, q):
+        """The nearest to ``p`` of ``q`` and of each border curve's orthogonal projections
+        and end points (the patch's corners)."""
+        if self._curves is None:
+            s0, s1, t0, t1 = self.surface.Bounds()
+            self._curves = [self.surface.UIso(s0), self.surface.UIso(s1),
+                            self.surface.VIso(t0), self.surface.VIso(t1)]
+        best, best_distance = q, p.Distance(q)
+        for curve in self._curves:
+            candidates = [curve.Value(curve.FirstParameter()), curve.Value(curve.LastParameter())]
+            projection = GeomAPI_ProjectPointOnCurve(p, curve)
+            if projection.NbPoints() > 0:
+                candidates.append(projection.NearestPoint())
+            for point in candidates:
+                if p.Distance(point) < best_distance:
+                    best, best_distance = point, p.Distance(point)
+        return best
+

@@ -119,3 +119,29 @@ def test_a_face_the_adaptive_target_cannot_reduce_is_kept_unchanged():
     assert report.status == "unchanged"
     assert "nothing to reduce" in report.message
     assert report.face.IsSame(face)
+
+
+def test_a_sample_whose_nearest_point_is_on_the_faired_border_is_measured_there(real):
+    """Face 51 of the testtoler strip (138 x 9 poles of degree 5): the core's adaptive net
+    is within the command line's default tol (12.50 of 12.68, two-sided), but the faired patch slides
+    along the source, and at samples past its end OCCT's Newton from the sample's
+    parameters finds no orthogonal projection; the same-parameter distance there is 15.1.
+    The check takes the nearest points of the patch's border curves there: the face is
+    faired, and every sample's distance is at most that of the nearest point of a dense
+    grid on the faired patch (both are distances to points of it)."""
+    from cq_fairing.occ import face_to_surface
+    from cq_fairing.occ.convert import indexed_faces
+    from cq_fairing.occ.faces import default_tolerance
+
+    shape = real("testtoler.brep")
+    tol = default_tolerance(shape)   # the command line's: 1e-3 of the model's size, 12.68
+    report = fair_face(indexed_faces(shape)[50], tol=tol, method="adaptive", details=False)
+    assert report.status == "faired" and report.max_deviation <= tol
+    samples = report.deviation
+    worst = np.argsort(samples["parametric"] - samples["distance"])[-20:]  # moved the most
+    faired = face_to_surface(report.face)[0]
+    (u0, u1), (v0, v1) = faired.u_space.domain, faired.v_space.domain
+    grid = faired.evaluate_grid(np.linspace(u0, u1, 1200), np.linspace(v0, v1, 300))
+    nearest = np.array([np.linalg.norm(grid - p, axis=-1).min() for p in samples["points"][worst]])
+    assert np.all(samples["distance"][worst] <= nearest + 1e-9)
+    assert samples["parametric"][worst].max() > tol   # the same-parameter bound alone fails
