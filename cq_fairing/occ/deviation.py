@@ -96,9 +96,11 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         ``"local"``: OCCT's Newton projection (``Extrema_GenLocateExtPS``) started at the
         sample's own parameters, about 10 us a point; ``"global"``:
         ``GeomAPI_ProjectPointOnSurf`` over the whole surface (about 1 ms a point), also
-        capped by the local result.  Every distance returned is the length to an actual
-        point of the faired surface, so it is never below the true distance: a
-        tolerance verified with ``"local"`` holds.
+        capped by the local result.  Either way the largest distances are then measured
+        again with ``GeomAPI_ProjectPointOnSurf`` and the border curves, down to the
+        first that stays the largest (:func:`_refine_largest`).  Every distance returned
+        is the length to an actual point of the faired surface, so it is never below the
+        true distance: a tolerance verified with ``"local"`` holds.
 
     Returns
     -------
@@ -137,11 +139,12 @@ def deviation_on_grid(original_face, faired_face, grid, projection="local", refe
     uv, points, normals = reference or reference_samples(original_face, grid)
     faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
     parametric = np.linalg.norm(faired_points - points, axis=1)
-    distance, projected = _project(BRep_Tool.Surface_s(faired_face), points, uv,
-                                   projection == "global")
+    surface = BRep_Tool.Surface_s(faired_face)
+    distance, projected = _project(surface, points, uv, projection == "global")
     closer = parametric < distance
     distance[closer] = parametric[closer]
     projected[closer] = faired_points[closer]
+    _refine_largest(surface, points, distance, projected)
     sign = np.sign(np.einsum("ij,ij->i", projected - points, normals))
     return {
         "uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
@@ -205,6 +208,37 @@ def _project(surface, points, uv, use_global):
         distance[k] = p.Distance(q)
         projected[k] = (q.X(), q.Y(), q.Z())
     return distance, projected
+
+
+def _refine_largest(surface, points, distance, projected):
+    """Measure the largest ``distance`` values again, in place, until the largest is one
+    measured again.
+
+    Newton from a sample's parameters can converge to an extremum that is not the
+    nearest point (the terrain's fair fit: 12.81 at a sample 10.06 from the faired
+    surface, whose tol is 11.58).  From the largest down, each sample takes the nearer
+    of its point, ``GeomAPI_ProjectPointOnSurf``'s nearest extremum and the nearest
+    point of the border curves (:class:`_Borders`); the walk stops at the first sample
+    not above the largest value measured again, so the maximum is a measured-again
+    value.  Usually one sample, 1-40 ms.
+    """
+    projector, borders = None, _Borders(surface)
+    largest = -np.inf
+    for k in np.argsort(distance)[::-1]:
+        if distance[k] <= largest:
+            break
+        if projector is None:
+            projector = GeomAPI_ProjectPointOnSurf()
+            projector.Init(surface, *surface.Bounds())
+        p = gp_Pnt(*map(float, points[k]))
+        q = gp_Pnt(*map(float, projected[k]))
+        projector.Perform(p)
+        if projector.NbPoints() > 0 and projector.LowerDistance() < p.Distance(q):
+            q = projector.NearestPoint()
+        q = borders.nearer(p, q)
+        distance[k] = p.Distance(q)
+        projected[k] = (q.X(), q.Y(), q.Z())
+        largest = max(largest, distance[k])
 
 
 class _Borders:
