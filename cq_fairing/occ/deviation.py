@@ -7,9 +7,13 @@ the original points :math:`p_i = S_0(u_i, v_i)` come from ``BRepAdaptor_Surface`
 distance :math:`|S_1(u_i, v_i) - p_i|` is an upper bound of :math:`d_i` (fairing keeps
 the parameter domain).  OCCT's projection finds orthogonal extrema only, so near a
 border, where the nearest point of the bounded patch may be a border point, it can
-return a farther extremum; :math:`d_i` is therefore the smaller of the two.  And the signed distance takes the sign of
-:math:`(q_i - p_i)\cdot n_0(u_i, v_i)` with :math:`q_i` the projected point and
-:math:`n_0` the original face's outward normal (face orientation applied).
+return a farther extremum; :math:`d_i` is therefore the smallest of the two and, where
+Newton finds no projection, of the nearest points of the four border curves; the
+largest :math:`d_i` are measured again with the global projection and the border curves
+(Newton can converge to an extremum that is not the nearest).  Every :math:`d_i` is the
+distance to a point of :math:`S_1`, never below the true one.  The signed distance takes
+the sign of :math:`(q_i - p_i)\cdot n_0(u_i, v_i)` with :math:`q_i` the projected point
+and :math:`n_0` the original face's outward normal (face orientation applied).
 """
 
 import numpy as np
@@ -266,4 +270,3 @@ class _Borders:
                 if p.Distance(point) < best_distance:
                     best, best_distance = point, p.Distance(point)
         return best
-

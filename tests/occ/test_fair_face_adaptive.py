@@ -142,6 +142,7 @@ def test_a_sample_whose_nearest_point_is_on_the_faired_border_is_measured_there(
     faired = face_to_surface(report.face)[0]
     (u0, u1), (v0, v1) = faired.u_space.domain, faired.v_space.domain
     grid = faired.evaluate_grid(np.linspace(u0, u1, 1200), np.linspace(v0, v1, 300))
-    nearest = np.array([np.linalg.norm(grid - p, axis=-1).min() for p in samples["points"][worst]])
+    nearest = np.array([np.linalg.norm(grid - p, axis=-1).min()
+                        for p in samples["points"][worst]])
     assert np.all(samples["distance"][worst] <= nearest + 1e-9)
     assert samples["parametric"][worst].max() > tol   # the same-parameter bound alone fails
