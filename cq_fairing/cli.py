@@ -18,9 +18,11 @@ Subcommands
     up on a face after S seconds (reported failed, kept unchanged).
 ``inspect IN``
     One line per face: type, degrees, poles, rational, periodic, trimmed, in a solid.
-``points IN.xyz -o OUT.step [--tol T] [--grid NU NV]``
+``points IN.xyz -o OUT.step [--tol T] [--grid NU NV | --resample NU NV | --curve]``
     Interpolate ``x y z`` points (one per line) and fair the curve (or the surface of a
-    grid of ``NU x NV`` points, rows of ``NV`` points).
+    grid of ``NU x NV`` points, rows of ``NV`` points, found from the jumps between rows
+    when ``--grid`` is not given); a scattered cloud is refused unless ``--resample``
+    puts it onto a grid (a height field over its best-fit plane).
 
 Exit codes
 ----------
@@ -166,7 +168,14 @@ def build_parser():
     points.add_argument("--tol", type=_positive_float,
                         help="largest allowed deviation (default 1e-3 of the points' extent)")
     points.add_argument("--grid", type=int, nargs=2, metavar=("NU", "NV"),
-                        help="the points form NU rows of NV points: fit a surface")
+                        help="the points form NU rows of NV points: fit a surface (rows "
+                             "separated by jumps are found without it)")
+    points.add_argument("--resample", type=int, nargs=2, metavar=("NU", "NV"),
+                        help="a scattered cloud: resample it onto an NU x NV grid, a height "
+                             "field over its best-fit plane, and fit a surface")
+    points.add_argument("--curve", action="store_true",
+                        help="one curve through the points in file order, however unevenly "
+                             "spaced")
     points.add_argument("--parametrization", choices=("uniform", "chord", "centripetal"),
                         default="uniform")
     points.add_argument("--force", action="store_true")
@@ -401,12 +410,9 @@ def command_points(args):
         raise FileFormatError(str(exc)) from exc
     extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     tol = args.tol or 1e-3 * extent
-    if args.grid:
-        nu, nv = args.grid
-        if nu * nv != points.shape[0]:
-            raise InvalidInputError(
-                f"--grid {nu} {nv} needs {nu * nv} points, {args.input} has {points.shape[0]}.")
-        source = interpolate_grid(points.reshape(nu, nv, 3), args.parametrization)
+    grid, note = _points_grid(points, args)
+    if grid is not None:
+        source = interpolate_grid(grid, args.parametrization)
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots, degree=3)
         shape = _surface_shape(result.surface)
@@ -419,11 +425,44 @@ def command_points(args):
     from .occ import write_shape
     from .occ.builders import write_edge
 
-    writer = write_shape if args.grid else write_edge
+    writer = write_shape if grid is not None else write_edge
     writer(shape, args.output, force=args.force, input_path=args.input)
-    print(f"{points.shape[0]} points, poles {sizes}, max deviation "
+    print(f"{points.shape[0]} points{note}, poles {sizes}, max deviation "
           f"{result.max_deviation:.4g} (tolerance {tol:.4g}), written to {args.output}")
     return EXIT_OK
+
+
+def _points_grid(points, args):
+    """``(grid (NU, NV, 3) or None for a curve, note for the summary)``: ``--grid``,
+    ``--resample``, or what the points' order says (:func:`cq_fairing.classify_points`);
+    a scattered cloud without ``--resample`` is refused."""
+    from . import classify_points, resample_height_field
+
+    if sum(map(bool, (args.grid, args.resample, args.curve))) > 1:
+        raise InvalidInputError("give one of --grid, --resample and --curve.")
+    if args.curve:
+        return None, ""
+    if args.resample:
+        grid, outside = resample_height_field(points, args.resample)
+        return grid, (f" resampled to a {args.resample[0]} x {args.resample[1]} height field "
+                      f"({outside} cells outside the cloud took the nearest height)")
+    if args.grid:
+        nu, nv = args.grid
+        if nu * nv != points.shape[0]:
+            raise InvalidInputError(
+                f"--grid {nu} {nv} needs {nu * nv} points, {args.input} has {points.shape[0]}.")
+        return points.reshape(nu, nv, 3), ""
+    kind, shape = classify_points(points)
+    if kind == "grid":
+        return points.reshape(*shape, 3), f" in {shape[0]} rows of {shape[1]} (scan lines)"
+    if kind == "scattered":
+        raise InvalidInputError(
+            f"the {points.shape[0]} points of {args.input} are neither one run (a curve) nor "
+            "rows of equal length separated by jumps (a grid): a scattered cloud; pass "
+            "--resample 40 40 to fit a surface to it as a height field over its best-fit "
+            "plane, --grid NU NV if its rows have NV points, or --curve if they are one "
+            "unevenly spaced curve.")
+    return None, ""
 
 
 def _curve_shape(curve):

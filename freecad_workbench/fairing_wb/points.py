@@ -11,11 +11,11 @@ The file's order decides what the points are:
   best-fit (PCA) plane: linear interpolation on the Delaunay triangulation, cells outside
   the cloud's convex hull take the nearest point's height (their count is reported).
 
-A jump is a step longer than ``JUMP`` times the median step between consecutive points.
+A jump is a step longer than 4 times the median step between consecutive points.  The
+classification is :func:`cq_fairing.classify_points`, the resampling
+:func:`cq_fairing.resample_height_field` (both in the core, shared with the command
+line).
 """
-
-import numpy as np
-from scipy.interpolate import griddata
 
 import FreeCAD
 import cq_fairing as cf
@@ -24,45 +24,8 @@ from . import conversion
 
 __all__ = ["classify", "resample_height_field", "shape_from_points", "make_points_shape"]
 
-JUMP = 4.0
-
-
-def classify(points):
-    """``("curve", None)``, ``("grid", (rows, columns))`` or ``("scattered", None)``."""
-    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    jumps = np.flatnonzero(steps > JUMP * np.median(steps)) + 1
-    if jumps.size == 0:
-        return "curve", None
-    columns = int(jumps[0])
-    n = points.shape[0]
-    regular = n % columns == 0 and np.array_equal(jumps, np.arange(columns, n, columns))
-    if regular and columns >= 4 and n // columns >= 4:
-        return "grid", (n // columns, columns)
-    return "scattered", None
-
-
-def resample_height_field(points, shape):
-    """Resample scattered points onto a ``shape`` grid over their best-fit plane.
-
-    Returns
-    -------
-    grid : ndarray, shape (n_u, n_v, 3)
-    extrapolated : int
-        Grid cells outside the convex hull (filled with the nearest point's height).
-    """
-    centre = points.mean(axis=0)
-    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
-    local = (points - centre) @ axes.T
-    s = np.linspace(local[:, 0].min(), local[:, 0].max(), shape[0])
-    t = np.linspace(local[:, 1].min(), local[:, 1].max(), shape[1])
-    S, T = np.meshgrid(s, t, indexing="ij")
-    H = griddata(local[:, :2], local[:, 2], (S, T), method="linear")
-    outside = np.isnan(H)
-    if outside.any():
-        H[outside] = griddata(local[:, :2], local[:, 2], (S[outside], T[outside]),
-                              method="nearest")
-    grid = centre + np.stack([S, T, H], axis=2) @ axes
-    return grid, int(outside.sum())
+classify = cf.classify_points
+resample_height_field = cf.resample_height_field
 
 
 def shape_from_points(points, resample=None):

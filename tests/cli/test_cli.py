@@ -167,6 +167,40 @@ def test_points_grid_to_a_faired_surface(tmp_path):
     assert face.surface_type == "BSpline" and face.n_poles_u < 32 and face.n_poles_v < 42
 
 
+def test_points_in_scan_lines_are_found_a_grid_without_the_option(tmp_path):
+    """The 30 x 40 grid of the test above, without --grid: the jumps between its rows
+    say it is a grid (not a zig-zag curve through all 1200 points)."""
+    u, v = np.meshgrid(np.linspace(0, 1, 30), np.linspace(0, 1, 40), indexing="ij")
+    grid = np.stack([100 * u, 100 * v, 10 * np.sin(3 * u) * np.cos(2 * v)], -1)
+    np.savetxt(tmp_path / "g.xyz", grid.reshape(-1, 3))
+    proc = run("points", "g.xyz", "-o", "surf.step", "--tol", "0.05", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "in 30 rows of 40 (scan lines)" in proc.stdout
+    from cq_fairing.occ import list_faces, read_shape
+
+    (face,) = list_faces(read_shape(tmp_path / "surf.step"))
+    assert face.surface_type == "BSpline"
+
+
+def test_a_scattered_scan_is_refused_then_resampled(tmp_path):
+    """Every 20th point of the real face scan (01_points.asc): neither a run nor a grid,
+    so the command refuses it in one line naming --resample (it used to thread one curve
+    through all the points in file order); with --resample a surface is written."""
+    np.savetxt(tmp_path / "scan.xyz", np.loadtxt(REAL_DATA / "01_points.asc")[::20])
+    proc = run("points", "scan.xyz", "-o", "scan.step", cwd=tmp_path)
+    assert proc.returncode == 2 and "--resample" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and not (tmp_path / "scan.step").exists()
+    proc = run("points", "scan.xyz", "-o", "scan.step", "--resample", "20", "20", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "resampled to a 20 x 20 height field" in proc.stdout
+    from cq_fairing.occ import list_faces, read_shape
+
+    (face,) = list_faces(read_shape(tmp_path / "scan.step"))
+    assert face.surface_type == "BSpline" and face.n_poles_u <= 22
+    proc = run("points", "scan.xyz", "-o", "curve.step", "--curve", "--tol", "5", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr   # one curve in file order, when asked for
+
+
 def test_help_documents_exit_codes():
     proc = subprocess.run(["cq-fairing", "--help"], capture_output=True, text=True)
     assert proc.returncode == 0

@@ -1,0 +1,50 @@
+"""Point files: a run, a grid of scan lines or a scattered cloud; a cloud as a height field."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import cq_fairing as cf
+from tests.conftest import REAL_DATA
+
+
+def test_a_run_a_grid_of_scan_lines_and_a_scan_are_told_apart():
+    """A helix is one run; rows of a grid written one after another are a grid (the
+    step back to the next row's start is a jump); the real scan of a face
+    (01_points.asc, scan lines of unequal length) is scattered, as is every 20th of it."""
+    t = np.linspace(0.0, 4 * np.pi, 300)
+    assert cf.classify_points(np.c_[np.cos(t), np.sin(t), 0.1 * t]) == ("curve", None)
+    u, v = np.meshgrid(np.linspace(0, 5, 6), np.linspace(0, 8, 9), indexing="ij")
+    grid = np.stack([u, v, np.sin(u) * np.cos(v / 3)], axis=-1)
+    assert cf.classify_points(grid.reshape(-1, 3)) == ("grid", (6, 9))
+    scan = np.loadtxt(REAL_DATA / "01_points.asc")
+    assert cf.classify_points(scan)[0] == cf.classify_points(scan[::20])[0] == "scattered"
+
+
+@given(seed=st.integers(0, 2**31 - 1), shape=st.tuples(st.integers(2, 12), st.integers(2, 12)))
+@settings(max_examples=25, deadline=None)
+def test_a_plane_resampled_as_a_height_field_stays_the_plane(seed, shape):
+    """Scattered points of a tilted plane: every grid point lies on the plane (linear
+    interpolation on the triangulation reproduces it; cells outside the hull take the
+    nearest point's height, also on the plane since the frame is the plane's own), and
+    the grid spans the points' extent along the plane."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(-5.0, 5.0, (200, 2))
+    points = np.c_[xy, 0.3 * xy[:, 0] - 0.2 * xy[:, 1] + 1.0]
+    grid, outside = cf.resample_height_field(points, shape)
+    assert grid.shape == shape + (3,) and 0 <= outside <= shape[0] * shape[1]
+    residual = grid[..., 2] - (0.3 * grid[..., 0] - 0.2 * grid[..., 1] + 1.0)
+    assert np.abs(residual).max() < 1e-9
+    _, _, axes = np.linalg.svd(points - points.mean(axis=0))
+    for axis in axes[:2]:   # the grid spans the points along both in-plane axes
+        along, at = points @ axis, grid.reshape(-1, 3) @ axis
+        assert np.allclose([at.min(), at.max()], [along.min(), along.max()], atol=1e-9)
+
+
+def test_resampling_refuses_a_line_and_a_grid_below_two_points():
+    line = np.outer(np.linspace(0.0, 1.0, 50), [1.0, 2.0, 3.0])
+    with pytest.raises(cf.InvalidInputError, match="lie on a line"):
+        cf.resample_height_field(line, (10, 10))
+    square = np.random.default_rng(0).uniform(size=(50, 3))
+    with pytest.raises(cf.InvalidInputError, match="at least 2 x 2"):
+        cf.resample_height_field(square, (1, 10))
