@@ -144,11 +144,12 @@ def deviation_on_grid(original_face, faired_face, grid, projection="local", refe
     faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
     parametric = np.linalg.norm(faired_points - points, axis=1)
     surface = BRep_Tool.Surface_s(faired_face)
-    distance, projected = _project(surface, points, uv, projection == "global")
+    borders = _Borders(surface)
+    distance, projected = _project(surface, points, uv, projection == "global", borders)
     closer = parametric < distance
     distance[closer] = parametric[closer]
     projected[closer] = faired_points[closer]
-    _refine_largest(surface, points, distance, projected)
+    _refine_largest(surface, points, distance, projected, borders)
     sign = np.sign(np.einsum("ij,ij->i", projected - points, normals))
     return {
         "uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
@@ -176,7 +177,7 @@ def _points_and_normals(face, uv, normals=True):
     return points, out_normals
 
 
-def _project(surface, points, uv, use_global):
+def _project(surface, points, uv, use_global, borders):
     """Distances of ``points`` to ``surface`` and the nearest points found.
 
     ``Extrema_GenLocateExtPS`` (Newton from the sample's parameters) for every point;
@@ -189,7 +190,6 @@ def _project(surface, points, uv, use_global):
     of the surface, so the distance is never below the true one.
     """
     adaptor = GeomAdaptor_Surface(surface)
-    borders = _Borders(surface)
     projector = None
     if use_global:
         s0, s1, t0, t1 = surface.Bounds()
@@ -214,7 +214,7 @@ def _project(surface, points, uv, use_global):
     return distance, projected
 
 
-def _refine_largest(surface, points, distance, projected):
+def _refine_largest(surface, points, distance, projected, borders=None):
     """Measure the largest ``distance`` values again, in place, until the largest is one
     measured again.
 
@@ -224,9 +224,10 @@ def _refine_largest(surface, points, distance, projected):
     of its point, ``GeomAPI_ProjectPointOnSurf``'s nearest extremum and the nearest
     point of the border curves (:class:`_Borders`); the walk stops at the first sample
     not above the largest value measured again, so the maximum is a measured-again
-    value.  Usually one sample, 1-40 ms.
+    value.  Usually one sample, 1-40 ms.  ``borders``: the surface's :class:`_Borders`,
+    if already built.
     """
-    projector, borders = None, _Borders(surface)
+    projector, borders = None, borders or _Borders(surface)
     largest = -np.inf
     for k in np.argsort(distance)[::-1]:
         if distance[k] <= largest:
