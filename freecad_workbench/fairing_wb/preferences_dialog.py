@@ -16,7 +16,11 @@ class PreferencesDialog(QtWidgets.QDialog):
         self.setObjectName("FairingPreferences")
         self.setWindowTitle("Fairing preferences")
         layout = QtWidgets.QFormLayout(self)
-        self.tolerance = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
+        # parented to the dialog at once: an unparented widget of a temporary UiLoader
+        # was sometimes deleted before the layout took it ("Internal C++ object already
+        # deleted" in one CI run of the GUI script)
+        loader = FreeCADGui.UiLoader()
+        self.tolerance = loader.createWidget("Gui::QuantitySpinBox", self)
         self.tolerance.setObjectName("fairing_default_tolerance")
         self.tolerance.setProperty("unit", "mm")
         self.tolerance.setProperty("decimals", 4)
