@@ -386,6 +386,41 @@ def finish_edges(edges, tolerance=1e-7, rebuild_3d=False):
         BRepLib.SameParameter_s(edge, tolerance)
 
 
+# relative and model-size margins on the tolerances of rebuilt edges and their vertices
+TEXT_MARGIN = 1e-9
+COORDINATE_MARGIN = 1e-12
+
+
+def settle_tolerances(shape, edges):
+    r"""Make the tolerances of ``shape`` consistent after ``edges`` changed, with a margin.
+
+    ``BRepLib::UpdateTolerances`` raises every vertex tolerance to exactly the distance
+    to the curve ends it must cover.  A BREP file stores tolerances and coordinates with
+    15 significant digits, so an exact tolerance can read back a hair below that distance
+    (testtoler face 55: 1.8685231246390617 written as 1.86852312463906) and the read
+    shape fails ``BRepCheck``.  Each touched edge and its vertices therefore get
+    :math:`t \leftarrow t (1 + 10^{-9}) + 10^{-12} M`, with :math:`M` the largest
+    coordinate magnitude of the edge's vertices: more than the rounding of 15 digits,
+    far below any modelling tolerance.
+    """
+    BRepLib.UpdateTolerances_s(shape, False)
+    builder = BRep_Builder()
+    for edge in edges:
+        vertices = (TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge))
+        size = max(np.abs(_xyz(BRep_Tool.Pnt_s(v))).max() for v in vertices)
+        builder.UpdateEdge(edge, _padded(BRep_Tool.Tolerance_s(edge), size))
+        for vertex in vertices:
+            builder.UpdateVertex(vertex, _padded(BRep_Tool.Tolerance_s(vertex), size))
+
+
+def _padded(tolerance, size):
+    return tolerance * (1.0 + TEXT_MARGIN) + COORDINATE_MARGIN * size
+
+
+def _xyz(point):
+    return np.array([point.X(), point.Y(), point.Z()])
+
+
 def surface_to_face(surface, original_face):
     """A new face on ``surface`` with the trim (wires, UV pcurves) of ``original_face``.
 
@@ -413,7 +448,7 @@ def surface_to_face(surface, original_face):
     copy = TopoDS.Face_s(BRepBuilderAPI_Copy(original_face, True, False).Shape())
     edges = replace_surface(copy, to_geom_surface(surface))
     finish_edges(edges, rebuild_3d=True)
-    BRepLib.UpdateTolerances_s(copy, False)
+    settle_tolerances(copy, edges)
     return copy
 
 

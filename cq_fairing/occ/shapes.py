@@ -24,7 +24,6 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
-from OCP.BRepLib import BRepLib
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
@@ -32,7 +31,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_Ind
 
 from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
 from .convert import (as_shape, face_info, finish_edges, indexed_faces, replace_surface,
-                      surface_to_face, to_geom_surface)
+                      settle_tolerances, surface_to_face, to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
 from .parallel import FacePool
 
@@ -280,7 +279,7 @@ class _Job:
         shared = [e for e, single in zip(touched, alone) if not single]
         finish_edges(free, rebuild_3d=True)
         finish_edges(shared)
-        BRepLib.UpdateTolerances_s(copy, False)
+        settle_tolerances(copy, touched)
         invalid = [i for i, (report, target) in enumerate(zip(self.reports, targets))
                    if report.faired and not BRepCheck_Analyzer(target).IsValid()]
         return copy, edge_gaps(copy, touched), invalid

@@ -9,6 +9,7 @@ from OCP.TopExp import TopExp_Explorer
 
 from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ import fair_shape, list_faces, read_shape, write_shape
+from cq_fairing.occ.convert import indexed_faces
 from tests.occ.helpers import area, faces_of, volume
 
 
@@ -190,3 +191,17 @@ def test_a_face_over_the_time_limit_is_kept_and_its_worker_killed(real):
 def test_bad_jobs_and_time_limits_are_refused(options):
     with pytest.raises(InvalidInputError, match="jobs|face_timeout"):
         fair_shape(_wiggly(0), **options)
+
+
+def test_faired_shell_survives_a_brep_text_round_trip(real, tmp_path):
+    """testtoler face 55 (index 54) faired alone: a shared vertex's tolerance is raised to exactly
+    its distance from a curve end (1.8685231246390617), which BREP's 15 digits would
+    round below that distance; the settled tolerances carry a margin, so the written
+    file reads back valid (``write_shape`` checks it with ``BRepCheck``)."""
+    result = fair_shape(real("testtoler.brep"), tol=12.68, faces=[54])  # default tol; 0-based
+    assert result.valid and result.faces[54].faired
+    path = tmp_path / "faired.brep"
+    write_shape(result.shape, path)
+    back = read_shape(path)
+    assert BRepCheck_Analyzer(back).IsValid()
+    assert len(indexed_faces(back)) == 56
