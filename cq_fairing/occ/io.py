@@ -10,11 +10,15 @@ killed process left behind are removed by a later write into the same folder
 (:func:`cq_fairing.report.remove_stale_temporaries`).
 
 OCCT's transfer banners and statistics (printed by its default messenger on standard
-output) are silenced during every read and write (:func:`quiet_occt`).
+output) and what its readers print straight to ``std::cout`` (the BREP reader's "Not a
+Curve table" on a truncated file) are silenced during every read and write
+(:func:`quiet_occt`).
 """
 
+import ctypes
 import io
 import os
+import sys
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -85,11 +89,13 @@ def read_shape(path):
 
 @contextmanager
 def quiet_occt():
-    """Detach the printers of OCCT's default messenger for the block, then restore them.
+    """Silence OCCT's printing on standard output for the block, then restore it.
 
     OCCT's data exchange prints banners and transfer statistics through
-    ``Message::DefaultMessenger()`` to standard output; inside the block they go
-    nowhere.  The messenger is left as it was found, also when the block raises.
+    ``Message::DefaultMessenger()``, whose printers are detached; some readers (BREP's
+    curve, surface and shape tables) write to ``std::cout`` directly, so file
+    descriptor 1 points at the null device too (:func:`_stdout_to_devnull`).  Both are
+    left as they were found, also when the block raises.
     """
     messenger = Message.DefaultMessenger_s()
     printers = messenger.Printers()
@@ -97,10 +103,44 @@ def quiet_occt():
     for printer in saved:
         messenger.RemovePrinter(printer)
     try:
-        yield
+        with _stdout_to_devnull():
+            yield
     finally:
         for printer in saved:
             messenger.AddPrinter(printer)
+
+
+@contextmanager
+def _stdout_to_devnull():
+    """Point file descriptor 1 at the null device for the block (C and C++ writes too).
+
+    Python's buffer is flushed before the block, so nothing printed earlier is lost,
+    and C's after it, so nothing printed inside leaks out later.  Where standard output
+    has no descriptor (closed, or replaced by an object without one) the block runs
+    unchanged.
+    """
+    try:
+        sys.stdout.flush()
+        saved = os.dup(1)
+    except (AttributeError, OSError, ValueError):
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        _flush_c_streams()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _flush_c_streams():
+    """``fflush(NULL)``: write out what C and C++ hold buffered (no-op without a libc)."""
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, TypeError, AttributeError):
+        pass
 
 
 def _read_with(reader, kind, path):
@@ -161,7 +201,9 @@ def _read_iges(path):
 
 def _read_brep(path):
     shape = TopoDS_Shape()
-    if not BRepTools.Read_s(shape, str(path), BRep_Builder()):
+    with quiet_occt():
+        read = BRepTools.Read_s(shape, str(path), BRep_Builder())
+    if not read:
         raise FileFormatError(
             f"'{path}' is not a readable BREP file; it may be corrupt or truncated."
         )
