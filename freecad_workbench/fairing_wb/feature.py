@@ -54,6 +54,9 @@ ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OB
                 "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES,
                 "Measure": make.MEASURES}
 
+# Values of newly added properties other than FreeCAD's zero (saved values are kept).
+DEFAULTS = {"Tolerance": 0.01}
+
 
 def _sewn(compound, deviation):
     """Sew faired faces whose borders meet within twice the deviation (valid result only).
@@ -70,10 +73,11 @@ def _sewn(compound, deviation):
     return sewn if sewn.isValid() and len(sewn.Faces) == len(compound.Faces) else compound
 
 
-def _clamped_target(target, face):
-    """With several faces, a face smaller than the target keeps its own pole count."""
-    surface = face.Surface
-    return (min(target[0], surface.NbUPoles), min(target[1], surface.NbVPoles))
+def _unexpected(error):
+    """``Status`` of a failure that is not a user error: one line naming it."""
+    what = " ".join(f"{type(error).__name__}: {error}".split())
+    return (f"Error: the fairing failed unexpectedly ({what}); check the Source's faces "
+            "(Part > Check geometry) or try other settings, and report it if it persists.")
 
 
 class Fairing:
@@ -94,10 +98,10 @@ class Fairing:
             obj.addProperty(kind, name, group, tip)
             if name in ENUMERATIONS:
                 setattr(obj, name, list(ENUMERATIONS[name]))
+            if name in DEFAULTS:
+                setattr(obj, name, DEFAULTS[name])
             if read_only:
                 obj.setEditorMode(name, 1)
-        if obj.Tolerance.Value == 0:
-            obj.Tolerance = 0.01
 
     @staticmethod
     def _extend_enumerations(obj):
@@ -117,11 +121,15 @@ class Fairing:
         self.Type, self.Version = TYPE, VERSION
 
     def execute(self, obj):
-        """Fair every linked face/edge; a user error sets ``Status`` and fails the object."""
+        """Fair every linked face/edge; any failure sets ``Status`` (one sentence) and
+        fails the object."""
         try:
             shape, results = self._fair(obj)
         except cf.FairingError as error:
             obj.Status = f"Error: {error}"
+            raise
+        except Exception as error:
+            obj.Status = _unexpected(error)
             raise
         obj.Shape = shape
         obj.PolesBefore = "; ".join(" x ".join(map(str, r.poles_before)) for r in results)
@@ -154,17 +162,7 @@ class Fairing:
         if obj.Source is None:
             raise cf.InvalidInputError("the Fairing has no Source; link faces or edges.")
         source, subs = obj.Source
-        kwargs = self.settings(obj)
-        results = []
-        for sub in subs:
-            element = source.Shape.getElement(sub)
-            if sub.startswith("Face"):
-                if kwargs["target"] is not None and len(subs) > 1:
-                    kwargs["target"] = _clamped_target(kwargs["target"], element)
-                results.append(make.fair_face(element, **self.face_settings(obj), **kwargs))
-            else:
-                target = None if kwargs["target"] is None else kwargs["target"][0]
-                results.append(make.fair_edge(element, **{**kwargs, "target": target}))
+        results = make.fair_elements(source, subs, self.settings(obj), self.face_settings(obj))
         shapes = [r.shape for r in results]
         if len(shapes) == 1:
             return shapes[0], results

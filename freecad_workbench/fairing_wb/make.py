@@ -18,12 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 
 import FreeCAD
+import Part
 import cq_fairing as cf
 from cq_fairing.core.adaptive import BORDERS  # "auto" first: the enumeration's default
+from cq_fairing.core.fairing import largest_resolved_scale
 
 from . import analysis, conversion
 
-__all__ = ["make_fairing", "fair_face", "fair_edge", "FairedShape", "MODES", "METHODS",
+__all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "FairedShape", "MODES", "METHODS",
            "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES"]
 
 MODES = ("Tolerance", "Target")
@@ -304,6 +306,85 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
     shape = conversion.part_curve(result.curve).toShape(first, last)
     return FairedShape(shape, (source.n_poles,), (result.curve.n_poles,), deviation,
                        time.perf_counter() - start)
+
+
+def _element(obj, sub):
+    """The face or edge ``sub`` (``"Face3"``, ``"Edge5"``) of ``obj``'s shape, checked.
+
+    Raises
+    ------
+    cq_fairing.InvalidInputError
+        If the shape has no such element (its shape changed since it was linked).
+    cq_fairing.UnsupportedGeometryError
+        If the element is not a B-spline face or edge.
+    """
+    kind = "Face" if sub.startswith("Face") else "Edge"
+    elements = obj.Shape.Faces if kind == "Face" else obj.Shape.Edges
+    index = sub[len(kind):]
+    if not index.isdigit() or not 1 <= int(index) <= len(elements):
+        raise cf.InvalidInputError(
+            f"{obj.Label} has no {sub}, it has {len(elements)} {kind.lower()}s (its shape "
+            "changed since it was linked); link existing faces or edges as the Source.")
+    element = elements[int(index) - 1]
+    geometry = element.Surface if kind == "Face" else element.Curve
+    wanted = Part.BSplineSurface if kind == "Face" else Part.BSplineCurve
+    if not isinstance(geometry, wanted):
+        raise cf.UnsupportedGeometryError(
+            f"{sub} of {obj.Label} is a {type(geometry).__name__}, not a B-spline "
+            f"{kind.lower()}; fairing applies to freeform (B-spline) geometry only, so "
+            f"remove {sub} from the selection.")
+    return element
+
+
+def _clamped_target(target, face):
+    """One target for several faces: each direction of ``face`` gets at most its own
+    control points, and at most the finest quasi-uniform scale its knots resolve (a
+    face with clustered knots cannot be projected onto a finer target)."""
+    source = conversion.surface_from_face(face)
+    clamped = []
+    for count, space in zip(target, (source.u_space, source.v_space)):
+        degree = min(3, space.degree)
+        count = min(count, space.dimension)
+        if degree < count < space.dimension:
+            resolved = largest_resolved_scale(space, degree, "auto", count - degree)
+            count = resolved + degree if resolved else count
+        clamped.append(count)
+    return tuple(clamped)
+
+
+def fair_elements(obj, subs, settings, face_settings):
+    """Fair the faces and edges ``subs`` of ``obj`` one by one (feature and task panel).
+
+    Parameters
+    ----------
+    obj : App.DocumentObject
+    subs : list of str
+        ``"Face2"``, ``"Edge5"``, ...
+    settings : dict
+        Keyword arguments of :func:`fair_face` and :func:`fair_edge` (``tolerance``,
+        ``target`` as ``(u, v)`` or ``None``, ``method``, ``search``, ``measure``,
+        ``objective``).
+    face_settings : dict
+        Those of faces only: ``boundary``, ``borders``.
+
+    Returns
+    -------
+    list of FairedShape
+        One per element, in the order of ``subs``.  With several faces in target mode,
+        each face is clamped to its own control-point counts.
+    """
+    target = settings["target"]
+    results = []
+    for sub in subs:
+        element = _element(obj, sub)
+        if sub.startswith("Face"):
+            own = target if target is None or len(subs) == 1 else _clamped_target(target,
+                                                                                  element)
+            results.append(fair_face(element, **face_settings, **{**settings, "target": own}))
+        else:
+            own = None if target is None else target[0]
+            results.append(fair_edge(element, **{**settings, "target": own}))
+    return results
 
 
 def _source_link(source):

@@ -182,16 +182,7 @@ class FairSurfacePanel:
     def run(self):
         """Fair every selected face/edge; returns the :class:`make.FairedShape` list."""
         obj, subs = self.link
-        s = self.settings()
-        results = []
-        for sub in subs:
-            element = obj.Shape.getElement(sub)
-            if self.kind == "Face":
-                results.append(make.fair_face(element, **self.face_settings(), **s))
-            else:
-                target = None if s["target"] is None else s["target"][0]
-                results.append(make.fair_edge(element, **{**s, "target": target}))
-        return results
+        return make.fair_elements(obj, subs, self.settings(), self.face_settings())
 
     def on_preview(self):
         """Recompute the figures: poles before -> after, max deviation, time."""

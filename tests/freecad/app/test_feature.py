@@ -140,7 +140,7 @@ def test_non_bspline_face_is_refused(doc):
     obj = make.make_fairing((box, ["Face1"]), target=(4, 4))
     doc.recompute()
     assert not obj.isValid()
-    assert "not a B-spline surface" in obj.Status
+    assert "Face1 of Box is a Plane, not a B-spline face" in obj.Status
 
 
 def test_fair_curve_edge(doc):
@@ -211,6 +211,58 @@ def test_whole_object_clamps_target_per_face_and_sews(doc, blade):
     # The two blade halves share an edge: sewn into one shell (the source has 3 shells).
     assert len(blade.Shape.Shells) == 3
     assert sorted(len(s.Faces) for s in obj.Shape.Shells) == [2]
+
+
+def test_target_is_clamped_per_face_whatever_the_order(doc, blade):
+    """A small face met first must not lower the target of the faces after it."""
+    first_small = make.make_fairing((blade, ["Face1", "Face2"]), target=(12, 100))
+    first_large = make.make_fairing((blade, ["Face2", "Face1"]), target=(12, 100))
+    doc.recompute()
+    assert _ok(first_small) and _ok(first_large), (first_small.Status, first_large.Status)
+    assert first_small.PolesAfter == "4 x 17; 12 x 100"
+    assert first_large.PolesAfter == "12 x 100; 4 x 17"
+
+
+def test_whole_object_target_clamps_to_what_each_face_resolves(doc):
+    """Linkrods: 18-pole faces and a degree-10 face with clustered knots, one target."""
+    shape = Part.read(str(fixtures.REAL / "linkrods.step"))
+    src = fixtures.add_shape(doc, shape, "Linkrods")
+    obj = make.make_fairing(src, target=(7, 40))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    bsplines = [f.Surface for f in shape.Faces if isinstance(f.Surface, Part.BSplineSurface)]
+    after = [tuple(map(int, p.split(" x "))) for p in obj.PolesAfter.split("; ")]
+    assert len(after) == len(bsplines) == len(obj.Shape.Faces)
+    for (u, v), surface in zip(after, bsplines):
+        assert u <= min(7, surface.NbUPoles) and v <= min(40, surface.NbVPoles)
+    assert max(v for _, v in after) == 40
+
+
+def test_plane_among_bspline_faces_names_it_in_status(doc):
+    src = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")), "Linkrods")
+    obj = make.make_fairing((src, ["Face21", "Face3"]), target=(7, 40))
+    doc.recompute()
+    assert not obj.isValid()
+    assert obj.Status.startswith("Error: Face3 of Linkrods is a Plane, not a B-spline face;")
+
+
+def test_lost_source_face_replaces_a_stale_ok_status(doc, blade):
+    obj = make.make_fairing((blade, ["Face3"]), target=(4, 12))
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    blade.Shape = blade.Shape.Faces[1]
+    doc.recompute()
+    assert not obj.isValid()
+    assert obj.Status.startswith("Error: Blade has no Face3, it has 1 faces")
+
+
+def test_tolerance_zero_survives_save_and_reopen(doc, noisy, tmp_path):
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05)
+    doc.recompute()
+    obj.Tolerance = 0.0
+    doc.recompute()
+    with fixtures.reopened(doc, tmp_path / "zero.FCStd") as reopened:
+        assert reopened.getObject("Fairing").Tolerance.Value == 0.0
 
 
 def test_preview_speed_on_50x80_face(noisy):
