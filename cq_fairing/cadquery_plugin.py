@@ -31,8 +31,9 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact",
               return_report=False, **options):
     """Fair a ``cq.Face`` (see :func:`cq_fairing.occ.fair_face` for the options).
 
-    ``method`` ``"wavelet"`` or ``"adaptive"`` (``objective`` ``"compact"``,
-    ``"faithful"`` or ``"fair"``, adaptive only); other options as in :func:`cq_fairing.occ.fair_face`.
+    ``method`` ``"wavelet"``, ``"adaptive"`` (``objective`` ``"compact"``,
+    ``"faithful"`` or ``"fair"``, adaptive only) or ``"energy"`` (keeps the net); other
+    options as in :func:`cq_fairing.occ.fair_face`.
 
     Returns
     -------

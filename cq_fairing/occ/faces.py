@@ -49,7 +49,9 @@ from .search import max_scales, project, search_scales
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
            "check_options"]
 
-METHODS = ("wavelet", "adaptive")
+METHODS = ("wavelet", "adaptive", "energy")
+# methods that choose their own net and so need tol, never n
+TOLERANCE_ONLY = ("adaptive", "energy")
 OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "fixed")
 SEARCHES = ("local", "core")
@@ -124,9 +126,9 @@ def default_tolerance(shape):
 def check_options(tol, n, method, boundary, objective="compact", borders="auto"):
     """Validate the shared options of :func:`fair_face` and ``fair_shape`` once.
 
-    ``method="adaptive"`` chooses its targets itself: it needs ``tol`` (or the default
-    tolerance, ``n`` and ``tol`` both ``None``) and refuses ``n``; ``objective`` and
-    ``borders`` apply to it only.
+    ``method="adaptive"`` chooses its targets itself and ``method="energy"`` keeps the
+    net: both need ``tol`` (or the default tolerance, ``n`` and ``tol`` both ``None``)
+    and refuse ``n``; ``objective`` and ``borders`` apply to the adaptive method only.
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -146,9 +148,11 @@ def check_options(tol, n, method, boundary, objective="compact", borders="auto")
             raise InvalidInputError(
                 f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
                 f"add method='adaptive' or drop {name}.")
-    if method == "adaptive" and n is not None:
+    if method in TOLERANCE_ONLY and n is not None:
+        what = ("chooses the target itself" if method == "adaptive"
+                else "keeps the control points")
         raise InvalidInputError(
-            f"method='adaptive' chooses the target itself and needs tol, not n; got n={n!r}. "
+            f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
             "Give tol, or use method='wavelet' for explicit scales.")
     if boundary not in BOUNDARIES:
         raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
@@ -170,12 +174,16 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     n : (int or None, int or None) or int, optional
         Explicit target scales (knot spans) per direction, passed to
         :func:`cq_fairing.fair_surface`; ``None`` keeps a direction.
-    method : {"wavelet", "adaptive"}
+    method : {"wavelet", "adaptive", "energy"}
         ``"wavelet"``: multiresolution (ARWFA/DWFA) fairing onto quasi-uniform targets.
         ``"adaptive"``: the same exact L2 projection onto u and v targets whose knots
         follow the error (``cq_fairing.fair_surface(method="adaptive")``), usually
-        fewer poles at the same ``tol``; needs ``tol`` (or the default), refuses ``n``,
-        ignores ``search``; polynomial faces only (rational ones: ``'skipped-rational'``).
+        fewer poles at the same ``tol``.  ``"energy"``: Eck-Hadenfeld local thin-plate
+        energy fairing that keeps the net, each pole within ``tol`` of its place
+        (``cq_fairing.fair_surface(method="energy")``), so the same-parameter distance,
+        and with it the true distance, stays within ``tol``.  ``"adaptive"`` and
+        ``"energy"`` need ``tol`` (or the default), refuse ``n`` and ignore ``search``;
+        they fair polynomial faces only (rational ones: ``'skipped-rational'``).
     objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
         ``"faithful"``: stop where the residual reaches the net's estimated noise level
@@ -240,12 +248,12 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     criteria = _criteria(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
-    except UnsupportedGeometryError:  # the core's adaptive method refuses weights
-        if method != "adaptive":
+    except UnsupportedGeometryError:  # the adaptive and energy methods refuse weights
+        if method not in TOLERANCE_ONLY:
             raise
         report = FaceFairReport(face, "skipped-rational", (
-            "rational face left unchanged: method='adaptive' fairs polynomial surfaces only; "
-            "use method='wavelet' for it."), info=info, tolerance=tol)
+            f"rational face left unchanged: method={method!r} fairs polynomial surfaces "
+            "only; use method='wavelet' for it."), info=info, tolerance=tol)
     report.original = face
     report.seconds = time.perf_counter() - start
     return report
@@ -262,7 +270,8 @@ def _criteria(tol, search, method, objective, borders):
     """The ``(criterion, goal)`` attempts of :func:`_fair_verified`, in order.
 
     With explicit ``n``: one attempt.  ``method="adaptive"``: the core's adaptive search
-    (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``.
+    (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``;
+    ``method="energy"`` likewise with the criterion ``"energy"``.
     Otherwise the requested search (``"local"`` with the normal-distance estimate, or the core's
     ``fair_surface(tol=...)``), then the local search with the parametric distance, an
     upper bound of the true distance; they aim at ``MARGIN * tol`` (room for excursions
@@ -270,8 +279,8 @@ def _criteria(tol, search, method, objective, borders):
     """
     if tol is None:
         return [(None, None)]
-    if method == "adaptive":
-        target = AdaptiveTarget(objective, borders)
+    if method in TOLERANCE_ONLY:
+        target = AdaptiveTarget(objective, borders) if method == "adaptive" else "energy"
         return [(target, tol), (target, MARGIN * tol)]
     first = "core" if search == "core" else "normal"
     return [(first, MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
@@ -340,10 +349,10 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
             measured.append(exc.best_deviation)
             refusals.append((goal, str(exc)))
             continue
-        if _is_identity(source, target, degree):
+        if target is not None and _is_identity(source, target, degree):
             return _unchanged(face, info, surface, "the finest admissible target is the "
                               "source space itself; nothing to fair", tol)
-        if _keeps_every_pole(source, target, faired):
+        if target is not None and _keeps_every_pole(source, target, faired):
             return _unchanged(face, info, surface, "the adaptive target needs as many poles "
                               "as the source; nothing to reduce", tol)
         new_face = surface_to_face(faired, face)
@@ -414,8 +423,15 @@ def _choose(source, tol, n, degree, sampler, finish, criterion):
     """Target scales, the faired (finished) surface and the core result if computed.
 
     For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
-    pair of non-uniform spaces the core chose.
+    pair of non-uniform spaces the core chose; energy fairing (``criterion`` ``"energy"``)
+    keeps the source's spaces and has no target (``None``).
     """
+    if criterion == "energy":
+        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
+                              v_knots=source.v_knots,
+                              degree=(source.u_degree, source.v_degree),
+                              weights=source.weights, method="energy")
+        return None, finish(result.surface), result
     if isinstance(criterion, AdaptiveTarget):
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,

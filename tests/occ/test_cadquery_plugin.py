@@ -77,3 +77,22 @@ def test_workplane_fair_passes_method_objective_and_workers():
     assert compact.poles_after != report.poles_after
     with pytest.raises(InvalidInputError, match="face_timeout"):
         cq.Workplane().add(face).fair(**options, face_timeout=120)
+
+
+def test_workplane_fair_with_energy_keeps_the_net():
+    """method='energy' arrives through Workplane.fair: the noisy blade keeps its 20 x 30
+    net, each pole moved by at most tol."""
+    import numpy as np
+
+    from cq_fairing.core.examples import blade_surface
+    from cq_fairing.occ import face_to_surface
+    from cq_fairing.occ.builders import surface_to_natural_face
+
+    register()
+    face = cq.Face(surface_to_natural_face(blade_surface(shape=(20, 30)).surface))
+    out = cq.Workplane().add(face).fair(tol=0.05, method="energy")
+    report, = out.fair_report
+    assert report.status == "faired"
+    assert report.poles_before == report.poles_after == (22, 32)
+    moved = face_to_surface(out.val().wrapped)[0].poles - face_to_surface(face.wrapped)[0].poles
+    assert 0 < np.linalg.norm(moved, axis=-1).max() <= 0.05 * (1 + 1e-12)

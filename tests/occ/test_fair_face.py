@@ -48,6 +48,40 @@ def test_iea_blade_faces_degree_3x8_fair_within_tolerance(real):
         assert area(report.face) == pytest.approx(area(face), rel=1e-3)
 
 
+def _thin_plate_energy(surface):
+    from cq_fairing.core.energy import surface_energy_matrix
+
+    net = surface.poles.reshape(-1, 3)
+    return float(np.einsum("id,id->", net, surface_energy_matrix(surface) @ net))
+
+
+def test_energy_method_keeps_the_net_and_lowers_its_energy_within_tol(real):
+    """method='energy' on the IEA main face: the same 17 x 204 net, every pole within tol
+    of its place (so the surface is too, by the convex hull of the basis), checked
+    independently with OCCT's projection, and a lower thin-plate energy."""
+    face = next(f for f, info in zip(faces_of(real("IEA_15MW_CFD.stp")),
+                                     list_faces(real("IEA_15MW_CFD.stp")))
+                if (info.n_poles_u, info.n_poles_v) == (17, 204))
+    tol = 0.01
+    report = fair_face(face, tol=tol, method="energy")
+    check_within(report, face, tol)
+    assert report.poles_before == report.poles_after == (17, 204)
+    before, _ = face_to_surface(face)
+    after, _ = face_to_surface(report.face)
+    moves = np.linalg.norm(after.poles - before.poles, axis=-1)
+    assert 0.5 * tol < moves.max() <= tol * (1 + 1e-12)
+    assert _thin_plate_energy(after) < 0.9 * _thin_plate_energy(before)
+
+
+def test_energy_method_skips_rational_faces_and_refuses_n(real):
+    face = faces_of(real("linkrods.step"))[20]
+    report = fair_face(face, tol=0.01, method="energy")
+    assert report.status == "skipped-rational"
+    assert "method='energy'" in report.message and "method='wavelet'" in report.message
+    with pytest.raises(InvalidInputError, match="keeps the control points"):
+        fair_face(face, n=5, method="energy")
+
+
 def test_terrain_312x323_fairs_within_tolerance(real):
     face, = faces_of(real("terrain.brep"))
     tol = 25.0  # model units; the patch is about 11 600 across
