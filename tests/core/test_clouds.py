@@ -46,5 +46,45 @@ def test_resampling_refuses_a_line_and_a_grid_below_two_points():
     with pytest.raises(cf.InvalidInputError, match="lie on a line"):
         cf.resample_height_field(line, (10, 10))
     square = np.random.default_rng(0).uniform(size=(50, 3))
-    with pytest.raises(cf.InvalidInputError, match="at least 2 x 2"):
+    with pytest.raises(cf.InvalidInputError, match="integers of at least 2"):
         cf.resample_height_field(square, (1, 10))
+
+
+_CLOUD = np.random.default_rng(3).uniform(size=(50, 3))
+
+
+@pytest.mark.parametrize("points, fragment", [
+    (np.arange(10.0), "shape (k, d)"), (None, "shape (k, d)"), ("abc", "numeric array"),
+    (np.zeros((0, 3)), "at least 2 points, got 0"), (np.zeros((1, 3)), "at least 2 points, got 1"),
+    (np.r_[_CLOUD, [[0.0, np.nan, 0.0]]], "NaN or inf (first at index (50, 1))"),
+    (_CLOUD[:, :2], "3 coordinates (x y z) each, got 2")])
+@pytest.mark.filterwarnings("error")
+def test_classify_points_refuses_what_is_not_two_or_more_finite_points(points, fragment):
+    """A 1-D array, None, text, fewer than 2 points, NaN and (N, 2) arrays raise
+    InvalidInputError naming the problem (they used to raise numpy errors, or come back
+    "curve" with RuntimeWarnings)."""
+    with pytest.raises(cf.InvalidInputError) as caught:
+        cf.classify_points(points)
+    assert fragment in str(caught.value)
+
+
+@pytest.mark.parametrize("points, shape, fragment", [
+    (_CLOUD.tolist(), (10,), "got (10,)"), (_CLOUD, 10, "got 10"),
+    (_CLOUD, (2.7, 3.9), "got (2.7, 3.9)"), (_CLOUD, (True, 5), "got (True, 5)"),
+    (_CLOUD, (4, 4, 4), "got (4, 4, 4)"), (_CLOUD, None, "got None"),
+    (np.r_[_CLOUD, [[np.nan] * 3]], (5, 5), "NaN or inf"),
+    (_CLOUD[:, :2], (5, 5), "3 coordinates (x y z)"),
+    (_CLOUD[:2], (5, 5), "a height field needs at least 3 points, got 2"),
+    (np.ones((20, 3)), (5, 5), "in one point")])
+@pytest.mark.filterwarnings("error")
+def test_resample_height_field_refuses_bad_points_and_grid_sizes(points, shape, fragment):
+    """Fractional sizes were truncated silently, and the other cases raised numpy or
+    Python errors (AttributeError, LinAlgError, IndexError, TypeError, ValueError)."""
+    with pytest.raises(cf.InvalidInputError) as caught:
+        cf.resample_height_field(points, shape)
+    assert fragment in str(caught.value)
+
+
+def test_resampling_takes_a_list_and_numpy_integer_sizes():
+    grid, _ = cf.resample_height_field(_CLOUD.tolist(), (np.int64(4), 5))
+    assert grid.shape == (4, 5, 3) and np.all(np.isfinite(grid))
