@@ -21,8 +21,9 @@ Subcommands
 ``points IN.xyz -o OUT.step [--tol T] [--grid NU NV | --resample NU NV | --curve]``
     Interpolate ``x y z`` points (one per line) and fair the curve (or the surface of a
     grid of ``NU x NV`` points, rows of ``NV`` points, found from the jumps between rows
-    when ``--grid`` is not given); a scattered cloud is refused unless ``--resample``
-    puts it onto a grid (a height field over its best-fit plane).
+    when ``--grid`` is not given, and checked against them when it is); a scattered
+    cloud is refused unless ``--resample`` puts it onto a grid (a height field over its
+    best-fit plane).  A file with no point, one point or coincident points is refused.
 
 Exit codes
 ----------
@@ -41,6 +42,7 @@ then renamed into place; the input file is never modified.
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from .errors import (FairingError, FileFormatError, InvalidInputError, OutputPathError,
@@ -78,6 +80,16 @@ def _seconds(text):
         value = float("nan")
     if not 0 < value < float("inf"):
         raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
+def _point_count(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a number of points >= 2, got {text!r}")
     return value
 
 
@@ -167,10 +179,10 @@ def build_parser():
     points.add_argument("-o", "--output", type=Path, required=True, help=".step/.stp or .brep")
     points.add_argument("--tol", type=_positive_float,
                         help="largest allowed deviation (default 1e-3 of the points' extent)")
-    points.add_argument("--grid", type=int, nargs=2, metavar=("NU", "NV"),
+    points.add_argument("--grid", type=_point_count, nargs=2, metavar=("NU", "NV"),
                         help="the points form NU rows of NV points: fit a surface (rows "
-                             "separated by jumps are found without it)")
-    points.add_argument("--resample", type=int, nargs=2, metavar=("NU", "NV"),
+                             "separated by jumps are found without it, and must match it)")
+    points.add_argument("--resample", type=_point_count, nargs=2, metavar=("NU", "NV"),
                         help="a scattered cloud: resample it onto an NU x NV grid, a height "
                              "field over its best-fit plane, and fit a surface")
     points.add_argument("--curve", action="store_true",
@@ -398,16 +410,13 @@ def _yes(flag):
 def command_points(args):
     import numpy as np
 
-    from . import fair_curve, fair_surface, interpolate_grid, interpolate_points, read_xyz
+    from . import fair_curve, fair_surface, interpolate_grid, interpolate_points
     from .report import check_output_path
 
     if args.output.suffix.lower() not in (".step", ".stp", ".brep"):
         raise OutputPathError(f"--output must end in .step, .stp or .brep, got {str(args.output)!r}.")
     check_output_path(args.output, force=args.force, inputs=(args.input,))
-    try:
-        points = read_xyz(args.input)
-    except InvalidInputError as exc:
-        raise FileFormatError(str(exc)) from exc
+    points = _read_points(args.input)
     extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     tol = args.tol or 1e-3 * extent
     grid, note = _points_grid(points, args)
@@ -446,13 +455,9 @@ def _points_grid(points, args):
         grid, outside = resample_height_field(points, args.resample)
         return grid, (f" resampled to a {args.resample[0]} x {args.resample[1]} height field "
                       f"({outside} cells outside the cloud took the nearest height)")
-    if args.grid:
-        nu, nv = args.grid
-        if nu * nv != points.shape[0]:
-            raise InvalidInputError(
-                f"--grid {nu} {nv} needs {nu * nv} points, {args.input} has {points.shape[0]}.")
-        return points.reshape(nu, nv, 3), ""
     kind, shape = classify_points(points)
+    if args.grid:
+        return _given_grid(points, args, shape if kind == "grid" else None), ""
     if kind == "grid":
         return points.reshape(*shape, 3), f" in {shape[0]} rows of {shape[1]} (scan lines)"
     if kind == "scattered":
@@ -463,6 +468,64 @@ def _points_grid(points, args):
             "plane, --grid NU NV if its rows have NV points, or --curve if they are one "
             "unevenly spaced curve.")
     return None, ""
+
+
+def _given_grid(points, args, found):
+    """The points as the ``--grid NU NV`` grid; refused when the count differs or when
+    their scan lines (``found``: (rows, columns) or None) say another grid."""
+    nu, nv = args.grid
+    if nu * nv != points.shape[0]:
+        raise InvalidInputError(
+            f"--grid {nu} {nv} needs {nu * nv} points, {args.input} has {points.shape[0]}.")
+    if found is not None and found != (nu, nv):
+        raise InvalidInputError(
+            f"--grid {nu} {nv} does not match {args.input}: its points run in {found[0]} "
+            f"rows of {found[1]} (scan lines, told apart by the jumps between rows); pass "
+            f"--grid {found[0]} {found[1]} or leave --grid out.")
+    return points.reshape(nu, nv, 3)
+
+
+def _read_points(path):
+    """The ``(N, 3)`` points of a point file: at least 2, not all in one place.
+
+    Raises
+    ------
+    FileFormatError
+        A missing file or a folder, unreadable numbers, no or one point, coincident points.
+    """
+    import numpy as np
+
+    from . import read_xyz
+
+    if not path.is_file():
+        problem = "it is a folder" if path.is_dir() else "no such file"
+        raise FileFormatError(f"cannot read '{path}': {problem}; give a file of x y z points.")
+    try:
+        with warnings.catch_warnings():   # loadtxt warns about empty files
+            warnings.simplefilter("ignore")
+            points = read_xyz(path)
+    except OSError as exc:
+        raise FileFormatError(f"cannot read '{path}': {exc.strerror}.") from exc
+    except InvalidInputError as exc:
+        raise FileFormatError(_no_points(path) or str(exc)) from exc
+    if points.shape[0] < 2:
+        raise FileFormatError(
+            f"'{path}' holds 1 point; a curve or a surface needs at least 2 x y z points.")
+    if not np.ptp(points, axis=0).any():
+        raise FileFormatError(
+            f"the {points.shape[0]} points of '{path}' all coincide at "
+            f"({', '.join(f'{c:g}' for c in points[0])}); a curve or a surface needs points "
+            "in at least two places.")
+    return points
+
+
+def _no_points(path):
+    """The message for a point file without any data line, else ``None``."""
+    with open(path, "rb") as handle:
+        if any(line.split(b"#")[0].strip() for line in handle):
+            return None
+    return (f"'{path}' holds no points (it is empty or has only blank and # comment "
+            "lines); write one 'x y z' point per line.")
 
 
 def _curve_shape(curve):
