@@ -140,12 +140,36 @@ def _is_uv_rectangle(face):
     return abs(box.Area - face.Area) <= 1e-6 * max(face.Area, 1e-300)
 
 
+def _wire_on_surface(face, wire, surface):
+    """``wire`` of ``face`` rebuilt on ``surface`` from its p-curves.
+
+    Each new edge gets its source edge's tolerance: files from other systems (IGES) join
+    their edges within 1e-4 to 0.2 mm, while an edge made from a p-curve has 1e-7, so
+    without it the edges do not connect into a wire ("BRep_API: command not done").
+    """
+    edges = []
+    for edge in wire.OrderedEdges:
+        pcurve, first, last = face.curveOnSurface(edge)  # the p-curve on *this* face
+        new = pcurve.toShape(surface, first, last)
+        new.fixTolerance(_tolerance(edge))
+        edges.append(new)
+    return Part.Wire(edges)
+
+
+def _tolerance(shape):
+    """The largest tolerance of ``shape`` and its vertices."""
+    return max([shape.Tolerance] + [v.Tolerance for v in shape.Vertexes])
+
+
 def face_on_surface(surface, face):
     """A face on the new ``Part`` surface bounded like ``face`` in parameter space.
 
     Untrimmed faces and faces trimmed to a parameter rectangle (e.g. the two halves of the
     IEA blade) are rebuilt exactly from their UV box.  Other trims are rebuilt from the
-    edges' pcurves (p-curves are unchanged because fairing keeps the parameter domain).
+    edges' p-curves (unchanged because fairing keeps the parameter domain) with the
+    source's edge tolerances; a face that is still not valid is repaired by OCCT's shape
+    fixer (wire order and orientation, edges shorter than the tolerance) within the
+    source face's largest tolerance.
 
     Raises
     ------
@@ -155,20 +179,21 @@ def face_on_surface(surface, face):
     u0, u1, v0, v1 = face.ParameterRange
     if _is_uv_rectangle(face):
         return surface.toShape(u0, u1, v0, v1)
-    wires = []
-    for wire in face.Wires:
-        edges = []
-        for edge in wire.OrderedEdges:
-            pcurve, first, last = face.curveOnSurface(edge)  # the p-curve on *this* face
-            edges.append(pcurve.toShape(surface, first, last))
-        wires.append(Part.Wire(edges))
-    result = Part.Face(surface, wires[0])
-    for inner in wires[1:]:
-        result.validate()
-        result = Part.Face(result, inner)
-    result.validate()
-    if not result.isValid():
-        raise cf.UnsupportedGeometryError(
-            "the trimmed face could not be rebuilt on the faired surface; fair the "
-            "untrimmed surface (Part > Convert) or a face trimmed to a UV rectangle.")
+    try:
+        wires = [_wire_on_surface(face, wire, surface) for wire in face.Wires]
+        result = Part.Face(surface, wires[0])
+        for inner in wires[1:]:
+            result = Part.Face(result, inner)
+        if not result.isValid():
+            result.fix(1e-7, 1e-7, max(_tolerance(face), 1e-7))
+    except Part.OCCError as error:
+        raise _not_rebuilt(f"OCCT: {error}") from error
+    if result.isNull() or not result.isValid():
+        raise _not_rebuilt("the rebuilt face is not valid")
     return result
+
+
+def _not_rebuilt(what):
+    return cf.UnsupportedGeometryError(
+        f"the trimmed face could not be rebuilt on the faired surface ({what}); fair the "
+        "untrimmed surface (Part > Convert) or a face trimmed to a UV rectangle.")
