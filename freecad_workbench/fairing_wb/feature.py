@@ -73,13 +73,6 @@ def _sewn(compound, deviation):
     return sewn if sewn.isValid() and len(sewn.Faces) == len(compound.Faces) else compound
 
 
-def _unexpected(error):
-    """``Status`` of a failure that is not a user error: one line naming it."""
-    what = " ".join(f"{type(error).__name__}: {error}".split())
-    return (f"Error: the fairing failed unexpectedly ({what}); check the Source's faces "
-            "(Part > Check geometry) or try other settings, and report it if it persists.")
-
-
 class Fairing:
     """Proxy of the Fairing feature."""
 
@@ -125,11 +118,8 @@ class Fairing:
         fails the object."""
         try:
             shape, results = self._fair(obj)
-        except cf.FairingError as error:
-            obj.Status = f"Error: {error}"
-            raise
         except Exception as error:
-            obj.Status = _unexpected(error)
+            obj.Status = f"Error: {make.error_sentence(error)}"
             raise
         obj.Shape = shape
         obj.PolesBefore = "; ".join(" x ".join(map(str, r.poles_before)) for r in results)

@@ -25,7 +25,8 @@ from cq_fairing.core.fairing import largest_resolved_scale
 
 from . import analysis, conversion
 
-__all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "FairedShape", "MODES", "METHODS",
+__all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "error_sentence",
+           "FairedShape", "MODES", "METHODS",
            "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES"]
 
 MODES = ("Tolerance", "Target")
@@ -87,12 +88,7 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
             f"{method!r} and {objective!r}.")
     if borders is not None and borders not in BORDERS:
         raise cf.InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
-    for name, value, default in (("objective", objective, "compact"),
-                                 ("borders", borders, "auto")):
-        if method != "adaptive" and value not in (None, default):
-            raise cf.InvalidInputError(
-                f"{name} {value!r} applies to the adaptive method only, got method "
-                f"{method!r}; choose method 'adaptive' or {name} {default!r}.")
+    _check_adaptive_only(method, objective, borders)
     if method == "wavelet":
         return {}
     if tolerance is None:
@@ -109,6 +105,16 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
         return {"method": method, "objective": objective,
                 **({} if borders is None else {"borders": borders})}
     return {"method": method}
+
+
+def _check_adaptive_only(method, objective, borders):
+    """``objective`` and ``borders`` other than their defaults need the adaptive method."""
+    for name, value, default in (("objective", objective, "compact"),
+                                 ("borders", borders, "auto")):
+        if method != "adaptive" and value not in (None, default):
+            raise cf.InvalidInputError(
+                f"{name} {value!r} applies to the adaptive method only, got method "
+                f"{method!r}; choose method 'adaptive' or {name} {default!r}.")
 
 
 def _check_polynomial(source, method):
@@ -161,12 +167,10 @@ def _fix_boundary(source, faired, boundary):
     target space of its direction (1-D L2-best fit), then pins the corners.  Two faces
     sharing an edge with the same parametrisation and target then share the faired edge.
     """
-    if boundary not in BOUNDARIES:
-        raise cf.InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
     if boundary == "free":
         return faired
     src, net = source.poles, faired.poles.copy()
-    if boundary == "edges" and source.weights is None:
+    if boundary == "edges":
         for i in (0, -1):
             net[i] = _faired_row(src[i], source.v_space, faired.v_space)
             net[:, i] = _faired_row(src[:, i], source.u_space, faired.u_space)
@@ -175,6 +179,23 @@ def _fix_boundary(source, faired, boundary):
             net[i, j] = src[i, j]
     return cf.BSplineSurface(net, faired.u_knots, faired.v_knots, faired.u_degree,
                              faired.v_degree, faired.weights)
+
+
+def _check_boundary(source, boundary):
+    """``boundary`` is known; ``edges`` needs a polynomial face.
+
+    The border rows of a rational face would be faired with their weights, and the
+    corner weights shared by two border curves would then disagree (each curve is only
+    defined up to a scale of its weights), so the edges are refused rather than left as
+    they are.
+    """
+    if boundary not in BOUNDARIES:
+        raise cf.InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
+    if boundary == "edges" and source.weights is not None:
+        raise cf.UnsupportedGeometryError(
+            "boundary 'edges' fairs the border curves of polynomial faces only and this face "
+            "is rational (its control points have weights); choose boundary 'corners' or "
+            "'free' for it.")
 
 
 def _search_keywords(search, measure):
@@ -234,7 +255,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     boundary : {"free", "corners", "edges"}
         ``free``: L2-best surface, the boundary may move within the tolerance;
         ``corners``: the four corner points stay; ``edges``: boundary curves are the
-        faired source boundary curves with pinned corners.
+        faired source boundary curves with pinned corners (polynomial faces only).
     search : {"linear", "guaranteed", "polyfit"}
         Accuracy-control strategy (tolerance mode), see :func:`fair_surface_net`.
     measure : {"parametric", "geometric"}
@@ -256,11 +277,13 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     Raises
     ------
     cq_fairing.FairingError
-        Any user error (non-B-spline face, rational face with ``adaptive``, bad tolerance
-        or target, target mode with ``energy``/``adaptive``, unmet tolerance).
+        Any user error (non-B-spline face, rational face with ``adaptive`` or boundary
+        ``edges``, bad tolerance or target, target mode with ``energy``/``adaptive``,
+        unmet tolerance, a trim that cannot be rebuilt).
     """
     start = time.perf_counter()
     source = conversion.surface_from_face(face)
+    _check_boundary(source, boundary)
     result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
                               borders)
     faired = _fix_boundary(source, result.surface, boundary)
@@ -308,15 +331,13 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
                        time.perf_counter() - start)
 
 
-def _element(obj, sub):
-    """The face or edge ``sub`` (``"Face3"``, ``"Edge5"``) of ``obj``'s shape, checked.
+def _existing(obj, sub):
+    """The face or edge ``sub`` (``"Face3"``, ``"Edge5"``) of ``obj``'s shape.
 
     Raises
     ------
     cq_fairing.InvalidInputError
-        If the shape has no such element (its shape changed since it was linked).
-    cq_fairing.UnsupportedGeometryError
-        If the element is not a B-spline face or edge.
+        If the shape has no such element (e.g. its shape changed since it was linked).
     """
     kind = "Face" if sub.startswith("Face") else "Edge"
     elements = obj.Shape.Faces if kind == "Face" else obj.Shape.Edges
@@ -324,15 +345,26 @@ def _element(obj, sub):
     if not index.isdigit() or not 1 <= int(index) <= len(elements):
         raise cf.InvalidInputError(
             f"{obj.Label} has no {sub}, it has {len(elements)} {kind.lower()}s (its shape "
-            "changed since it was linked); link existing faces or edges as the Source.")
-    element = elements[int(index) - 1]
-    geometry = element.Surface if kind == "Face" else element.Curve
-    wanted = Part.BSplineSurface if kind == "Face" else Part.BSplineCurve
-    if not isinstance(geometry, wanted):
+            "changed since it was linked?); link existing faces or edges as the Source.")
+    return elements[int(index) - 1]
+
+
+def _element(obj, sub):
+    """:func:`_existing`, which must be a B-spline face or edge.
+
+    Raises
+    ------
+    cq_fairing.UnsupportedGeometryError
+        If the element is not a B-spline face or edge.
+    """
+    element = _existing(obj, sub)
+    face = sub.startswith("Face")
+    geometry = element.Surface if face else element.Curve
+    if not isinstance(geometry, Part.BSplineSurface if face else Part.BSplineCurve):
         raise cf.UnsupportedGeometryError(
             f"{sub} of {obj.Label} is a {type(geometry).__name__}, not a B-spline "
-            f"{kind.lower()}; fairing applies to freeform (B-spline) geometry only, so "
-            f"remove {sub} from the selection.")
+            f"{'face' if face else 'edge'}; fairing applies to freeform (B-spline) geometry "
+            f"only, so remove {sub} from the selection.")
     return element
 
 
@@ -387,6 +419,19 @@ def fair_elements(obj, subs, settings, face_settings):
     return results
 
 
+def error_sentence(error):
+    """The one-line sentence shown for ``error`` (``Status``, the panels' error label).
+
+    A user error (:class:`cq_fairing.FairingError`) says itself what was expected, what
+    came and what to do; any other failure is named with that advice.
+    """
+    if isinstance(error, cf.FairingError):
+        return " ".join(str(error).split())
+    what = " ".join(f"{type(error).__name__}: {error}".split())
+    return (f"the fairing failed unexpectedly ({what}); check the Source's faces "
+            "(Part > Check geometry) or try other settings, and report it if it persists.")
+
+
 def _source_link(source):
     """Normalise ``source`` to ``(object, [subelement names])``."""
     if isinstance(source, (tuple, list)) and len(source) == 2:
@@ -400,6 +445,8 @@ def _source_link(source):
         raise cf.InvalidInputError(
             f"select B-spline faces or edges of one object to fair, got {subs!r} of "
             f"{getattr(obj, 'Label', obj)!r}.")
+    for sub in subs:
+        _existing(obj, sub)
     return obj, subs
 
 
@@ -433,6 +480,11 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
     """
     from . import feature, preferences
 
+    if tolerance is not None and target is not None:
+        raise cf.InvalidInputError(
+            f"give either a tolerance (mm) or target control points, not both; got "
+            f"tolerance {tolerance!r} and target {target!r}.")
+    _check_adaptive_only(method, objective, borders)
     obj_source, subs = _source_link(source)
     doc = doc or obj_source.Document
     obj = doc.addObject("Part::FeaturePython", name)
@@ -444,7 +496,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         obj.TargetU, obj.TargetV = int(target[0]), int(target[-1])
     else:
         obj.Mode = "Tolerance"
-        first = obj_source.Shape.getElement(subs[0])
+        first = _existing(obj_source, subs[0])
         if subs[0].startswith("Face") and hasattr(first.Surface, "NbUPoles"):
             obj.TargetU, obj.TargetV = first.Surface.NbUPoles, first.Surface.NbVPoles
         obj.Tolerance = (tolerance if tolerance is not None

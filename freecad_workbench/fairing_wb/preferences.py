@@ -10,7 +10,7 @@
 import FreeCAD
 
 __all__ = ["params", "default_tolerance", "sample_density", "colors", "set_colors",
-           "RELATIVE_TOLERANCE"]
+           "RELATIVE_TOLERANCE", "DENSITY_RANGE"]
 
 PATH = "User parameter:BaseApp/Preferences/Mod/Fairing"
 RELATIVE_TOLERANCE = 1e-3
@@ -29,8 +29,13 @@ def default_tolerance(shape=None):
     return RELATIVE_TOLERANCE * shape.BoundBox.DiagonalLength
 
 
+DENSITY_RANGE = (8, 400)  # samples per direction of the maps (the dialog's range)
+
+
 def sample_density():
-    return max(8, params().GetInt("SampleDensity", 60))
+    """Samples per direction of the maps, within :data:`DENSITY_RANGE` whatever is saved."""
+    low, high = DENSITY_RANGE
+    return min(max(low, params().GetInt("SampleDensity", 60)), high)
 
 
 def _unpack(packed):

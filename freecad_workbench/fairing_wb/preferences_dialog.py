@@ -29,7 +29,7 @@ class PreferencesDialog(QtWidgets.QDialog):
         self.tolerance.setToolTip("0 means 1e-3 of the model's bounding-box diagonal")
         self.density = QtWidgets.QSpinBox()
         self.density.setObjectName("fairing_sample_density")
-        self.density.setRange(8, 400)
+        self.density.setRange(*preferences.DENSITY_RANGE)
         self.density.setValue(preferences.sample_density())
         self.colors = list(preferences.colors())
         self.buttons = []

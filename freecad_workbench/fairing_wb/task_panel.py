@@ -9,7 +9,7 @@ GUI tests can find them with ``Gui.getMainWindow().findChild``.
 """
 
 import FreeCADGui
-import cq_fairing as cf
+import Part
 from PySide2 import QtCore, QtWidgets
 
 from . import icon_path, make, preferences
@@ -18,12 +18,19 @@ __all__ = ["FairSurfacePanel", "LevelsPanel", "selection_link", "make_call"]
 
 
 def selection_link(kind="Face"):
-    """``(object, [sub names])`` of the current selection's faces/edges (first object)."""
+    """``(object, [sub names])`` of the selection's B-spline faces/edges (first object
+    with any), else ``None``: the commands are disabled for other geometry."""
     for sel in FreeCADGui.Selection.getSelectionEx():
-        subs = [s for s in sel.SubElementNames if s.startswith(kind)]
+        subs = [name for name, element in zip(sel.SubElementNames, sel.SubObjects)
+                if name.startswith(kind) and _is_bspline(element)]
         if subs:
             return sel.Object, subs
     return None
+
+
+def _is_bspline(element):
+    geometry = getattr(element, "Surface", None) or getattr(element, "Curve", None)
+    return isinstance(geometry, (Part.BSplineSurface, Part.BSplineCurve))
 
 
 def make_call(link, settings, face):
@@ -189,9 +196,9 @@ class FairSurfacePanel:
         self.error.setText("")
         try:
             results = self.run()
-        except cf.FairingError as error:
+        except Exception as error:  # a slot: anything uncaught would be lost
             self.figures.setText("")
-            self.error.setText(str(error))
+            self.error.setText(make.error_sentence(error))
             return None
         lines = [f"{' x '.join(map(str, r.poles_before))} -> "
                  f"{' x '.join(map(str, r.poles_after))} control points\n"
@@ -300,8 +307,8 @@ class LevelsPanel:
         target = self.targets[index]
         try:
             result = make.fair_face(self.face, target=target)
-        except cf.FairingError as error:
-            self.error.setText(str(error))
+        except Exception as error:  # a slot: anything uncaught would be lost
+            self.error.setText(make.error_sentence(error))
             return
         self.error.setText("")
         doc = self.link[0].Document

@@ -265,6 +265,35 @@ def test_tolerance_zero_survives_save_and_reopen(doc, noisy, tmp_path):
         assert reopened.getObject("Fairing").Tolerance.Value == 0.0
 
 
+@pytest.mark.parametrize("sub", ["Face84", "Face155"])
+def test_trimmed_impeller_face_fairs_within_tolerance(doc, sub):
+    """IGES trims whose edges meet within 0.15 mm were rebuilt with 1e-7 and failed."""
+    shape = Part.Shape()
+    shape.read(str(fixtures.REAL / "impeller.igs"))
+    src = fixtures.add_shape(doc, shape, "Impeller")
+    obj = make.make_fairing((src, [sub]), tolerance=0.05)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    source = shape.getElement(sub)
+    assert obj.MaxDeviation.Value <= 0.05
+    assert fixtures.sample_distance(obj.Shape.Faces[0], source, 10) <= 0.05
+    assert obj.Shape.Faces[0].Area == pytest.approx(source.Area, rel=0.01)
+
+
+def test_make_fairing_refuses_what_it_would_ignore(doc, noisy):
+    """Both a tolerance and a target, or an adaptive-only option with another method,
+    are refused at once instead of one silently winning."""
+    import cq_fairing as cf
+
+    with pytest.raises(cf.InvalidInputError, match="not both"):
+        make.make_fairing((noisy, ["Face1"]), tolerance=0.05, target=(18, 26))
+    with pytest.raises(cf.InvalidInputError, match="adaptive method only"):
+        make.make_fairing((noisy, ["Face1"]), tolerance=0.05, objective="faithful")
+    with pytest.raises(cf.InvalidInputError, match="Noisy has no Face7, it has 1 faces"):
+        make.make_fairing((noisy, ["Face7"]), tolerance=0.05)
+    assert not [o for o in doc.Objects if o.Name.startswith("Fairing")]
+
+
 def test_preview_speed_on_50x80_face(noisy):
     face = noisy.Shape.Faces[0]
     for kwargs, limit in ((dict(target=(18, 26)), 0.5), (dict(tolerance=0.05), 1.0)):
@@ -292,6 +321,18 @@ def test_trimmed_rational_face_keeps_its_trim(doc):
     assert faired.isValid() and len(faired.Edges) == len(face.Edges)
     assert faired.Area == pytest.approx(face.Area, rel=0.02)
     assert fixtures.sample_distance(faired, face, 8) <= obj.MaxDeviation.Value * 1.05 + 1e-9
+
+
+def test_boundary_edges_refuses_a_rational_face():
+    """It used to do the same as corners on a rational face, silently."""
+    import cq_fairing as cf
+
+    face = Part.read(str(fixtures.REAL / "linkrods.step")).Faces[20]
+    assert face.Surface.isURational() or face.Surface.isVRational()
+    with pytest.raises(cf.UnsupportedGeometryError, match="choose boundary 'corners'"):
+        make.fair_face(face, target=(7, 40), boundary="edges")
+    corners = make.fair_face(face, target=(7, 40), boundary="corners")
+    assert corners.shape.isValid() and corners.poles_after == (7, 40)
 
 
 def test_energy_method_needs_a_tolerance_and_keeps_the_poles(noisy):

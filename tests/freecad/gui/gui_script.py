@@ -57,6 +57,15 @@ def press_task_ok():
     return False
 
 
+def press_task_cancel():
+    for box in Gui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
+        button = box.button(QtWidgets.QDialogButtonBox.Cancel)
+        if button is not None and button.isVisible():
+            button.click()
+            return True
+    return False
+
+
 def timed_preview(repeat=3):
     """Best wall time of clicking Preview (fairing + figures), seconds."""
     times = []
@@ -129,6 +138,80 @@ def check_adaptive_panel(doc, source):
           bool(echo) and "method='adaptive'" in echo[-1] and "objective='faithful'" in echo[-1]
           and "borders='free'" in echo[-1],
           echo[-1:] or "no make_fairing line in the Python console")
+
+
+def check_real_models(doc):
+    """Commands refuse what they cannot fair (a plane, a line); the panel fairs a trimmed
+    IGES face and a several-face target the feature accepts, and shows errors."""
+    import Part
+    import fixtures
+
+    rods = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")), "Linkrods")
+    blade = fixtures.add_shape(doc, fixtures.blade_shape(), "Blade")
+    impeller = Part.Shape()
+    impeller.read(str(fixtures.REAL / "impeller.igs"))
+    impeller = fixtures.add_shape(doc, impeller, "Impeller")
+    doc.recompute()
+    line = next(f"Edge{i + 1}" for i, e in enumerate(rods.Shape.Edges)
+                if type(e.Curve).__name__ == "Line")
+    for command, sub in (("Fairing_FairSurface", "Face3"), ("Fairing_Levels", "Face3"),
+                         ("Fairing_FairCurve", line)):
+        Gui.Selection.clearSelection()
+        Gui.Selection.addSelection(rods, sub)
+        check(f"{command} disabled for Linkrods.{sub} (not B-spline)", not is_active(command))
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(impeller, "Face84")
+    Gui.runCommand("Fairing_Levels")
+    pump()
+    check("levels panel opens on a trimmed IGES face",
+          find("fairing_level", QtWidgets.QSlider) is not None
+          and find("FairingLevelsPanel").findChild(QtWidgets.QLabel, "fairing_error").text() == "")
+    press_task_cancel()  # removes the level preview
+    pump()
+    panel_ok(impeller, ["Face84"], "Impeller Face84 tolerance 0.05", lambda: find(
+        "fairing_tolerance").setProperty("rawValue", 0.05), "13 x 12 ->")
+    panel_ok(blade, ["Face1", "Face2"], "Blade Face1+Face2 target 12 x 100",
+             lambda: (find("fairing_mode").setCurrentIndex(1), find("fairing_target_u").setValue(12),
+                      find("fairing_target_v").setValue(100)), "-> 12 x 100")
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(rods, "Face21")
+    Gui.runCommand("Fairing_FairSurface")
+    pump()
+    find("fairing_boundary").setCurrentText("edges")
+    find("fairing_preview").click()
+    pump()
+    error = find("fairing_error").text()
+    made = len(doc.Objects)
+    press_task_ok()
+    pump()
+    check("panel error on a rational face with boundary edges; OK keeps the panel",
+          "choose boundary 'corners'" in error and len(doc.Objects) == made
+          and find("FairingTaskPanel") is not None, error)
+    press_task_cancel()
+    pump()
+    for obj in (rods, blade, impeller):
+        obj.ViewObject.Visibility = False
+
+
+def panel_ok(source, subs, what, settings, expected):
+    """Fair Surface on ``subs``: Preview shows ``expected`` and no error, OK makes a valid
+    feature."""
+    Gui.Selection.clearSelection()
+    for sub in subs:
+        Gui.Selection.addSelection(source, sub)
+    Gui.runCommand("Fairing_FairSurface")
+    pump()
+    settings()
+    find("fairing_preview").click()
+    pump()
+    figures, error = find("fairing_figures").text(), find("fairing_error").text()
+    before = {o.Name for o in source.Document.Objects}
+    press_task_ok()
+    pump()
+    made = [o for o in source.Document.Objects if o.Name not in before]
+    check(f"panel fairs {what}", expected in figures and not error and len(made) == 1
+          and made[0].isValid() and made[0].Status == "OK",
+          f"{figures!r} {error!r} {[(o.Name, getattr(o, 'Status', '')) for o in made]}")
 
 
 def run():
@@ -311,6 +394,7 @@ def run():
         Gui.Selection.clearSelection()
 
     check_adaptive_panel(doc, source)
+    check_real_models(doc)
 
     # Points to surface on a grid file (the file dialog is the only part skipped).
     import numpy as np
