@@ -103,13 +103,20 @@ def _positive_float(text):
     return value
 
 
+def _file_name(text):
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a file name, got {text!r}")
+    return Path(text)
+
+
 def _face_list(text):
     """Parse ``1,3-5`` (1-based, as ``inspect`` prints) into 0-based indices."""
     indices = []
     try:
         for part in text.split(","):
-            first, _, last = part.strip().partition("-")
-            lo, hi = int(first), int(last or first)
+            first, dash, last = part.strip().partition("-")
+            lo = int(first)
+            hi = int(last) if dash else lo   # "1-" is no range: int("") refuses it
             if lo < 1 or hi < lo:
                 raise ValueError
             indices.extend(range(lo - 1, hi))
@@ -131,7 +138,7 @@ def build_parser():
 
     fair = sub.add_parser("fair", help="fair the B-spline faces of a STEP/IGES/BREP model")
     fair.add_argument("input", type=Path)
-    fair.add_argument("-o", "--output", type=Path, required=True, help=".step/.stp or .brep")
+    fair.add_argument("-o", "--output", type=_file_name, required=True, help=".step/.stp or .brep")
     fair.add_argument("--tol", type=_positive_float,
                       help="largest allowed deviation in model units "
                            "(default 1e-3 of the model's bounding-box diagonal)")
@@ -155,9 +162,9 @@ def build_parser():
                       help="keep the face borders fixed or let them move within --tol")
     fair.add_argument("--convert", action="store_true",
                       help="convert non-B-spline faces to B-splines and fair them too")
-    fair.add_argument("--report", type=Path, help="report file: .json or .html")
-    fair.add_argument("--deviation-map", type=Path, help="deviation map: .png or .vtp")
-    fair.add_argument("--curvature-map", type=Path,
+    fair.add_argument("--report", type=_file_name, help="report file: .json or .html")
+    fair.add_argument("--deviation-map", type=_file_name, help="deviation map: .png or .vtp")
+    fair.add_argument("--curvature-map", type=_file_name,
                       help="curvature before/after of the most deviated faired face: .png")
     fair.add_argument("--jobs", type=_jobs, default=1, metavar="N",
                       help="fair N faces at once, each in a worker process (default 1); "
@@ -176,7 +183,7 @@ def build_parser():
 
     points = sub.add_parser("points", help="fair a curve or grid surface through x y z points")
     points.add_argument("input", type=Path)
-    points.add_argument("-o", "--output", type=Path, required=True, help=".step/.stp or .brep")
+    points.add_argument("-o", "--output", type=_file_name, required=True, help=".step/.stp or .brep")
     points.add_argument("--tol", type=_positive_float,
                         help="largest allowed deviation (default 1e-3 of the points' extent)")
     points.add_argument("--grid", type=_point_count, nargs=2, metavar=("NU", "NV"),
@@ -230,13 +237,14 @@ def command_fair(args):
         raise InvalidInputError("give --tol or --target, not both.")
     started = time.perf_counter()
     shape = read_shape(args.input)
-    infos = list_faces(shape)
+    infos = list_faces(_converted(shape) if args.convert else shape)
     if args.faces and max(args.faces) >= len(infos):
         raise InvalidInputError(
             f"--faces names face {max(args.faces) + 1}, but {args.input} has {len(infos)} faces.")
+    n = _target_scales(args.target, [infos[i] for i in args.faces or range(len(infos))])
     tol = None if args.target else (args.tol or default_tolerance(shape))
     progress = _Progress(args.progress or sys.stderr.isatty())
-    result = fair_shape(shape, tol=tol, n=_target_scales(args.target), faces=args.faces,
+    result = fair_shape(shape, tol=tol, n=n, faces=args.faces,
                         method=args.method, objective=_objective(args),
                         borders=_borders(args),
                         convert=args.convert, progress=progress,
@@ -245,6 +253,7 @@ def command_fair(args):
     write_shape(result.shape, args.output, force=args.force, input_path=args.input)
     report = _build_report(args, result, tol, time.perf_counter() - started)
     _write_maps(args, result, tol, report)
+    _note_nothing_faired(args, result)
     if args.report:
         from .report import write_report
         write_report(report, args.report, force=args.force)
@@ -259,9 +268,17 @@ def _check_suffixes(args):
               (args.deviation_map, (".png", ".vtp"), "--deviation-map"),
               (args.curvature_map, (".png",), "--curvature-map")]
     for path, suffixes, option in checks:
-        if path is not None and path.suffix.lower() not in suffixes:
-            raise OutputPathError(
-                f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
+        if path is not None:
+            _check_suffix(path, suffixes, option)
+
+
+def _check_suffix(path, suffixes, option):
+    """Refuse an output ``path`` that is a folder or does not end in one of ``suffixes``."""
+    if path.is_dir():
+        raise OutputPathError(f"{option} {str(path)!r} is a folder; give a file name ending "
+                              f"in {' or '.join(suffixes)}.")
+    if path.suffix.lower() not in suffixes:
+        raise OutputPathError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
 
 
 def _check_method(args):
@@ -285,13 +302,62 @@ def _borders(args):
     return args.borders or "auto"
 
 
-def _target_scales(target):
-    """--target gives poles per direction; the core wants spans (poles - degree)."""
+def _converted(shape):
+    """The shape with every face a B-spline, as ``fair_shape(convert=True)`` fairs it."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+
+    return BRepBuilderAPI_NurbsConvert(shape, True).Shape()
+
+
+def _target_scales(target, infos):
+    """--target NU NV (poles per direction) as the core's scales ``n = poles - degree``.
+
+    The target degree is the face's own, at most 3, per direction (as ``fair_face``
+    chooses it).  Each selected face with poles (B-spline or Bezier) must allow the
+    poles asked for: from its target degree + 1 up to its own count; and since one
+    scale goes to every face, their target degrees must agree.
+    """
     if target is None:
         return None
-    if min(target) < 4:
-        raise InvalidInputError(f"--target needs at least 4 poles per direction, got {target}.")
-    return tuple(int(k) - 3 for k in target)
+    degrees = {}
+    for info in (i for i in infos if i.n_poles_u):
+        own = (min(3, info.u_degree), min(3, info.v_degree))
+        _check_target_poles(target, info, own)
+        degrees.setdefault(own, []).append(info.index + 1)
+    if len(degrees) > 1:
+        kinds = "; ".join(f"face{'s' * (len(faces) > 1)} {_ranges(faces)}: {du} x {dv}"
+                          for (du, dv), faces in sorted(degrees.items()))
+        raise InvalidInputError(
+            f"--target gives poles per direction, but the selected faces' targets have "
+            f"different degrees ({kinds}), so the same poles are different targets; "
+            "select faces of one degree with --faces, or use --tol.")
+    du, dv = next(iter(degrees), (3, 3))
+    return target[0] - du, target[1] - dv
+
+
+def _check_target_poles(target, info, degrees):
+    """Refuse a --target outside what ``info``'s face allows (degree + 1 to its poles)."""
+    own = (info.n_poles_u, info.n_poles_v)
+    if all(d + 1 <= t <= k for t, d, k in zip(target, degrees, own)):
+        return
+    allowed = " and ".join(f"{d + 1} to {k} in {name}"
+                           for d, k, name in zip(degrees, own, "uv"))
+    raise InvalidInputError(
+        f"--target {target[0]} {target[1]} does not fit face {info.index + 1}: it has "
+        f"{own[0]} x {own[1]} poles and a degree {degrees[0]} x {degrees[1]} target, "
+        f"which allows {allowed}; choose --target within that, select other faces with "
+        "--faces, or use --tol.")
+
+
+def _ranges(numbers):
+    """``[1, 2, 3, 5]`` -> ``"1-3,5"`` (the --faces syntax)."""
+    runs = []
+    for number in numbers:
+        if runs and number == runs[-1][1] + 1:
+            runs[-1][1] = number
+        else:
+            runs.append([number, number])
+    return ",".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
 
 
 def _all_requested_met(args, result):
@@ -336,7 +402,7 @@ def _build_report(args, result, tol, seconds):
         stats = None if not deviation else {k: deviation.get(k) for k in ("max", "mean", "rms")}
         entries.append(face_entry(
             index + 1, surface_type=face.info.surface_type if face.info else None,
-            status=_STATUS.get(face.status, "skipped"), message=face.message,
+            status=_STATUS.get(face.status, "skipped"), message=_in_options(face.message),
             poles_before=face.poles_before, poles_after=face.poles_after,
             max_deviation=face.max_deviation, tolerance=face.tolerance,
             fairness_before=before, fairness_after=after, seconds=face.seconds,
@@ -348,6 +414,32 @@ def _build_report(args, result, tol, seconds):
                         max_gap=result.max_gap,
                         valid=result.valid, seconds=seconds,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
+
+
+def _in_options(message):
+    """A face message in the command's terms (the API's ``convert=True`` is ``--convert``)."""
+    return message and message.replace("pass convert=True", "pass --convert")
+
+
+def _note_nothing_faired(args, result):
+    """One note on stderr when no face was faired: the faces' statuses, the maps not
+    written, and ``--convert`` where faces were skipped for not being B-splines."""
+    if _faired(result):
+        return
+    counts = {}
+    for face in result.faces:
+        if face.status != "skipped-not-selected":
+            counts[face.status] = counts.get(face.status, 0) + 1
+    why = ", ".join(f"{count} {status}" for status, count in sorted(counts.items()))
+    maps = " and ".join(option for option, path in (("--deviation-map", args.deviation_map),
+                                                    ("--curvature-map", args.curvature_map))
+                        if path)
+    notes = [f"no face was faired ({why})"]
+    if "skipped-not-bspline" in counts and not args.convert:
+        notes.append("pass --convert to fair the faces that are not B-splines")
+    if maps:
+        notes.append(f"{maps} not written (they show faired faces)")
+    print(f"cq-fairing: note: {'; '.join(notes)}.", file=sys.stderr)
 
 
 def _write_maps(args, result, tol, report):
@@ -413,8 +505,7 @@ def command_points(args):
     from . import fair_curve, fair_surface, interpolate_grid, interpolate_points
     from .report import check_output_path
 
-    if args.output.suffix.lower() not in (".step", ".stp", ".brep"):
-        raise OutputPathError(f"--output must end in .step, .stp or .brep, got {str(args.output)!r}.")
+    _check_suffix(args.output, (".step", ".stp", ".brep"), "--output")
     check_output_path(args.output, force=args.force, inputs=(args.input,))
     points = _read_points(args.input)
     extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
