@@ -267,7 +267,8 @@ def _damped(trial, active, step, dist, halvings=5):
     return new, d_new
 
 
-def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=None):
+def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=None,
+                           bounds=None):
     r"""Foot points on ``surface`` by damped, clamped 2x2 Newton iterations.
 
     Solves :math:`g = (S_u\cdot r,\ S_v\cdot r) = 0`, :math:`r = S(u, v) - P`, with the
@@ -276,7 +277,9 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     domain and halving steps until the distance decreases.  With ``stop_below`` a point
     stops once its distance is at most that value; it has converged once its step would
     move the foot point by less than ``STEP_FLOOR`` times the surface's size (as
-    :func:`closest_points_curve`).
+    :func:`closest_points_curve`).  ``bounds`` ``((u0, u1), (v0, v1))`` inside the
+    domain restricts the foot points to that parameter box (a face's UV box); default
+    the whole domain.
 
     Returns
     -------
@@ -284,7 +287,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         ``distance`` is that of an actual surface point: never below the exact one.
     """
     points = np.asarray(points, dtype=float)
-    (ulo, uhi), (vlo, vhi) = surface.domain
+    (ulo, uhi), (vlo, vhi) = surface.domain if bounds is None else bounds
     uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
                    np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
     dist = _distance(_derivatives_in_domain(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
@@ -296,28 +299,9 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         if active.size == 0:
             break
         s = _derivatives_in_domain(surface, uv[active, 0], uv[active, 1], 2)
-        r = s[(0, 0)] - points[active]
-        su, sv = s[(1, 0)], s[(0, 1)]
-        g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
-        a = np.einsum("qd,qd->q", su, su)
-        b = np.einsum("qd,qd->q", su, sv)
-        c = np.einsum("qd,qd->q", sv, sv)
-        ha = a + np.einsum("qd,qd->q", s[(2, 0)], r)
-        hb = b + np.einsum("qd,qd->q", s[(1, 1)], r)
-        hc = c + np.einsum("qd,qd->q", s[(0, 2)], r)
-        det = ha * hc - hb * hb
-        bad = (det <= 1e-12 * (a * c + 1e-300)) | (ha <= 0)
-        ha, hb, hc = np.where(bad, a, ha), np.where(bad, b, hb), np.where(bad, c, hc)
-        det = ha * hc - hb * hb
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
-        cur = uv[active]
-        blocked_u = ((cur[:, 0] <= ulo) & (step[:, 0] < 0)) | ((cur[:, 0] >= uhi) & (step[:, 0] > 0))
-        blocked_v = ((cur[:, 1] <= vlo) & (step[:, 1] < 0)) | ((cur[:, 1] >= vhi) & (step[:, 1] > 0))
-        # on a boundary: minimise along it (1-D Newton in the free parameter)
-        step[:, 0] = np.where(blocked_u, 0.0, np.where(blocked_v, -g1 / np.maximum(ha, 1e-300), step[:, 0]))
-        step[:, 1] = np.where(blocked_v, 0.0, np.where(blocked_u, -g2 / np.maximum(hc, 1e-300), step[:, 1]))
-        moves = a * step[:, 0] ** 2 + 2 * b * step[:, 0] * step[:, 1] + c * step[:, 1] ** 2
+        with np.errstate(over="ignore", invalid="ignore"):  # a collapsed surface: S_u = 0
+            step, moves = _newton_step(s, s[(0, 0)] - points[active], uv[active],
+                                       ((ulo, uhi), (vlo, vhi)))
         big = (np.abs(step).sum(axis=1) > 1e-13 * scale) & (moves > (STEP_FLOOR * size) ** 2)
         active, step = active[big], step[big]
         if active.size == 0:
@@ -335,6 +319,64 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         uv[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
     return uv[:, 0], uv[:, 1], dist
+
+
+def _newton_step(s, r, uv, bounds):
+    """Newton step of :func:`closest_points_surface` at derivatives ``s`` and residuals
+    ``r`` (Gauss-Newton where the Hessian is not positive definite), held at the borders
+    (:func:`_border_step`), and the squared length of the foot point's move."""
+    su, sv = s[(1, 0)], s[(0, 1)]
+    g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
+    a = np.einsum("qd,qd->q", su, su)
+    b = np.einsum("qd,qd->q", su, sv)
+    c = np.einsum("qd,qd->q", sv, sv)
+    ha = a + np.einsum("qd,qd->q", s[(2, 0)], r)
+    hb = b + np.einsum("qd,qd->q", s[(1, 1)], r)
+    hc = c + np.einsum("qd,qd->q", s[(0, 2)], r)
+    det = ha * hc - hb * hb
+    bad = (det <= 1e-12 * (a * c + 1e-300)) | (ha <= 0)
+    ha, hb, hc = np.where(bad, a, ha), np.where(bad, b, hb), np.where(bad, c, hc)
+    det = ha * hc - hb * hb
+    det = np.where(np.abs(det) > 1e-300, det, 1e-300)
+    step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
+    step = _border_step(step, uv, (g1, g2), (ha, hc), bounds)
+    moves = a * step[:, 0] ** 2 + 2 * b * step[:, 0] * step[:, 1] + c * step[:, 1] ** 2
+    return step, moves
+
+
+def _border_step(step, uv, gradient, curvature, bounds):
+    r"""The Newton ``step`` of foot points ``uv`` with the domain's borders as constraints.
+
+    A parameter on a border whose 2-D step leaves the domain is held there, and the
+    other one takes the 1-D Newton step :math:`-g_i / h_{ii}` along that border.  At a
+    corner the 2-D step can point out of both borders while the minimum lies along one
+    of them (the coupling :math:`h_{uv}` turns the step): each 1-D step that points
+    inward is then a candidate, and the one with the larger predicted decrease
+    :math:`g_i^2 / h_{ii}` is taken (IEA blade face 2: the corner at 0.2951, the border
+    minimum 0.0246 along it at 0.2937).
+    """
+    (g1, g2), (ha, hc) = gradient, curvature
+    along = np.stack([-g1 / np.maximum(ha, 1e-300), -g2 / np.maximum(hc, 1e-300)], axis=1)
+    leaves = [_leaves(uv[:, i], step[:, i], bounds[i]) for i in (0, 1)]
+    inward = [~_leaves(uv[:, i], along[:, i], bounds[i]) for i in (0, 1)]
+    gain = np.stack([g1 * g1 / np.maximum(ha, 1e-300), g2 * g2 / np.maximum(hc, 1e-300)], axis=1)
+    corner = leaves[0] & leaves[1]
+    take_u = corner & inward[0] & (~inward[1] | (gain[:, 0] >= gain[:, 1]))
+    take_v = corner & inward[1] & ~take_u
+    out = step.copy()
+    out[:, 0] = np.where(leaves[1] & ~leaves[0], along[:, 0], out[:, 0])
+    out[:, 1] = np.where(leaves[0] & ~leaves[1], along[:, 1], out[:, 1])
+    out[leaves[0], 0] = 0.0
+    out[leaves[1], 1] = 0.0
+    out[take_u, 0] = along[take_u, 0]
+    out[take_v, 1] = along[take_v, 1]
+    return out
+
+
+def _leaves(x, step, bounds):
+    """True where a parameter on a border of ``bounds`` would step out of it."""
+    low, high = bounds
+    return ((x <= low) & (step < 0)) | ((x >= high) & (step > 0))
 
 
 # -- results ---------------------------------------------------------------------------------

@@ -2,9 +2,10 @@ r"""Deviation and curvature of core surfaces on sample grids (numpy + scipy only
 
 Deviation of the faired surface :math:`F` from the source :math:`S` at a sample
 :math:`p = F(u_i, v_j)` is the signed distance to the closest point of :math:`S`:
-the foot point :math:`(u^*, v^*) = \arg\min |S(u, v) - p|^2` is found by Gauss-Newton
-steps :math:`\Delta = (J^T J)^{-1} J^T (p - S)`, :math:`J = [S_u\ S_v]`, started at the
-nearest point of a dense source sample and kept inside the face's parameter box; then
+the foot point :math:`(u^*, v^*) = \arg\min |S(u, v) - p|^2` is found by the core's
+damped Newton iterations (``cq_fairing.core.measures.closest_points_surface``: they
+slide along the border of the face's parameter box where the minimum lies on it),
+started at the nearest point of a dense source sample; then
 :math:`|d| = |p - S(u^*, v^*)|` with the sign of :math:`(p - S)\cdot n_S`.  The tests
 compare it with FreeCAD's ``Part.Face.distToShape``.
 
@@ -14,6 +15,8 @@ Curvatures follow from the fundamental forms: with :math:`E, F, G` and :math:`L,
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from cq_fairing.core.measures import closest_points_surface
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation", "curvature"]
 
@@ -58,17 +61,11 @@ def _point_and_tangents(surface, u, v):
     return point, (su[:, :-1] - point * wu) / w, (sv[:, :-1] - point * wv) / w
 
 
-def foot_points(surface, points, u, v, uv_range, iterations=4):
-    """Gauss-Newton closest points on ``surface`` from start parameters ``u, v``."""
+def foot_points(surface, points, u, v, uv_range):
+    """Closest points on ``surface`` inside ``uv_range`` from start parameters ``u, v``,
+    and the unit normals there."""
     u0, u1, v0, v1 = uv_range
-    for _ in range(iterations):
-        s, su, sv = _point_and_tangents(surface, u, v)
-        r = points - s
-        a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
-        g1, g2 = (su * r).sum(1), (sv * r).sum(1)
-        det = np.where(np.abs(a * c - b * b) > 1e-300, a * c - b * b, 1e-300)
-        u = np.clip(u + (c * g1 - b * g2) / det, u0, u1)
-        v = np.clip(v + (a * g2 - b * g1) / det, v0, v1)
+    u, v, _ = closest_points_surface(surface, points, u, v, bounds=((u0, u1), (v0, v1)))
     s, su, sv = _point_and_tangents(surface, u, v)
     n = np.cross(su, sv)
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)

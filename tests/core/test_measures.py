@@ -426,3 +426,26 @@ def test_a_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(
                                      window=0, tol=tol, verdict=True)
     assert np.all(once >= either * (1 - 1e-12))
     assert np.allclose(once[once <= tol], either[once <= tol], rtol=1e-12, atol=0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(shear=st.floats(-0.95, 0.95), stretch=st.floats(0.3, 3.0),
+       point=st.tuples(st.floats(-1.0, 2.0), st.floats(-1.0, 2.0), st.floats(-1.0, 1.0)),
+       corner=st.tuples(st.integers(0, 1), st.integers(0, 1)))
+def test_foot_points_slide_along_a_border_from_a_corner(shear, stretch, point, corner):
+    """On a sheared planar patch S(u, v) = (u + shear v, stretch v, 0) the squared
+    distance is a convex quadratic, so its minimum over the unit box is the one foot
+    point: closest-point iterations started at any corner must reach it, also where the
+    2-D Newton step points out of both borders at that corner and the minimum lies
+    along one of them (the distance is then that of the exact constrained minimum,
+    found here by brute force on a fine grid)."""
+    x = np.linspace(0.0, 1.0, 4)
+    poles = np.array([[(a + shear * b, stretch * b, 0.0) for b in x] for a in x])
+    surface = cf.make_surface(poles, degree=1)
+    p = np.array([point])
+    _, _, dist = M.closest_points_surface(surface, p, [float(corner[0])], [float(corner[1])])
+    fine = np.linspace(0.0, 1.0, 801)
+    grid = surface.evaluate_grid(fine, fine)
+    brute = np.linalg.norm(grid - p[0], axis=2).min()
+    assert dist[0] <= brute + 1e-9
+    assert dist[0] >= brute - 5e-3  # the grid's own spacing bounds how far below it can be

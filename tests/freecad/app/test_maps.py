@@ -44,6 +44,28 @@ def test_deviation_map_values_match_occt_distance(doc, fairing):
     assert dmap.Unit == "mm"
 
 
+def test_deviation_at_the_border_matches_occt_on_the_iea_blade(doc):
+    """IEA blade Face2 at 0.5 mm (geometric measure): the largest deviation sits at a
+    corner sample whose closest source point lies on the face's border.  Foot points
+    that slide along the border give FreeCAD's distance there (they once stopped at
+    0.6076 where ``distToShape`` gives 0.4962, above the tolerance)."""
+    shape = Part.read(str(fixtures.BLADE))
+    blade = fixtures.add_shape(doc, shape, "Blade")
+    obj = make.make_fairing((blade, ["Face2"]), tolerance=0.5, measure="geometric")
+    doc.recompute()
+    assert obj.isValid(), obj.Status
+    source_face = shape.Faces[1]
+    source = conversion.surface_from_face(source_face)
+    faired = conversion.surface_from_face(obj.Shape.Faces[0])
+    points, d = analysis.signed_deviation(source, faired, conversion.uv_range(source_face, source),
+                                          30)
+    occt = np.array([source_face.distToShape(Part.Vertex(FreeCAD.Vector(*p)))[0]
+                     for p in points.reshape(-1, 3)])
+    np.testing.assert_allclose(np.abs(d).ravel(), occt, rtol=1e-3, atol=1e-6)
+    assert obj.MaxDeviation.Value == pytest.approx(occt.max(), rel=1e-3)
+    assert obj.MaxDeviation.Value <= 0.5
+
+
 def test_colours_run_green_to_red(doc, fairing):
     dmap = deviation_map.make_map(fairing)
     doc.recompute()
