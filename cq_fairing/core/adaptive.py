@@ -918,11 +918,16 @@ def net_lengths(poles):
     Returns
     -------
     (float, float)
-        Positive (a degenerate direction gets a billionth of the other's length).
+        Positive (a degenerate direction gets a billionth of the other's length); ``(1,
+        1)`` for a net below ``1e-50`` in both directions (all poles coincident, or a
+        model so small that the energy's fifth powers of its lengths would underflow:
+        any net is then within every admissible tolerance).
     """
     lu = float(np.mean(np.linalg.norm(np.diff(poles, axis=0), axis=-1).sum(axis=0)))
     lv = float(np.mean(np.linalg.norm(np.diff(poles, axis=1), axis=-1).sum(axis=1)))
-    floor = 1e-9 * max(lu, lv, 1e-300)
+    if max(lu, lv) < 1e-50:
+        return 1.0, 1.0
+    floor = 1e-9 * max(lu, lv)
     return max(lu, floor), max(lv, floor)
 
 

@@ -232,7 +232,10 @@ def fair_surface_energy(surface, tol, *, rtol=1e-6, max_sweeps=200):
             "energy fairing needs a polynomial (non-rational) surface; use method='wavelet'."
         )
     if min(surface.u_degree, surface.v_degree) < 2:
-        raise InvalidInputError("thin-plate energy fairing needs degree >= 2 in u and v.")
+        raise UnsupportedGeometryError(
+            f"thin-plate energy fairing needs degree >= 2 in u and v, this surface is "
+            f"{surface.u_degree} x {surface.v_degree} (its second derivatives vanish along a "
+            "degree-1 direction); use method='wavelet'.")
     ku, kv, d = surface.poles.shape
     K = surface_energy_matrix(surface)
     diag = K.diagonal()

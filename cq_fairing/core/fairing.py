@@ -22,9 +22,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import InvalidInputError, InvalidTargetError, NumericalError
+from ..errors import InvalidInputError, InvalidTargetError, NumericalError, UnsupportedGeometryError
 from .decomposition import decomposition
-from .geometry import BSplineCurve, BSplineSurface, make_curve, make_surface
+from .geometry import BSplineCurve, BSplineSurface, make_curve, make_surface, split_pair
 from .robustness import LocalFrame
 from .schedule import plan_spaces
 from .spaces import SplineSpace
@@ -481,8 +481,9 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
         error (:mod:`cq_fairing.core.adaptive`), usually fewer poles than the
         quasi-uniform ``V_n`` at the same ``tol``; one direct decomposition step, so
         ``details``/``reconstruct`` still work.  ``"energy"``: Eck-Hadenfeld local
-        energy fairing (:mod:`cq_fairing.core.energy`, derivative ``l = 3``) that keeps
-        the poles and moves none farther than ``tol``.  Both need ``tol`` and no ``n``.
+        energy fairing (:mod:`cq_fairing.core.energy`, derivative ``l = 3``, ``l = 2``
+        for quadratics; degree >= 2) that keeps the poles and moves none farther than
+        ``tol``.  Both need ``tol`` and no ``n``.
     objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``, the
         rest of the budget spent on fairness.  ``"faithful"``: stop where the residual
@@ -520,7 +521,11 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     if method == "energy":
         from .energy import fair_curve_energy
 
-        return fair_curve_energy(curve, tol)
+        if curve.degree < 2:
+            raise UnsupportedGeometryError(
+                "energy fairing needs degree >= 2 (the second derivatives of a degree-1 "
+                "curve vanish between its poles); use method='wavelet'.")
+        return fair_curve_energy(curve, tol, l=min(3, curve.degree))
     if method == "adaptive":
         from .adaptive import fair_curve_adaptive
 
@@ -601,21 +606,22 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     if method == "adaptive":
         from .adaptive import fair_surface_adaptive
 
-        return fair_surface_adaptive(surface, tol, target_degree=target_degree,
+        return fair_surface_adaptive(surface, tol,
+                                     target_degree=split_pair(target_degree, "target_degree"),
                                      objective=objective, borders=borders)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
             f"got n={n!r}, tol={tol!r}."
         )
-    tdu, tdv = _split_pair(target_degree, "target_degree")
+    tdu, tdv = split_pair(target_degree, "target_degree")
     if tol is not None:
         from .accuracy import fair_surface_to_tolerance
 
         return fair_surface_to_tolerance(surface, tol, target_degree=(tdu, tdv),
                                          schedule=schedule, strategy=strategy,
                                          deviation=deviation)
-    nu, nv = _split_pair(n, "n")
+    nu, nv = split_pair(n, "n")
     target_u = _direction_target(surface.u_space, nu, tdu)
     target_v = _direction_target(surface.v_space, nv, tdv)
     return project_surface(surface, target_u, target_v, schedule)
@@ -641,16 +647,6 @@ def _tolerance_method(method, objective, n, tol, borders="auto"):
             f"method={method!r} {what} and needs tol (the largest allowed deviation) and "
             f"no n; got n={n!r}, tol={tol!r}.")
     return method
-
-
-def _split_pair(value, name):
-    if value is None:
-        return None, None
-    if np.ndim(value) == 0:
-        return value, value
-    if len(value) != 2:
-        raise InvalidInputError(f"{name} must be one value or a pair (u, v), got {value!r}.")
-    return tuple(value)
 
 
 def _direction_target(space, n, degree):

@@ -12,7 +12,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidInputError
-from .spaces import SplineSpace, basis_functions, find_spans
+from .spaces import SplineSpace, basis_functions, find_spans, real_array
 from .taylor import TaylorSurface
 
 # Products up to these sizes (m n k for a matrix product, n k for a matrix-vector one) run
@@ -24,6 +24,10 @@ ONE_THREAD_GEMV = 2304 * 4
 # Elements of one slice of GridBlocks' sparse product (1 MB): the slice is still in the
 # cache when it is transposed into place, and no grid-sized temporary is allocated.
 ALONG_V_SLICE = 2 ** 17
+# largest coordinate magnitude and smallest non-zero extent accepted: squared distances
+# and the fifth powers of a net's lengths (curvature-variation energy) stay in float range
+COORDINATE_LIMIT = 1e50
+EXTENT_FLOOR = 1e-50
 
 __all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles", "extent"]
 
@@ -325,22 +329,39 @@ def _binom(n, k):
     return comb(n, k)
 
 
+def split_pair(value, name):
+    """``(u, v)`` from one value for both directions or a pair; ``(None, None)`` for
+    ``None``; :class:`InvalidInputError` for anything else."""
+    if value is None:
+        return None, None
+    if np.ndim(value) == 0:
+        return value, value
+    if len(value) != 2:
+        raise InvalidInputError(f"{name} must be one value or a pair (u, v), got {value!r}.")
+    return tuple(value)
+
+
+def _check_scale(arr, name):
+    """Refuse coordinates beyond ``COORDINATE_LIMIT`` and a non-zero extent below
+    ``EXTENT_FLOOR`` (squared distances would overflow or underflow)."""
+    largest = float(np.abs(arr).max(initial=0.0))
+    if largest > COORDINATE_LIMIT:
+        raise InvalidInputError(
+            f"{name} reach {largest:.3g} in magnitude; coordinates up to "
+            f"{COORDINATE_LIMIT:.0e} are supported: express the model in larger units."
+        )
+    flat = arr.reshape(-1, arr.shape[-1])
+    extent = float((flat.max(axis=0) - flat.min(axis=0)).max()) if flat.size else 0.0
+    if 0.0 < extent < EXTENT_FLOOR:
+        raise InvalidInputError(
+            f"{name} span only {extent:.3g} model units; extents from {EXTENT_FLOOR:.0e} "
+            "are supported (or all points coincident): express the model in smaller units."
+        )
+
+
 def as_poles(poles, name="poles", ndim=2):
     """Validate a pole array: float, finite, of ``ndim`` axes, last axis 1..4 coordinates."""
-    numeric = f"{name} must be a numeric array, got {type(poles).__name__}."
-    try:
-        raw = np.asarray(poles)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(numeric) from exc
-    if raw.dtype.kind == "c":
-        raise InvalidInputError(
-            f"{name} must be real coordinates, got complex numbers; pass the real part "
-            "explicitly if that is what you mean."
-        )
-    try:
-        arr = raw.astype(float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(numeric) from exc
+    arr = real_array(poles, name)
     if arr.ndim != ndim:
         expected = "(k, d)" if ndim == 2 else "(k_u, k_v, d)"
         raise InvalidInputError(
@@ -356,13 +377,14 @@ def as_poles(poles, name="poles", ndim=2):
             f"{name} contain NaN or inf (first at index {tuple(int(i) for i in bad)}); "
             "repair or drop those points before fairing."
         )
+    _check_scale(arr, name)
     return arr
 
 
 def _as_weights(weights, shape):
     if weights is None:
         return None
-    w = np.asarray(weights, dtype=float)
+    w = real_array(weights, "weights")
     if w.shape != tuple(shape):
         raise InvalidInputError(f"weights must have shape {tuple(shape)}, got {w.shape}.")
     bad = np.argwhere(~np.isfinite(w) | (w <= 0))
@@ -422,8 +444,7 @@ def make_surface(poles, u_knots=None, v_knots=None, degree=None, weights=None):
         On a wrong shape, NaN/inf, too few poles, bad knots or bad weights.
     """
     P = as_poles(poles, "poles", 3)
-    du, dv = (3, 3) if degree is None else (
-        (degree, degree) if np.ndim(degree) == 0 else tuple(degree))
+    du, dv = (3, 3) if degree is None else split_pair(degree, "degree")
     spaces = []
     for knots, k, d, name in ((u_knots, P.shape[0], du, "u"), (v_knots, P.shape[1], dv, "v")):
         d = _check_degree(d)

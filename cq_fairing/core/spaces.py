@@ -20,6 +20,25 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidTargetError
 
+
+def real_array(values, name):
+    """``values`` as a float array; :class:`InvalidInputError` for text, complex numbers or
+    anything else that is not a real numeric array."""
+    numeric = f"{name} must be a numeric array, got {type(values).__name__}."
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(numeric) from exc
+    if raw.dtype.kind == "c":
+        raise InvalidInputError(
+            f"{name} must be real numbers, got complex numbers; pass the real part "
+            "explicitly if that is what you mean."
+        )
+    try:
+        return raw.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(numeric) from exc
+
 __all__ = ["SplineSpace", "basis_functions", "find_spans", "require_in_domain"]
 
 
@@ -60,7 +79,7 @@ class SplineSpace:
                 f"degree must be an integer >= 1, got {degree!r}; pass e.g. degree=3."
             )
         degree = int(degree)
-        t = np.asarray(knots, dtype=float)
+        t = real_array(knots, "knots")
         if t.ndim != 1:
             raise InvalidInputError(
                 f"knots must be a 1-D array, got shape {t.shape}; pass the full knot vector."

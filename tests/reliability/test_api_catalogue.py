@@ -16,7 +16,8 @@ import pytest
 
 import cq_fairing as cf
 from cq_fairing.errors import (FairingError, InvalidInputError, InvalidTargetError,
-                               InvalidToleranceError, NumericalError, ToleranceNotMetError)
+                               InvalidToleranceError, NumericalError, ToleranceNotMetError,
+                               UnsupportedGeometryError)
 
 RNG = np.random.default_rng(7)
 P = RNG.normal(size=(20, 3))            # 20 poles, cubic: n in 1..17
@@ -153,6 +154,27 @@ CASES = [
      InvalidInputError, "inf"),
     ("net 1xN names the direction", lambda: cf.fair_surface(NET[:1], (1, 3)),
      InvalidInputError, r"surface|\bu\b"),
+    # found by the fifteenth session's QA pass
+    ("degree of three values", lambda: cf.fair_surface(NET, (3, 3), degree=(3, 3, 3)),
+     InvalidInputError, "pair"),
+    ("degree [3]", lambda: cf.fair_surface(NET, (3, 3), degree=[3]), InvalidInputError, "pair"),
+    ("adaptive target_degree of three values",
+     lambda: cf.fair_surface(NET, tol=1.0, method="adaptive", target_degree=(3, 3, 3)),
+     InvalidInputError, "target_degree"),
+    ("knots as text", lambda: cf.fair_curve(P, 5, knots="abc"), InvalidInputError,
+     "knots must be a numeric array"),
+    ("weights as text", lambda: cf.fair_curve(P, 5, weights=["a"] * 20), InvalidInputError,
+     "weights must be a numeric array"),
+    ("complex knots", lambda: cf.fair_curve(P, 5, knots=KNOTS + 0j), InvalidInputError,
+     "complex"),
+    ("complex weights", lambda: cf.fair_curve(P, 5, weights=np.ones(20) + 1j),
+     InvalidInputError, "complex"),
+    ("coordinates beyond 1e50", lambda: cf.fair_curve(P * 1e60, tol=1e58), InvalidInputError,
+     "larger units"),
+    ("extent below 1e-50", lambda: cf.fair_curve(P * 1e-170, tol=5e-172), InvalidInputError,
+     "smaller units"),
+    ("energy on a degree-1 curve", lambda: cf.fair_curve(P, tol=0.5, degree=1, method="energy"),
+     UnsupportedGeometryError, "degree >= 2.*method='wavelet'"),
 ]
 
 
@@ -218,6 +240,25 @@ def test_degenerate_nets_fair_without_nan(kind, mode):
     if kind == "coincident":
         assert np.allclose(result.poles, (1.0, 2.0, 3.0), atol=1e-12)
     assert np.allclose(result.reconstruct(), net, atol=1e-9 * (1 + np.abs(net).max()))
+
+
+@pytest.mark.parametrize("method", ["adaptive", "energy"])
+@pytest.mark.parametrize("kind", ["coincident", "line", "flat"])
+def test_degenerate_nets_fair_by_the_tolerance_methods_without_warnings(kind, method):
+    """All poles at one point, on one line, or in a plane: the adaptive method (whose
+    polish scales its energy by the net's lengths, zero for a point) and energy fairing
+    finish within tol, without overflow warnings from the collapsed closest points."""
+    u, v = np.meshgrid(np.linspace(0, 1, 7), np.linspace(0, 1, 6), indexing="ij")
+    nets = {"coincident": np.broadcast_to((1.0, 2.0, 3.0), (7, 6, 3)),
+            "line": np.stack([u, 0 * v, 0 * u], axis=2),
+            "flat": np.stack([u, v, 0 * u], axis=2)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = cf.fair_surface(nets[kind], tol=1e-3, method=method)
+    _finite_result(result)
+    assert result.max_deviation <= 1e-3
+    if kind == "coincident":
+        assert np.allclose(result.poles, (1.0, 2.0, 3.0), atol=1e-12)
 
 
 def test_tiny_tolerance_returns_the_source_space_with_zero_deviation():

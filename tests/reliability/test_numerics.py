@@ -118,6 +118,30 @@ def test_tolerance_search_is_scale_invariant():
     assert len(chosen) == 1
 
 
+@pytest.mark.parametrize("method", ["wavelet", "adaptive", "energy"])
+def test_every_method_is_scale_invariant_up_to_the_supported_extremes(method):
+    """The same relative deviation at 1e-45 and 1e45 model units as at 1 (the adaptive
+    polish's energy scales with the fifth power of the net's lengths), without
+    warnings; coordinates beyond 1e50, or a non-zero extent below 1e-50, are refused
+    (squared distances would overflow or underflow: a tiny net once came back 'within
+    tol' at nine times tol)."""
+    rng = np.random.default_rng(1)
+    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12), indexing="ij")
+    net = np.stack([u, v, 0.1 * np.sin(6 * u)], axis=2) + 2e-3 * rng.normal(size=(12, 12, 3))
+    relative = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for scale in (1e-45, 1.0, 1e45):
+            result = cf.fair_surface(net * scale, tol=0.01 * scale, method=method)
+            relative.append(result.max_deviation / scale)
+    assert max(relative) <= 0.01
+    assert np.ptp(relative) <= 1e-9
+    with pytest.raises(InvalidInputError, match="larger units"):
+        cf.fair_surface(net * 1e60, tol=1e58, method=method)
+    with pytest.raises(InvalidInputError, match="smaller units"):
+        cf.fair_curve(net[:, 0] * 1e-170, tol=5e-172, method=method)
+
+
 def test_small_part_far_from_origin_keeps_its_own_accuracy():
     """A 1 mm part 1000 km away keeps its accuracy up to the spacing of its coordinates.
 
