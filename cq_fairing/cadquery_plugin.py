@@ -72,6 +72,9 @@ def fair_shape(shape, *, tol=None, n=None, method="wavelet", objective="compact"
 def _face_indices(shape, faces):
     if faces is None:
         return None
+    if isinstance(faces, cq.Face) or not hasattr(faces, "__iter__"):
+        raise InvalidInputError(
+            f"faces must be a list of face indices or cq.Face objects, got {faces!r}.")
     all_faces = indexed_faces(shape.wrapped)
     out = []
     for item in faces:

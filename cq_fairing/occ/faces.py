@@ -248,15 +248,25 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     criteria = _criteria(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
-    except UnsupportedGeometryError:  # the adaptive and energy methods refuse weights
+    except UnsupportedGeometryError as exc:  # weights; energy: a degree-1 direction
         if method not in TOLERANCE_ONLY:
             raise
-        report = FaceFairReport(face, "skipped-rational", (
-            f"rational face left unchanged: method={method!r} fairs polynomial surfaces "
-            "only; use method='wavelet' for it."), info=info, tolerance=tol)
+        report = _not_for_this_method(face, info, method, tol, exc)
     report.original = face
     report.seconds = time.perf_counter() - start
     return report
+
+
+def _not_for_this_method(face, info, method, tol, refusal):
+    """Report of a face the adaptive or energy method does not fair: rational faces are
+    ``'skipped-rational'``; any other refusal of the core (energy fairing of a face with
+    a degree-1 direction) leaves the face ``'unchanged'`` with the core's reason."""
+    if info.rational:
+        return FaceFairReport(face, "skipped-rational", (
+            f"rational face left unchanged: method={method!r} fairs polynomial surfaces "
+            "only; use method='wavelet' for it."), info=info, tolerance=tol)
+    return FaceFairReport(face, "unchanged", f"face left unchanged: {refusal}", info=info,
+                          tolerance=tol)
 
 
 class AdaptiveTarget(NamedTuple):

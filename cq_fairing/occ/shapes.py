@@ -78,11 +78,17 @@ def _selection(faces, count):
     if faces is None:
         return set(range(count))
     try:
-        chosen = {int(i) for i in faces}
-    except (TypeError, ValueError) as exc:
+        chosen = list(faces)
+    except TypeError as exc:
         raise InvalidInputError(
             f"faces must be an iterable of face indices (0-based), got {faces!r}."
         ) from exc
+    odd = [i for i in chosen if isinstance(i, bool) or not isinstance(i, (int, np.integer))]
+    if odd:
+        raise InvalidInputError(
+            f"faces must hold integer face indices (0-based), got {odd[0]!r}; e.g. faces=[0, 2]."
+        )
+    chosen = {int(i) for i in chosen}
     bad = sorted(i for i in chosen if not 0 <= i < count)
     if bad:
         raise InvalidInputError(

@@ -50,11 +50,17 @@ def noisy_curve(k, amplitude, seed):
 
 
 def brute_hausdorff_curve(a, b, u, dense=200_001):
-    """Two-sided max distance from the samples u to a dense polyline of the other curve."""
+    """Two-sided max distance from the samples u to dense points of the other curve, and
+    how far above the curve's own distance that can lie: a foot point between two dense
+    points ``h`` apart is at most ``h / 2`` from one of them, so the point distance
+    ``sqrt(d^2 + (h/2)^2)`` exceeds ``d`` by less than ``(h/2)^2 / d``."""
     x = np.linspace(0, 1, dense)
-    da = cKDTree(b.evaluate(x)).query(a.evaluate(u))[0]
-    db = cKDTree(a.evaluate(x)).query(b.evaluate(u))[0]
-    return max(da.max(), db.max())
+    dense_a, dense_b = a.evaluate(x), b.evaluate(x)
+    da = cKDTree(dense_b).query(a.evaluate(u))[0]
+    db = cKDTree(dense_a).query(b.evaluate(u))[0]
+    value = max(da.max(), db.max())
+    gap = max(np.linalg.norm(np.diff(d, axis=0), axis=1).max() for d in (dense_a, dense_b))
+    return value, (gap / 2) ** 2 / value
 
 
 @settings(max_examples=12)
@@ -66,10 +72,10 @@ def test_curve_max_deviation_matches_brute_force(k, ratio, amp, seed):
     faired = project_curve(curve, target_space(curve.space, n)).curve
     probe = M.CurveProbe(curve)
     value, i = probe.max_deviation(faired)
-    brute = brute_hausdorff_curve(curve, faired, probe.u)
-    # ours: distance to an actual foot point (>= exact); brute: to a 4e5-point polyline
+    brute, slack = brute_hausdorff_curve(curve, faired, probe.u)
+    # ours: distance to an actual foot point (>= exact); brute: to 2e5 points per curve
     assert value <= brute + 1e-9
-    assert value >= brute - 1e-6
+    assert value >= brute - slack - 1e-9
     same = np.linalg.norm(curve.evaluate(probe.u) - faired.evaluate(probe.u), axis=1).max()
     assert M.CurveProbe(curve, method="parametric").max_deviation(faired)[0] == pytest.approx(same)
     assert value <= same + 1e-12

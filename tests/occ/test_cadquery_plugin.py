@@ -96,3 +96,11 @@ def test_workplane_fair_with_energy_keeps_the_net():
     assert report.poles_before == report.poles_after == (22, 32)
     moved = face_to_surface(out.val().wrapped)[0].poles - face_to_surface(face.wrapped)[0].poles
     assert 0 < np.linalg.norm(moved, axis=-1).max() <= 0.05 * (1 + 1e-12)
+
+
+def test_face_selections_that_are_not_lists_of_indices_are_refused(linkrods):
+    shape = linkrods.val()
+    for faces, fragment in ((0, "list of face indices"), ([1.5], "integer face indices"),
+                            ([True], "integer face indices")):
+        with pytest.raises(InvalidInputError, match=fragment):
+            fair_shape(shape, tol=5e-3, faces=faces)

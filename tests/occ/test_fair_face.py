@@ -5,6 +5,7 @@ import pytest
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 
+import cq_fairing as cf
 from cq_fairing.errors import InvalidInputError, InvalidTargetError, InvalidToleranceError
 from cq_fairing.occ import face_to_surface, fair_face, list_faces, sample_face_deviation
 from tests.occ.helpers import area, faces_of, global_distance, occ_points, uv_box_grid
@@ -246,3 +247,18 @@ def test_rational_fallback_when_weights_go_non_positive():
 
     with pytest.raises(NumericalError, match="non-positive weights"):
         project(surface, target_space(surface.u_space, 5), target_space(surface.v_space, 5))
+
+
+def test_energy_method_leaves_a_ruled_face_unchanged_and_says_why():
+    """A face of degree 3 x 1 (a loft between two curves): its thin-plate energy has no
+    second derivative across, so energy fairing leaves it unchanged with the reason."""
+    from cq_fairing.core.examples import blade_surface
+    from cq_fairing.occ.builders import surface_to_natural_face
+
+    blade = blade_surface(shape=(20, 30)).surface
+    ruled = cf.make_surface(blade.poles[:, [0, -1]], u_knots=blade.u_knots,
+                            v_knots=[0, 0, 1, 1], degree=(3, 1))
+    report = fair_face(surface_to_natural_face(ruled), tol=0.05, method="energy")
+    assert report.status == "unchanged"
+    assert "degree >= 2" in report.message and "3 x 1" in report.message
+    assert "method='wavelet'" in report.message
