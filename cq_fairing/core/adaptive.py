@@ -485,7 +485,8 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
         if polish and not curve.is_rational and degree >= 3:
             (faired, values, e), lam = _polish(lambda x: fit.trial(space, x), fit.tol,
                                                (faired, values, e))
-    faired, e, lam = _final_curve_check(curve, fit, space, faired, lam, per_span, tol)
+    space, faired, e, lam = _checked_curve(curve, fit, space, faired, values, lam, per_span,
+                                           tol)
     if fair:
         space, faired, e, lam = _fairest_curve(curve, fit, (space, faired, e, lam), values,
                                                per_span, tol)
@@ -577,6 +578,24 @@ def _curve_energy(space, curve):
     return float(np.einsum("id,id->", curve.poles, gram_matrix(space, nu=3) @ curve.poles))
 
 
+def _checked_curve(curve, fit, space, faired, values, lam, per_span, tol):
+    """The final check of :func:`_final_curve_check`; a space it refuses grows by one
+    span at a time (knots equidistributing the search grid's error density ``values``)
+    up to the source's span count, as the surface search grows a refused net.  Returns
+    ``(space, faired, deviation, lambda)``."""
+    while True:
+        try:
+            return (space,) + _final_curve_check(curve, fit, space, faired, lam, per_span, tol)
+        except ToleranceNotMetError:
+            if space.n_spans >= curve.space.n_spans:
+                raise
+        breaks = space.breakpoints
+        rho = error_density(breaks, _span_max(breaks, fit.probe.u, values), fit.tol,
+                            fit.degree)
+        space = equidistributed_space(breaks, rho, space.n_spans + 1, fit.degree)
+        (faired, values, _), lam = fit.trial(space), 0.0
+
+
 def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
     """Check on twice the samples; back the polish off until ``tol`` holds."""
     check_probe = CurveProbe(curve, per_span=2 * per_span)
@@ -588,7 +607,9 @@ def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
     if e > tol:
         raise ToleranceNotMetError(
             f"the adaptive target ({space.dimension} poles) passed the search samples but "
-            f"deviates by {e:.4g} > tol={tol:g} on the denser check; raise per_span.",
+            f"deviates by {e:.4g} > tol={tol:g} on the denser check, as do the targets "
+            "grown from it up to the source's span count; raise the tolerance or use "
+            "method='wavelet'.",
             tolerance=tol, best_deviation=e)
     return faired, e, lam
 
@@ -613,7 +634,8 @@ class _SurfaceFit:
     def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free"):
         if surface.is_rational:
             raise UnsupportedGeometryError(
-                "adaptive fairing needs a polynomial surface; use fair_surface for rational ones.")
+                "adaptive fairing needs a polynomial surface; fair rational ones with "
+                "method='wavelet'.")
         self.surface, self.tol, self.degrees = surface, tol, degrees
         self.pinned = borders == "pinned"
         u = sample_parameters(surface.u_space, per_span=per_span)
@@ -1122,7 +1144,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         raise ToleranceNotMetError(
             f"the adaptive target {spaces[0].dimension}x{spaces[1].dimension} passed the "
             f"search samples but deviates by {e:.4g} > tol={tol:g} on the denser check; "
-            "raise per_span or use fair_surface.", tolerance=tol, best_deviation=e)
+            "raise the tolerance or use method='wavelet'.", tolerance=tol, best_deviation=e)
     step = (_step(surface.u_space, spaces[0]), _step(surface.v_space, spaces[1]))
     n = (spaces[0].n_spans, spaces[1].n_spans)
     return SurfaceFairResult(surface, faired, (tuple(tops), n), n, "adaptive", (step,),
@@ -1325,6 +1347,15 @@ def _constrained_stages(fit, spaces, faired, lam):
     return stages
 
 
+def _degree_hint(fit):
+    """``" or keep the source's degrees (target_degree=(p_u, p_v))"`` where the target
+    degree is below the source's, as the curve search says."""
+    source = (fit.surface.u_degree, fit.surface.v_degree)
+    if tuple(fit.degrees) == source:
+        return ""
+    return f" or keep the source's degrees (target_degree={source})"
+
+
 def _compact_net(fit, family, dens, tops, tol):
     """Smallest net within tol from three starts: ``(spaces, trial)``.  Two starts on the
     same net are reduced once (the IEA face's axis starts both stop at 17 x 31 poles)."""
@@ -1335,7 +1366,8 @@ def _compact_net(fit, family, dens, tops, tol):
         raise ToleranceNotMetError(
             f"no adaptive target within tol={tol:g}: simple knots on the source's "
             f"breakpoints at degrees {fit.degrees} deviate by {top_result[2]:.4g}; raise "
-            f"the tolerance{_multiple_knots_hint(fit.surface.u_space, fit.surface.v_space)}.",
+            f"the tolerance{_degree_hint(fit)}"
+            f"{_multiple_knots_hint(fit.surface.u_space, fit.surface.v_space)}.",
             tolerance=tol, best_deviation=top_result[2])
     starts = [_diagonal_start(fit, family, steps, top_result),
               _axis_start(fit, full, top_result, dens, tops, fit.degrees, (0, 1)),
