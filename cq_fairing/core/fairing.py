@@ -140,8 +140,13 @@ class FairResult:
         Parameters
         ----------
         detail_weight : float, optional
-            1 restores the source exactly; 0 gives the coarse curve expressed in the
-            source space; values between restore part of the detail.
+            1 restores the source exactly when ``curve`` is the plain projection
+            (``method="wavelet"``; ``"adaptive"`` with ``polish=False``); 0 gives the
+            coarse curve expressed in the source space; values between restore part of
+            the detail.  The details are those of the plain projection, so after a
+            polished adaptive fit (``table`` ``lambda > 0``) or energy fairing (no
+            details: same space) 1 gives the source plus the change the polish or the
+            energy fairing made, not the source.
 
         Returns
         -------
@@ -226,6 +231,12 @@ class SurfaceFairResult:
 
     def reconstruct(self, detail_weight=1.0):
         """Source net from the faired net and the three detail nets per level.
+
+        ``detail_weight`` as for :meth:`FairResult.reconstruct`: 1 restores the source
+        exactly when ``surface`` is the plain projection (``method="wavelet"``;
+        ``"adaptive"`` with ``polish=False`` and free borders); after a polished or
+        pinned adaptive fit or energy fairing it gives the source plus the change those
+        made to the coarse net.
 
         Returns
         -------
