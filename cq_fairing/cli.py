@@ -42,7 +42,6 @@ then renamed into place; the input file is never modified.
 import argparse
 import sys
 import time
-import warnings
 from pathlib import Path
 
 from .errors import (FairingError, FileFormatError, InvalidInputError, OutputPathError,
@@ -592,16 +591,11 @@ def _read_points(path):
         problem = "it is a folder" if path.is_dir() else "no such file"
         raise FileFormatError(f"cannot read '{path}': {problem}; give a file of x y z points.")
     try:
-        with warnings.catch_warnings():   # loadtxt warns about empty files
-            warnings.simplefilter("ignore")
-            points = read_xyz(path)
+        points = read_xyz(path)
     except OSError as exc:
         raise FileFormatError(f"cannot read '{path}': {exc.strerror}.") from exc
     except InvalidInputError as exc:
         raise FileFormatError(_no_points(path) or str(exc)) from exc
-    if points.shape[0] < 2:
-        raise FileFormatError(
-            f"'{path}' holds 1 point; a curve or a surface needs at least 2 x y z points.")
     if not np.ptp(points, axis=0).any():
         raise FileFormatError(
             f"the {points.shape[0]} points of '{path}' all coincide at "

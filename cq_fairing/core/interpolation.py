@@ -8,6 +8,8 @@ Grids of points are interpolated along rows, then along columns (tensor product)
 parameters averaged over the rows (The NURBS Book, section 9.2.5).
 """
 
+import warnings
+
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
@@ -140,15 +142,24 @@ def read_xyz(path):
         Missing file, unreadable numbers, wrong column count, or fewer than 2 points.
     """
     try:
-        data = np.loadtxt(path, dtype=float, comments="#", ndmin=2)
+        with warnings.catch_warnings():   # loadtxt warns on an empty file: said below
+            warnings.simplefilter("ignore", UserWarning)
+            data = np.loadtxt(path, dtype=float, comments="#", ndmin=2)
     except FileNotFoundError as exc:
         raise InvalidInputError(f"point file {path} does not exist.") from exc
+    except IsADirectoryError as exc:
+        raise InvalidInputError(f"point file {path} is a folder, not a file.") from exc
     except ValueError as exc:
         raise InvalidInputError(
             f"point file {path} is not 'x y z' numbers per line ({exc})."
         ) from exc
+    if data.size == 0:
+        raise InvalidInputError(f"point file {path} holds no points.")
     if data.shape[1] != 3:
         raise InvalidInputError(
             f"point file {path} must have 3 columns (x y z), found {data.shape[1]}."
         )
+    if data.shape[0] < 2:
+        raise InvalidInputError(f"point file {path} holds 1 point; a curve or a surface "
+                                "needs at least 2 x y z points.")
     return as_poles(data, f"points in {path}", 2)

@@ -1,5 +1,7 @@
 """Data points to control points (patent step 1)."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -54,3 +56,21 @@ def test_read_xyz(tmp_path):
         cf.read_xyz(tmp_path / "bad.xyz")
     with pytest.raises(cf.InvalidInputError, match="does not exist"):
         cf.read_xyz(tmp_path / "missing.xyz")
+
+
+def test_read_xyz_refuses_folders_empty_files_and_single_points(tmp_path):
+    """Each in one typed sentence, without numpy's empty-file warning."""
+    cases = {"folder": (tmp_path, "is a folder"),
+             "empty.xyz": ("", "holds no points"),
+             "comments.xyz": ("# scan\n\n", "holds no points"),
+             "one.xyz": ("1 2 3\n", "holds 1 point")}
+    for name, (content, fragment) in cases.items():
+        path = content if name == "folder" else tmp_path / name
+        if name != "folder":
+            path.write_text(content)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(cf.InvalidInputError, match=fragment):
+                cf.read_xyz(path)
+    (tmp_path / "two.xyz").write_text("1 2 3\n4 5 6\n")
+    assert cf.read_xyz(tmp_path / "two.xyz").shape == (2, 3)
