@@ -15,7 +15,7 @@ import Part
 import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
-           "face_on_surface", "full_knots", "uv_range"]
+           "face_on_surface", "face_on_edges", "full_knots", "uv_range"]
 
 
 def full_knots(knots, mults):
@@ -190,6 +190,26 @@ def face_on_surface(surface, face):
         raise _not_rebuilt(f"OCCT: {error}") from error
     if result.isNull() or not result.isValid():
         raise _not_rebuilt("the rebuilt face is not valid")
+    return result
+
+
+def face_on_edges(surface, face, tolerance):
+    """A face on ``surface`` bounded by ``face``'s own edges (shared, not copied).
+
+    Faces of one shell rebuilt this way keep sharing their edges, vertices and edge splits,
+    so they form a shell without sewing.  The edges keep their 3D curves; OCCT's shape
+    fixer adds each edge's p-curve on ``surface`` (projection) and raises the edge
+    tolerances to the distance between the edge and the new surface, at most
+    ``tolerance``.  The result has ``face``'s orientation.
+    """
+    result = Part.Face(surface, face.OuterWire)
+    for inner in face.Wires:
+        if not inner.isSame(face.OuterWire):
+            result = Part.Face(result, inner)
+    if result.Orientation != face.Orientation:
+        result.reverse()
+    if not result.isValid():
+        result.fix(1e-7, 1e-7, tolerance)
     return result
 
 

@@ -10,7 +10,7 @@ proxy's module path ``fairing_wb.feature`` is frozen: saved documents refer to i
 import Part
 import cq_fairing as cf
 
-from . import make
+from . import conversion, make
 
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
@@ -71,6 +71,36 @@ def _sewn(compound, deviation):
     sewn = compound.copy()
     sewn.sewShape(min(max(2.0 * deviation, 1e-7 * diagonal), 1e-2 * diagonal))
     return sewn if sewn.isValid() and len(sewn.Faces) == len(compound.Faces) else compound
+
+
+def _shell_on_source_edges(source, subs, results):
+    """The faired faces on the source's own shared edges as one valid shell, else ``None``.
+
+    Each faired face keeps its parameter domain, so it can be bounded by the edges of a
+    copy of its source face (:func:`conversion.face_on_edges`): neighbours share those
+    edges, their splits and their vertices, and need no sewing.  An edge then lies within
+    its tolerance of both faired faces; the tolerance may grow to twice the largest
+    deviation (two faces each within the deviation of the source), at least the source's
+    largest tolerance, at most 1 % of the size.
+    """
+    if not all(sub.startswith("Face") for sub in subs):
+        return None
+    copy = source.Shape.copy()  # the source's topology, never modified in place
+    diagonal = copy.BoundBox.DiagonalLength
+    deviation = max(r.max_deviation for r in results)
+    tolerance = min(max(2.0 * deviation, copy.getTolerance(1), 1e-7 * diagonal),
+                    1e-2 * diagonal)
+    try:
+        faces = [conversion.face_on_edges(r.shape.Surface, copy.getElement(sub), tolerance)
+                 for sub, r in zip(subs, results)]
+        shell = Part.Shell(faces)
+        if not shell.isValid():
+            shell.fix(1e-7, 1e-7, tolerance)
+    except Part.OCCError:
+        return None  # e.g. a face the fixer turned into something else: sew instead
+    if shell.isValid() and len(shell.Faces) == len(faces) and len(shell.Shells) <= 1:
+        return shell
+    return None
 
 
 class Fairing:
@@ -156,6 +186,9 @@ class Fairing:
         shapes = [r.shape for r in results]
         if len(shapes) == 1:
             return shapes[0], results
+        shell = _shell_on_source_edges(source, subs, results)
+        if shell is not None:
+            return shell, results
         return _sewn(Part.makeCompound(shapes), max(r.max_deviation for r in results)), results
 
     def __getstate__(self):

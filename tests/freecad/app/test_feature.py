@@ -370,3 +370,25 @@ def test_boundary_edges_keeps_shell_faces_closer():
         deviations[boundary] = max(ra.max_deviation, rb.max_deviation)
     assert gaps["edges"] < 0.5 * gaps["free"]
     assert deviations["edges"] < deviations["free"]
+
+
+@pytest.mark.parametrize("boundary", ["free", "edges"])
+def test_whole_testtoler_shell_stays_one_shell(doc, boundary):
+    """testtoler.brep is one open shell of 56 faces with edge tolerances up to 11.7 mm and
+    24 degenerate edges; sewing faces rebuilt one by one gave 40 + 16 loose faces (QA
+    D11).  Built on the source's own shared edges, it stays one valid 56-face shell whose
+    edges lie within their tolerances of the faired faces."""
+    shape = Part.Shape()
+    shape.read(str(fixtures.REAL / "testtoler.brep"))
+    assert [len(s.Faces) for s in shape.Shells] == [56]
+    obj = make.make_fairing(fixtures.add_shape(doc, shape, "Sheet"), boundary=boundary)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.Shape.ShapeType == "Shell" and obj.Shape.isValid()
+    assert len(obj.Shape.Faces) == 56
+    assert obj.Shape.getTolerance(1) <= max(2 * obj.MaxDeviation.Value,
+                                            shape.getTolerance(1)) + 1e-9
+    faired = sorted(len(f.Surface.getPoles()) * len(f.Surface.getPoles()[0])
+                    for f in obj.Shape.Faces)
+    source = sorted(f.Surface.NbUPoles * f.Surface.NbVPoles for f in shape.Faces)
+    assert sum(faired) < sum(source)  # the faces were faired, not kept
