@@ -13,7 +13,7 @@ so what a user clicks can be replayed in a macro::
 import importlib.util
 import inspect
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -181,6 +181,36 @@ def _fix_boundary(source, faired, boundary):
                              faired.v_degree, faired.weights)
 
 
+def _ends_coincide(geometry, axis):
+    """True when the first and last pole rows along ``axis`` coincide (with their weights)
+    within ``1e-9`` of the net's size: a closed (e.g. formerly periodic) direction."""
+    rows = np.moveaxis(geometry.homogeneous(), axis, 0)
+    size = np.ptp(geometry.poles.reshape(-1, geometry.poles.shape[-1]), axis=0).max()
+    return bool(np.abs(rows[0] - rows[-1]).max() <= 1e-9 * max(size, 1.0))
+
+
+def _tie_ends(geometry, axis):
+    r"""First and last pole rows along ``axis`` set to their mean in homogeneous
+    coordinates, :math:`P_0 = P_{k-1} = (P_0 + P_{k-1})/2` with :math:`P = (w x, w)`:
+    a clamped curve or surface passes through its end rows, so it closes again."""
+    rows = np.moveaxis(geometry.homogeneous(), axis, 0).copy()
+    rows[0] = rows[-1] = 0.5 * (rows[0] + rows[-1])
+    hom = np.moveaxis(rows, 0, axis)
+    weights = hom[..., -1]
+    return replace(geometry, poles=hom[..., :-1] / weights[..., None],
+                   weights=None if geometry.weights is None else weights)
+
+
+def _closed_like(source, faired):
+    """``faired`` closed in each direction where ``source`` is closed (periodic sources
+    are clamped copies whose end rows coincide); fairing each direction on its own
+    opens such a seam by a fraction of the tolerance."""
+    for axis in range(faired.poles.ndim - 1):
+        if _ends_coincide(source, axis):
+            faired = _tie_ends(faired, axis)
+    return faired
+
+
 def _check_boundary(source, boundary):
     """``boundary`` is known; ``edges`` needs a polynomial face.
 
@@ -286,7 +316,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     _check_boundary(source, boundary)
     result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
                               borders)
-    faired = _fix_boundary(source, result.surface, boundary)
+    faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
     uv_range = conversion.uv_range(face, source)
     _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
     deviation = float(np.abs(distances).max())
@@ -322,12 +352,13 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
         target = (target,) if np.ndim(target) == 0 else tuple(target)[:1]
         (n,) = _target_spans(target, (source.n_poles,), (source.degree,), "curve")
         result = cf.fair_curve(source.poles, n, **common)
+    curve = _closed_like(source, result.curve)
     first, last = edge.ParameterRange
     low, high = source.domain
     t = np.linspace(max(first, low), min(last, high), 200)
-    deviation = float(np.linalg.norm(source.evaluate(t) - result.curve.evaluate(t), axis=1).max())
-    shape = conversion.part_curve(result.curve).toShape(first, last)
-    return FairedShape(shape, (source.n_poles,), (result.curve.n_poles,), deviation,
+    deviation = float(np.linalg.norm(source.evaluate(t) - curve.evaluate(t), axis=1).max())
+    shape = conversion.part_curve(curve).toShape(first, last)
+    return FairedShape(shape, (source.n_poles,), (curve.n_poles,), deviation,
                        time.perf_counter() - start)
 
 
