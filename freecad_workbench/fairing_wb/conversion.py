@@ -15,7 +15,7 @@ import Part
 import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
-           "face_on_surface", "face_on_edges", "full_knots", "uv_range"]
+           "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask"]
 
 
 def full_knots(knots, mults):
@@ -84,6 +84,12 @@ def uv_range(face, surface):
     (a, b), (c, d) = surface.domain
     u0, u1, v0, v1 = face.ParameterRange
     return (min(max(u0, a), b), min(max(u1, a), b), min(max(v0, c), d), min(max(v1, c), d))
+
+
+def inside_mask(face, u, v):
+    """``(len(u), len(v))`` booleans: which grid parameters ``(u_i, v_j)`` lie on ``face``
+    (inside its trim or on it, OCCT's ``isPartOfDomain``); all true for an untrimmed face."""
+    return np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u])
 
 
 def part_surface(surface):

@@ -49,29 +49,42 @@ def ramp(values, low, high, colors=None):
     return [tuple(map(float, c)) for c in (1 - t) * c0 + t * c1]
 
 
-def _grid_mesh(points, values):
-    """Triangles of a (n, n, 3) sample grid; returns (Mesh.Mesh, per-vertex values)."""
+def _grid_mesh(points, values, inside=None):
+    """Triangles of a (n, n, 3) sample grid; returns (Mesh.Mesh, per-vertex values).
+
+    With ``inside`` (n, n booleans: the sample lies on the trimmed face) only triangles
+    whose three vertices are inside are kept, and only the vertices they use (values
+    renumbered with them), so the map covers the face's trim, not its parameter box.
+    """
     n_u, n_v = points.shape[:2]
     index = np.arange(n_u * n_v).reshape(n_u, n_v)
     a, b = index[:-1, :-1].ravel(), index[1:, :-1].ravel()
     c, d = index[1:, 1:].ravel(), index[:-1, 1:].ravel()
     triangles = np.concatenate([np.c_[a, b, c], np.c_[a, c, d]])
-    vertices = [FreeCAD.Vector(*p) for p in points.reshape(-1, 3).tolist()]
+    points, values = points.reshape(-1, 3), values.ravel()
+    if inside is not None:
+        triangles = triangles[inside.ravel()[triangles].all(axis=1)]
+        used, triangles = np.unique(triangles, return_inverse=True)
+        triangles = triangles.reshape(-1, 3)
+        points, values = points[used], values[used]
+    vertices = [FreeCAD.Vector(*p) for p in points.tolist()]
     # (Vectors, index tuples) keeps the vertex order; plain float tuples crash 0.20.2.
     mesh = Mesh.Mesh((vertices, [tuple(t) for t in triangles.tolist()]))
-    return mesh, values.ravel()
+    return mesh, values
 
 
 def _face_samples(obj, source_face, faired_face, count):
-    """(points, values) of one face pair for the map's Kind/Which."""
+    """(points, values, inside) of one face pair for the map's Kind/Which; ``inside``
+    marks the samples on the source face's trim (same parameters on both faces)."""
     source = conversion.surface_from_face(source_face)
     faired = conversion.surface_from_face(faired_face)
     uv_range = conversion.uv_range(source_face, source)
+    inside = conversion.inside_mask(source_face, *analysis.sample_parameters(uv_range, count))
     if obj.Kind == "Deviation":
-        return analysis.signed_deviation(source, faired, uv_range, count)
+        return (*analysis.signed_deviation(source, faired, uv_range, count), inside)
     surface = faired if obj.Which == "Faired" else source
     kind = "gaussian" if obj.Kind == "GaussianCurvature" else "mean"
-    return analysis.curvature(surface, uv_range, count, kind)
+    return (*analysis.curvature(surface, uv_range, count, kind), inside)
 
 
 def _pairs(source_faces, faired_faces):
@@ -125,8 +138,7 @@ class AnalysisMap:
                 "curvature maps are drawn on faces.")
         for source_face, faired_face in _pairs([source.Shape.getElement(f) for f in faces],
                                                fairing.Shape.Faces):
-            points, v = _face_samples(obj, source_face, faired_face, obj.Samples)
-            mesh, v = _grid_mesh(points, v)
+            mesh, v = _grid_mesh(*_face_samples(obj, source_face, faired_face, obj.Samples))
             merged.addMesh(mesh)
             values.extend(v.tolist())
         values = np.asarray(values)

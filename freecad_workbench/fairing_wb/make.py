@@ -319,7 +319,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
     uv_range = conversion.uv_range(face, source)
     _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
-    deviation = float(np.abs(distances).max())
+    inside = conversion.inside_mask(
+        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
+    # over the face's trim; a trim too thin to hold a sample falls back on its UV box
+    deviation = float(np.abs(distances[inside] if inside.any() else distances).max())
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "

@@ -161,3 +161,23 @@ def test_map_of_a_sewn_multi_face_fairing(doc):
     doc.recompute()
     assert dmap.isValid() and dmap.Mesh.CountPoints == 3 * 144
     assert dmap.Maximum <= 1.05 * obj.MaxDeviation.Value
+
+
+def test_maps_of_a_trimmed_face_cover_its_trim_only(doc):
+    """On linkrods Face21 (trimmed) 173 of 3600 map vertices lay outside the faired face,
+    up to 0.089 mm away, and the map's area exceeded the face's (QA D9): the maps keep
+    the samples on the trim only, and MaxDeviation is their largest distance."""
+    rods = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")), "Rods")
+    fairing = make.make_fairing((rods, ["Face21"]), target=(7, 40))
+    doc.recompute()
+    face = fairing.Shape.Faces[0]
+    for kind in ("Deviation", "MeanCurvature"):
+        mapped = deviation_map.make_map(fairing, kind)
+        mapped.recompute()
+        points = mapped.Mesh.Points
+        assert len(mapped.Values) == len(points) == len(mapped.VertexColors)
+        assert 0.8 * 3600 < len(points) < 3600  # samples outside the trim are dropped
+        assert all(face.isInside(FreeCAD.Vector(p.x, p.y, p.z), 1e-4, True) for p in points)
+        assert mapped.Mesh.Area <= face.Area
+    deviation = deviation_map.find_maps(fairing, "Deviation")[0]
+    assert fairing.MaxDeviation.Value == pytest.approx(deviation.Maximum, rel=0.5)
