@@ -156,7 +156,7 @@ class Fairing:
         obj.PolesAfter = "; ".join(" x ".join(map(str, r.poles_after)) for r in results)
         obj.MaxDeviation = max(r.max_deviation for r in results)
         obj.FairingTime = sum(r.seconds for r in results)
-        obj.Status = "OK"
+        obj.Status = "; ".join(["OK"] + [r.note for r in results if r.note])
 
     @staticmethod
     def settings(obj):

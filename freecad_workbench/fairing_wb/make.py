@@ -52,6 +52,8 @@ class FairedShape:
         samples (model units, mm); the same measure as the deviation map.
     seconds : float
         Wall time of conversion + fairing + rebuild.
+    note : str
+        Why the element was kept as it is (``""`` when it was faired).
     """
 
     shape: object
@@ -59,6 +61,7 @@ class FairedShape:
     poles_after: tuple
     max_deviation: float
     seconds: float
+    note: str = ""
 
 
 def _check_tolerance(tolerance):
@@ -437,7 +440,9 @@ def fair_elements(obj, subs, settings, face_settings):
     -------
     list of FairedShape
         One per element, in the order of ``subs``.  With several faces in target mode,
-        each face is clamped to its own control-point counts.
+        each face is clamped to its own control-point counts; with several faces in
+        tolerance mode, a face with no coarser net within the tolerance is kept as it is
+        (:func:`_kept`) instead of failing the others.
     """
     target = settings["target"]
     results = []
@@ -446,11 +451,27 @@ def fair_elements(obj, subs, settings, face_settings):
         if sub.startswith("Face"):
             own = target if target is None or len(subs) == 1 else _clamped_target(target,
                                                                                   element)
-            results.append(fair_face(element, **face_settings, **{**settings, "target": own}))
+            try:
+                results.append(fair_face(element, **face_settings,
+                                         **{**settings, "target": own}))
+            except cf.ToleranceNotMetError as error:
+                if len(subs) == 1:
+                    raise
+                results.append(_kept(element, sub, error))
         else:
             own = None if target is None else target[0]
             results.append(fair_edge(element, **{**settings, "target": own}))
     return results
+
+
+def _kept(face, sub, error):
+    """:class:`FairedShape` of a face left as it is because ``error`` (a
+    :class:`cq_fairing.ToleranceNotMetError`) found no coarser net within the tolerance:
+    same poles, deviation 0, and a note for the ``Status``."""
+    poles = tuple(conversion.surface_from_face(face).shape)
+    note = (f"{sub} kept unchanged: no coarser net within {error.tolerance:.4g} mm "
+            f"(best found {error.best_deviation:.4g} mm)")
+    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, note)
 
 
 def error_sentence(error):

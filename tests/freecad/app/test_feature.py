@@ -57,6 +57,26 @@ def test_target_mode_on_blade_face(doc, blade):
     assert blade.isValid()  # the source is not touched
 
 
+def test_a_face_with_no_coarser_net_is_kept_and_the_others_faired(doc):
+    """Linkrods Face13 and Face21 at 0.05 mm: Face21 (rational, trimmed) has no coarser
+    net within the tolerance by the core's measure over its whole surface (0.246 mm),
+    which once failed the whole selection; it is now kept as it is and named in the
+    Status, and Face13 is faired within the tolerance."""
+    source = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")),
+                                "Linkrods")
+    doc.recompute()
+    obj = make.make_fairing((source, ["Face13", "Face21"]), tolerance=0.05)
+    doc.recompute()
+    assert obj.isValid() and "Invalid" not in obj.State, obj.Status
+    assert obj.Status.startswith("OK; Face21 kept unchanged: no coarser net within 0.05 mm")
+    assert "Face13" not in obj.Status
+    before, after = obj.PolesBefore.split("; "), obj.PolesAfter.split("; ")
+    assert before[1] == after[1] == "7 x 286"
+    assert np.prod([int(x) for x in after[0].split(" x ")]) < 7 * 18
+    assert 0 < obj.MaxDeviation.Value <= 0.05
+    assert len(obj.Shape.Faces) == 2
+
+
 def test_tolerance_mode_meets_tolerance_checked_by_occt(doc, blade):
     source = blade.Shape.getElement("Face2")
     tol = 4e-3 * source.BoundBox.DiagonalLength  # degree 8 -> 3 needs some room
