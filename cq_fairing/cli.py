@@ -182,7 +182,8 @@ def build_parser():
 
     points = sub.add_parser("points", help="fair a curve or grid surface through x y z points")
     points.add_argument("input", type=Path)
-    points.add_argument("-o", "--output", type=_file_name, required=True, help=".step/.stp or .brep")
+    points.add_argument("-o", "--output", type=_file_name, required=True,
+                        help=".step/.stp or .brep")
     points.add_argument("--tol", type=_positive_float,
                         help="largest allowed deviation (default 1e-3 of the points' extent)")
     points.add_argument("--grid", type=_point_count, nargs=2, metavar=("NU", "NV"),

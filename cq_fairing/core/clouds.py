@@ -92,8 +92,8 @@ def resample_height_field(points, shape):
     _, spread, axes = np.linalg.svd(points - centre, full_matrices=False)
     if spread.size < 2 or spread[1] <= 1e-12 * max(spread[0], 1e-300):
         raise InvalidInputError(
-            f"the {points.shape[0]} points lie on a line (or in one point): they span no plane to resample "
-            "a height field over.")
+            f"the {points.shape[0]} points lie on a line (or in one point): they span no "
+            "plane to resample a height field over.")
     local = (points - centre) @ axes.T
     s = np.linspace(local[:, 0].min(), local[:, 0].max(), n_u)
     t = np.linspace(local[:, 1].min(), local[:, 1].max(), n_v)
