@@ -299,9 +299,8 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         if active.size == 0:
             break
         s = _derivatives_in_domain(surface, uv[active, 0], uv[active, 1], 2)
-        with np.errstate(over="ignore", invalid="ignore"):  # a collapsed surface: S_u = 0
-            step, moves = _newton_step(s, s[(0, 0)] - points[active], uv[active],
-                                       ((ulo, uhi), (vlo, vhi)))
+        step, moves = _newton_step(s, s[(0, 0)] - points[active], uv[active],
+                                   ((ulo, uhi), (vlo, vhi)))
         big = (np.abs(step).sum(axis=1) > 1e-13 * scale) & (moves > (STEP_FLOOR * size) ** 2)
         active, step = active[big], step[big]
         if active.size == 0:
@@ -324,7 +323,9 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
 def _newton_step(s, r, uv, bounds):
     """Newton step of :func:`closest_points_surface` at derivatives ``s`` and residuals
     ``r`` (Gauss-Newton where the Hessian is not positive definite), held at the borders
-    (:func:`_border_step`), and the squared length of the foot point's move."""
+    (:func:`_border_step`), and the squared length of the foot point's move, computed
+    from the step capped at a thousand domain widths (a collapsed surface, S_u = 0, has
+    steps whose squares would overflow; any such step counts as a move)."""
     su, sv = s[(1, 0)], s[(0, 1)]
     g1, g2 = np.einsum("qd,qd->q", su, r), np.einsum("qd,qd->q", sv, r)
     a = np.einsum("qd,qd->q", su, su)
@@ -340,7 +341,9 @@ def _newton_step(s, r, uv, bounds):
     det = np.where(np.abs(det) > 1e-300, det, 1e-300)
     step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
     step = _border_step(step, uv, (g1, g2), (ha, hc), bounds)
-    moves = a * step[:, 0] ** 2 + 2 * b * step[:, 0] * step[:, 1] + c * step[:, 1] ** 2
+    limit = 1e3 * max(high - low for low, high in bounds)
+    s0, s1 = np.clip(step[:, 0], -limit, limit), np.clip(step[:, 1], -limit, limit)
+    moves = a * s0 ** 2 + 2 * b * s0 * s1 + c * s1 ** 2
     return step, moves
 
 
@@ -356,21 +359,31 @@ def _border_step(step, uv, gradient, curvature, bounds):
     minimum 0.0246 along it at 0.2937).
     """
     (g1, g2), (ha, hc) = gradient, curvature
-    along = np.stack([-g1 / np.maximum(ha, 1e-300), -g2 / np.maximum(hc, 1e-300)], axis=1)
-    leaves = [_leaves(uv[:, i], step[:, i], bounds[i]) for i in (0, 1)]
-    inward = [~_leaves(uv[:, i], along[:, i], bounds[i]) for i in (0, 1)]
-    gain = np.stack([g1 * g1 / np.maximum(ha, 1e-300), g2 * g2 / np.maximum(hc, 1e-300)], axis=1)
-    corner = leaves[0] & leaves[1]
-    take_u = corner & inward[0] & (~inward[1] | (gain[:, 0] >= gain[:, 1]))
-    take_v = corner & inward[1] & ~take_u
-    out = step.copy()
-    out[:, 0] = np.where(leaves[1] & ~leaves[0], along[:, 0], out[:, 0])
-    out[:, 1] = np.where(leaves[0] & ~leaves[1], along[:, 1], out[:, 1])
-    out[leaves[0], 0] = 0.0
-    out[leaves[1], 1] = 0.0
-    out[take_u, 0] = along[take_u, 0]
-    out[take_v, 1] = along[take_v, 1]
+    (ulo, uhi), (vlo, vhi) = bounds
+    low, high = np.array([ulo, vlo]), np.array([uhi, vhi])
+    leaves = ((uv <= low) & (step < 0)) | ((uv >= high) & (step > 0))
+    if not leaves.any():
+        return step
+    lu, lv = leaves[:, 0], leaves[:, 1]
+    along_u = -g1 / np.maximum(ha, 1e-300)
+    along_v = -g2 / np.maximum(hc, 1e-300)
+    out = np.stack([np.where(lu, 0.0, np.where(lv, along_u, step[:, 0])),
+                    np.where(lv, 0.0, np.where(lu, along_v, step[:, 1]))], axis=1)
+    corner = np.flatnonzero(lu & lv)
+    if corner.size:
+        out[corner] = _corner_step(uv[corner], along_u[corner], along_v[corner],
+                                   g1[corner], g2[corner], bounds)
     return out
+
+
+def _corner_step(uv, along_u, along_v, g1, g2, bounds):
+    """Steps at corners where the 2-D step leaves both borders: the inward 1-D step with
+    the larger predicted decrease :math:`g_i^2 / h_{ii} = -g_i s_i`, else none."""
+    inward_u = ~_leaves(uv[:, 0], along_u, bounds[0])
+    inward_v = ~_leaves(uv[:, 1], along_v, bounds[1])
+    take_u = inward_u & (~inward_v | (-g1 * along_u >= -g2 * along_v))
+    take_v = inward_v & ~take_u
+    return np.stack([np.where(take_u, along_u, 0.0), np.where(take_v, along_v, 0.0)], axis=1)
 
 
 def _leaves(x, step, bounds):
