@@ -258,10 +258,11 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
 
 
 def _not_for_this_method(face, info, method, tol, refusal):
-    """Report of a face the adaptive or energy method does not fair: rational faces are
-    ``'skipped-rational'``; any other refusal of the core (energy fairing of a face with
-    a degree-1 direction) leaves the face ``'unchanged'`` with the core's reason."""
-    if info.rational:
+    """Report of a face the adaptive or energy method does not fair: rational faces (also
+    those ``convert=True`` made rational, a cylinder's) are ``'skipped-rational'``; any
+    other refusal of the core (energy fairing of a face with a degree-1 direction)
+    leaves the face ``'unchanged'`` with the core's reason."""
+    if face_info(face).rational:
         return FaceFairReport(face, "skipped-rational", (
             f"rational face left unchanged: method={method!r} fairs polynomial surfaces "
             "only; use method='wavelet' for it."), info=info, tolerance=tol)
