@@ -67,7 +67,7 @@ from .decomposition import decomposition
 from .fairing import (_cartesian, _coefficients, largest_resolved_scale, project_curve,
                       project_surface, resolved_plan)
 from .geometry import BSplineCurve, BSplineSurface
-from .measures import CurveProbe, SurfaceProbe, sample_parameters
+from .measures import CurveProbe, SurfaceProbe, sample_parameters, within_box
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
@@ -458,12 +458,14 @@ def fair_curve_to_tolerance(curve, tol, *, target_degree=None, schedule="auto",
                           table=err.table())
 
 
-def _surface_error(surface, degrees, schedule, deviation):
+def _surface_error(surface, degrees, schedule, deviation, window=None):
     chain_u = _Chain(surface.u_space, degrees[0], schedule)
     chain_v = _Chain(surface.v_space, degrees[1], schedule)
-    probe = SurfaceProbe(surface, method=deviation, hold_grid=False,
-                         uv=(sample_parameters(surface.u_space), sample_parameters(surface.v_space)))
-    strict = SurfaceProbe(surface, method=deviation, hold_grid=False)
+    bounds = None if window is None else (window[:2], window[2:])
+    probe = SurfaceProbe(surface, method=deviation, hold_grid=False, bounds=bounds,
+                         uv=within_box(sample_parameters(surface.u_space),
+                                       sample_parameters(surface.v_space), bounds))
+    strict = SurfaceProbe(surface, method=deviation, hold_grid=False, bounds=bounds)
     net = _coefficients(surface)
 
     def geometry(nu, nv):
@@ -484,6 +486,25 @@ def _surface_error(surface, degrees, schedule, deviation):
                     lambda n: float(np.log2(max(n))),
                     lambda n: _deviation(strict, geometry(*n)))
     return err, chain_u, chain_v
+
+
+def _check_window(window, surface):
+    """``window`` as four floats ``(u0, u1, v0, v1)`` with ``u0 < u1``, ``v0 < v1`` inside
+    the domain (to rounding), or ``None``."""
+    if window is None:
+        return None
+    (a, b), (c, d) = surface.domain
+    try:
+        u0, u1, v0, v1 = (float(x) for x in window)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"window must be four numbers (u0, u1, v0, v1), got {window!r}.") from exc
+    eps = 1e-9 * max(b - a, d - c)
+    if not (a - eps <= u0 < u1 <= b + eps and c - eps <= v0 < v1 <= d + eps):
+        raise InvalidInputError(
+            f"window must be a parameter box inside the domain u[{a:g}, {b:g}] x "
+            f"v[{c:g}, {d:g}] with u0 < u1 and v0 < v1, got {window!r}.")
+    return max(u0, a), min(u1, b), max(v0, c), min(v1, d)
 
 
 def _min_along(err, fixed, tol, lo_fail, hi_pass, axis):
@@ -588,7 +609,8 @@ class _Projected:
 
 
 def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), schedule="auto",
-                              strategy="guaranteed", order=6, deviation="geometric"):
+                              strategy="guaranteed", order=6, deviation="geometric",
+                              window=None):
     r"""Fair ``surface`` with the fewest poles in total whose deviation stays within ``tol``.
 
     Parameters
@@ -602,22 +624,27 @@ def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), sched
         search the equal-ratio diagonal (see the module documentation).
     order : int
     deviation : {"geometric", "parametric"}
+    window : (u0, u1, v0, v1), optional
+        Parameter box inside the domain (a trimmed face's UV box) where the deviation is
+        measured, two-sided: samples of either surface in the box, foot points on the
+        other surface in the box.  Default the whole domain.
 
     Returns
     -------
     SurfaceFairResult
-        With ``max_deviation``, ``evaluations`` and ``table``.
+        With ``max_deviation`` (over ``window``), ``evaluations`` and ``table``.
 
     Raises
     ------
-    InvalidToleranceError, ToleranceNotMetError
+    InvalidToleranceError, ToleranceNotMetError, InvalidInputError (``window``)
     """
     tol = check_tolerance(tol)
     _check_options(strategy, order)
+    window = _check_window(window, surface)
     tdu, tdv = (None, None) if target_degree is None else target_degree
     pu = _check_degree(tdu, surface.u_degree, "target_degree (u)")
     pv = _check_degree(tdv, surface.v_degree, "target_degree (v)")
-    err, chain_u, chain_v = _surface_error(surface, (pu, pv), schedule, deviation)
+    err, chain_u, chain_v = _surface_error(surface, (pu, pv), schedule, deviation, window)
     U, V = chain_u.n_max, chain_v.n_max
     if U < 1 or V < 1:
         raise InvalidInputError("the surface has too few poles for the target degrees.")

@@ -559,7 +559,7 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
 def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=None,
                  weights=None, target_degree=None, schedule="auto",
                  strategy="guaranteed", deviation="geometric", method="wavelet",
-                 objective="compact", borders="auto"):
+                 objective="compact", borders="auto", window=None):
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
 
     .. math:: C_n = A_u\, C\, A_v^T, \qquad
@@ -599,6 +599,10 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         :func:`~cq_fairing.core.adaptive.fair_surface_adaptive` (``"free"`` is the plain
         L2 projection, exact reconstruction and often the faster search; ``"pinned"``
         keeps the corners; ``"auto"`` pins them only when the net gets smaller).
+    window : (u0, u1, v0, v1), optional
+        With ``tol`` and ``method="wavelet"``: measure the deviation only in this
+        parameter box (a trimmed face's UV box), both ways; default the whole domain
+        (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`).
 
     Returns
     -------
@@ -610,6 +614,10 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
     method = _tolerance_method(method, objective, n, tol, borders)
+    if window is not None and (method != "wavelet" or tol is None):
+        raise InvalidInputError(
+            f"window applies to the tolerance search of method='wavelet' (with tol), got "
+            f"method={method!r}, tol={tol!r}; drop window or give tol.")
     if method == "energy":
         from .energy import fair_surface_energy
 
@@ -631,7 +639,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 
         return fair_surface_to_tolerance(surface, tol, target_degree=(tdu, tdv),
                                          schedule=schedule, strategy=strategy,
-                                         deviation=deviation)
+                                         deviation=deviation, window=window)
     nu, nv = split_pair(n, "n")
     target_u = _direction_target(surface.u_space, nu, tdu)
     target_v = _direction_target(surface.v_space, nv, tdv)

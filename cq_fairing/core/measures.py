@@ -69,6 +69,15 @@ COLLOCATIONS = 128     # collocation matrices a probe keeps (per target space an
 
 
 # -- samples and evaluation ---------------------------------------------------------------
+def within_box(u, v, bounds):
+    """Sample axes ``u``, ``v`` restricted to ``bounds`` ``((u0, u1), (v0, v1))``, whose
+    ends become samples; unchanged for ``bounds=None``."""
+    if bounds is None:
+        return u, v
+    return tuple(np.unique(np.concatenate([[low], x[(x > low) & (x < high)], [high]]))
+                 for x, (low, high) in zip((u, v), bounds))
+
+
 def sample_parameters(*spaces, per_span=8):
     """Dense parameters: ``per_span`` per span of the merged breakpoints, ends included.
 
@@ -547,6 +556,9 @@ class SurfaceProbe:
     keep_feet : bool
         Keep each sample's last foot parameters, the Newton starts of the next candidate
         (a search that measures many nearby candidates on the same grid).
+    bounds : ((u0, u1), (v0, v1)), optional
+        Parameter box of both geometries that the foot points stay in (a face's UV box,
+        with ``uv`` sampled inside it); default the source's whole domain.
     hold_grid : bool
         Keep the source's grid points and each candidate's in full (the adaptive search's
         probe, capped at 400k samples, whose path depends on the rounding of those
@@ -558,9 +570,10 @@ class SurfaceProbe:
     """
 
     def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False,
-                 hold_grid=True):
+                 hold_grid=True, bounds=None):
         _check_method(method)
         self.source = source
+        self.bounds = bounds
         self.method = method
         self.per_span = per_span
         self.keep_feet = keep_feet
@@ -568,8 +581,8 @@ class SurfaceProbe:
         self._prior = None
         self._fixed = uv is not None
         if uv is None:
-            uv = (sample_parameters(source.u_space, per_span=per_span),
-                  sample_parameters(source.v_space, per_span=per_span))
+            uv = within_box(sample_parameters(source.u_space, per_span=per_span),
+                            sample_parameters(source.v_space, per_span=per_span), bounds)
         self._set_samples(*uv)
 
     def _set_samples(self, u, v):
@@ -607,8 +620,10 @@ class SurfaceProbe:
         """Use ``per_span`` samples per span of the merged breakpoints, per direction."""
         if self._fixed:
             return
-        u = sample_parameters(self.source.u_space, faired.u_space, per_span=self.per_span)
-        v = sample_parameters(self.source.v_space, faired.v_space, per_span=self.per_span)
+        u, v = within_box(
+            sample_parameters(self.source.u_space, faired.u_space, per_span=self.per_span),
+            sample_parameters(self.source.v_space, faired.v_space, per_span=self.per_span),
+            self.bounds)
         if (u.size, v.size) != (self.u.size, self.v.size) or not (
                 np.array_equal(u, self.u) and np.array_equal(v, self.v)):
             self._set_samples(u, v)
@@ -705,11 +720,12 @@ class SurfaceProbe:
         todo = np.flatnonzero(d > tol)
         if todo.size:
             u0[todo], v0[todo], d[todo] = closest_points_surface(
-                target, p[todo], u0[todo], v0[todo], stop_below=tol)
+                target, p[todo], u0[todo], v0[todo], stop_below=tol, bounds=self.bounds)
             todo = todo[d[todo] > tol]
         if todo.size and window:
             wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
-            fu, fv, fd = closest_points_surface(target, p[todo], wu, wv, stop_below=tol)
+            fu, fv, fd = closest_points_surface(target, p[todo], wu, wv, stop_below=tol,
+                                                bounds=self.bounds)
             better = fd < d[todo]
             k = todo[better]
             u0[k], v0[k], d[k] = fu[better], fv[better], fd[better]
@@ -726,7 +742,8 @@ class SurfaceProbe:
         wu, wv = _window_start(here, there, i, j, self.u, self.v, window)
         n = p.shape[0]
         fu, fv, fd = closest_points_surface(target, np.concatenate([p, p]),
-                                            np.concatenate([u0, wu]), np.concatenate([v0, wv]))
+                                            np.concatenate([u0, wu]), np.concatenate([v0, wv]),
+                                            bounds=self.bounds)
         pick = np.where(fd[n:] < fd[:n], np.arange(n, 2 * n), np.arange(n))
         return fu[pick], fv[pick], fd[pick]
 

@@ -240,14 +240,17 @@ def _search_keywords(search, measure):
 
 
 def fair_surface_net(source, tolerance=None, target=None, method="wavelet", search="linear",
-                     measure="parametric", objective="compact", borders="auto"):
+                     measure="parametric", objective="compact", borders="auto", window=None):
     """Fair a core surface by tolerance or by target control points (core call only).
 
     ``search`` is the accuracy-control strategy of the core (``linear``: the seed's
     hypothesis iteration, a few evaluations; ``guaranteed``: the fewest poles in total,
     slower; ``polyfit``) and ``measure`` its deviation (``parametric`` is an upper bound of
-    the ``geometric`` one, so the tolerance holds either way, and is about 3x faster).
-    ``method="adaptive"`` ignores both: it checks the true closest-point distance itself.
+    the ``geometric`` one, so the tolerance holds either way, and is about 3x faster);
+    ``window`` ``(u0, u1, v0, v1)``, the face's UV box, is where the wavelet method's
+    tolerance search measures (a trimmed face uses only part of its surface).
+    ``method="adaptive"`` ignores all three: it checks the true closest-point distance
+    itself.
     """
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
@@ -256,11 +259,12 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
     _check_polynomial(source, method)
     if tolerance is not None:
         _require_accuracy_control()
+        box = {"window": window} if method == "wavelet" and window is not None else {}
         return cf.fair_surface(source.poles, tol=_check_tolerance(tolerance),
                                u_knots=source.u_knots, v_knots=source.v_knots,
                                degree=(source.u_degree, source.v_degree),
                                weights=source.weights,
-                               **_search_keywords(search, measure), **keywords)
+                               **_search_keywords(search, measure), **keywords, **box)
     n = _target_spans(target, source.shape, (source.u_degree, source.v_degree), "face")
     # A target equal to the source's pole count keeps that direction as it is.
     n = tuple(None if t == k else m for t, k, m in zip(target, source.shape, n))
@@ -317,10 +321,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     start = time.perf_counter()
     source = conversion.surface_from_face(face)
     _check_boundary(source, boundary)
-    result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
-                              borders)
-    faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
     uv_range = conversion.uv_range(face, source)
+    result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
+                              borders, uv_range)
+    faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
     _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
     inside = conversion.inside_mask(
         face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))

@@ -186,3 +186,39 @@ def test_blade_surface_gets_fairer_and_closer_to_truth():
     assert summary["bending_energy"]["after"] < 0.2 * summary["bending_energy"]["before"]
     assert summary["curvature_extrema"]["after"] < 0.2 * summary["curvature_extrema"]["before"]
     assert summary["inflections"]["after"] < 0.2 * summary["inflections"]["before"]
+
+
+def _wavy_edge_net():
+    """A calm sheet whose last fifth (u > 0.8) carries a fast ripple."""
+    rng = np.random.default_rng(3)
+    u, v = np.meshgrid(np.linspace(0, 1, 30), np.linspace(0, 1, 30), indexing="ij")
+    z = 0.05 * np.sin(3 * u) + np.where(u > 0.8, 2.0 * (u - 0.8) ** 2 * np.sin(40 * v), 0.0)
+    return np.stack([u, v, z], axis=2) + 1e-4 * rng.normal(size=(30, 30, 3))
+
+
+@pytest.mark.parametrize("strategy", ["guaranteed", "linear"])
+def test_window_measures_the_tolerance_inside_a_parameter_box(strategy):
+    """A trimmed face uses part of its surface: measured only in the box u <= 0.7 that
+    leaves the ripple out, the search keeps fewer poles, and the fit is within tol there
+    by the same-parameter distance on a 400 x 400 grid of the box (an upper bound of
+    the true one, independent of the probes), while over the whole domain it is not."""
+    net = _wavy_edge_net()
+    source = cf.make_surface(net)
+    whole = cf.fair_surface(net, tol=3e-3, strategy=strategy)
+    part = cf.fair_surface(net, tol=3e-3, strategy=strategy, window=(0.0, 0.7, 0.0, 1.0))
+    assert np.prod(part.surface.shape) < np.prod(whole.surface.shape)
+    u, v = np.linspace(0.0, 0.7, 400), np.linspace(0.0, 1.0, 400)
+    same = np.linalg.norm(source.evaluate_grid(u, v) - part.surface.evaluate_grid(u, v), axis=2)
+    assert part.max_deviation <= same.max() + 1e-12 <= 3e-3
+    assert M.deviation(source, part.surface).max > 3e-3
+
+
+def test_window_must_be_a_box_in_the_domain_for_the_wavelet_tolerance_search():
+    net = _wavy_edge_net()
+    for window in ((0.0, 1.5, 0.0, 1.0), (0.5, 0.2, 0.0, 1.0), (0.0, 1.0), "box"):
+        with pytest.raises(cf.InvalidInputError, match="window"):
+            cf.fair_surface(net, tol=3e-3, window=window)
+    with pytest.raises(cf.InvalidInputError, match="window applies"):
+        cf.fair_surface(net, tol=3e-3, method="adaptive", window=(0.0, 0.7, 0.0, 1.0))
+    with pytest.raises(cf.InvalidInputError, match="window applies"):
+        cf.fair_surface(net, (5, 5), window=(0.0, 0.7, 0.0, 1.0))

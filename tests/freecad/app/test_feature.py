@@ -57,24 +57,46 @@ def test_target_mode_on_blade_face(doc, blade):
     assert blade.isValid()  # the source is not touched
 
 
-def test_a_face_with_no_coarser_net_is_kept_and_the_others_faired(doc):
-    """Linkrods Face13 and Face21 at 0.05 mm: Face21 (rational, trimmed) has no coarser
-    net within the tolerance by the core's measure over its whole surface (0.246 mm),
-    which once failed the whole selection; it is now kept as it is and named in the
-    Status, and Face13 is faired within the tolerance."""
+def _linkrods(doc):
     source = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")),
                                 "Linkrods")
     doc.recompute()
-    obj = make.make_fairing((source, ["Face13", "Face21"]), tolerance=0.05)
+    return source
+
+
+def test_a_face_with_no_coarser_net_is_kept_and_the_others_faired(doc):
+    """Linkrods Face13 and Face21 at 0.0002 mm: Face13 (7 x 18) has no coarser
+    quasi-uniform net within the tolerance (0.00048 at best), which once failed the whole
+    selection; it is now kept as it is and named in the Status, and Face21 is faired."""
+    obj = make.make_fairing((_linkrods(doc), ["Face13", "Face21"]), tolerance=2e-4)
     doc.recompute()
     assert obj.isValid() and "Invalid" not in obj.State, obj.Status
-    assert obj.Status.startswith("OK; Face21 kept unchanged: no coarser net within 0.05 mm")
-    assert "Face13" not in obj.Status
+    assert obj.Status.startswith("OK; Face13 kept unchanged: no coarser net within 0.0002 mm")
+    assert "Face21" not in obj.Status
     before, after = obj.PolesBefore.split("; "), obj.PolesAfter.split("; ")
-    assert before[1] == after[1] == "7 x 286"
-    assert np.prod([int(x) for x in after[0].split(" x ")]) < 7 * 18
-    assert 0 < obj.MaxDeviation.Value <= 0.05
+    assert before[0] == after[0] == "7 x 18"
+    assert np.prod([int(x) for x in after[1].split(" x ")]) < 7 * 286
+    assert 0 < obj.MaxDeviation.Value <= 2e-4
     assert len(obj.Shape.Faces) == 2
+
+
+def test_tolerance_of_a_trimmed_face_is_measured_on_its_uv_box(doc):
+    """Linkrods Face21 (rational, trimmed) at 0.05 mm: over its whole surface no
+    quasi-uniform net came within 0.05 (0.246 at best), though the face itself is met
+    by 4 x 40 poles at 0.0002; the search now measures in the face's UV box and fairs
+    it, within the tolerance by FreeCAD's distance on samples inside the trim."""
+    source = _linkrods(doc)
+    obj = make.make_fairing((source, ["Face21"]), tolerance=0.05)
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.PolesBefore == "7 x 286"
+    assert np.prod([int(x) for x in obj.PolesAfter.split(" x ")]) <= 4 * 10
+    face, original = obj.Shape.Faces[0], source.Shape.getElement("Face21")
+    u0, u1, v0, v1 = face.ParameterRange
+    inside = [face.Surface.value(u, v) for u in np.linspace(u0, u1, 15)
+              for v in np.linspace(v0, v1, 15) if face.isPartOfDomain(u, v)]
+    assert len(inside) > 100
+    assert max(original.distToShape(Part.Vertex(p))[0] for p in inside) <= 0.05
 
 
 def test_tolerance_mode_meets_tolerance_checked_by_occt(doc, blade):
