@@ -61,15 +61,21 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}; see {self.prog} --help\n")
 
 
-def _jobs(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(
-            f"expected a number of worker processes >= 1, got {text!r}")
-    return value
+def _integer_at_least(minimum, what):
+    """An argparse type: an integer ``>= minimum``, else "expected ``what`` >= minimum"."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected {what} >= {minimum}, got {text!r}")
+        return value
+    return parse
+
+
+_jobs = _integer_at_least(1, "a number of worker processes")
+_point_count = _integer_at_least(2, "a number of points")
 
 
 def _seconds(text):
@@ -82,14 +88,6 @@ def _seconds(text):
     return value
 
 
-def _point_count(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a number of points >= 2, got {text!r}")
-    return value
 
 
 def _positive_float(text):

@@ -48,22 +48,23 @@ def is_active(command):
     return Gui.Command.get(command).isActive()
 
 
-def press_task_ok():
+def press_task_button(kind):
+    """Click the visible ``kind`` button (``QDialogButtonBox.Ok``, ``.Cancel``) of the task
+    dialog; False if there is none."""
     for box in Gui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
-        button = box.button(QtWidgets.QDialogButtonBox.Ok)
+        button = box.button(kind)
         if button is not None and button.isVisible():
             button.click()
             return True
     return False
+
+
+def press_task_ok():
+    return press_task_button(QtWidgets.QDialogButtonBox.Ok)
 
 
 def press_task_cancel():
-    for box in Gui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
-        button = box.button(QtWidgets.QDialogButtonBox.Cancel)
-        if button is not None and button.isVisible():
-            button.click()
-            return True
-    return False
+    return press_task_button(QtWidgets.QDialogButtonBox.Cancel)
 
 
 def timed_preview(repeat=3):
