@@ -88,7 +88,10 @@ def uv_range(face, surface):
 
 def inside_mask(face, u, v):
     """``(len(u), len(v))`` booleans: which grid parameters ``(u_i, v_j)`` lie on ``face``
-    (inside its trim or on it, OCCT's ``isPartOfDomain``); all true for an untrimmed face."""
+    (inside its trim or on it, OCCT's ``isPartOfDomain``); all true, without asking OCCT
+    sample by sample, for a face trimmed to its UV box (or untrimmed)."""
+    if _is_uv_rectangle(face):
+        return np.ones((len(u), len(v)), dtype=bool)
     return np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u])
 
 
