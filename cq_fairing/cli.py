@@ -235,7 +235,9 @@ def command_fair(args):
         raise InvalidInputError("give --tol or --target, not both.")
     started = time.perf_counter()
     shape = read_shape(args.input)
-    infos = list_faces(_converted(shape) if args.convert else shape)
+    if args.convert:
+        shape = _converted(shape)  # once, here: --target is checked on the converted faces
+    infos = list_faces(shape)
     if args.faces and max(args.faces) >= len(infos):
         raise InvalidInputError(
             f"--faces names face {max(args.faces) + 1}, but {args.input} has {len(infos)} faces.")
@@ -245,7 +247,7 @@ def command_fair(args):
     result = fair_shape(shape, tol=tol, n=n, faces=args.faces,
                         method=args.method, objective=_objective(args),
                         borders=_borders(args),
-                        convert=args.convert, progress=progress,
+                        progress=progress,
                         boundary=args.boundary, details=False, jobs=args.jobs,
                         face_timeout=args.face_timeout)
     write_shape(result.shape, args.output, force=args.force, input_path=args.input)
