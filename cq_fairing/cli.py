@@ -223,7 +223,8 @@ class _Progress:
 
 # -- fair ------------------------------------------------------------------------------------
 def command_fair(args):
-    from .occ import default_tolerance, fair_shape, list_faces, read_shape, write_shape
+    from .occ import default_tolerance, fair_shape, list_faces
+    from .occ.io import WRITE_SUFFIXES, read_model, write_model
     from .report import check_output_path
 
     outputs = [p for p in (args.output, args.report, args.deviation_map, args.curvature_map) if p]
@@ -234,9 +235,10 @@ def command_fair(args):
     if args.tol is not None and args.target is not None:
         raise InvalidInputError("give --tol or --target, not both.")
     started = time.perf_counter()
-    shape = read_shape(args.input)
+    model = read_model(args.input)
     if args.convert:
-        shape = _converted(shape)  # once, here: --target is checked on the converted faces
+        model = model.converted()  # once, here: --target is checked on the converted faces
+    shape = model.shape
     infos = list_faces(shape)
     if args.faces and max(args.faces) >= len(infos):
         raise InvalidInputError(
@@ -249,9 +251,10 @@ def command_fair(args):
                         borders=_borders(args),
                         progress=progress,
                         boundary=args.boundary, details=False, jobs=args.jobs,
-                        face_timeout=args.face_timeout)
-    write_shape(result.shape, args.output, force=args.force, input_path=args.input)
-    report = _build_report(args, result, tol, time.perf_counter() - started)
+                        face_timeout=args.face_timeout, in_place=True)
+    write_model(model, args.output, force=args.force, input_path=args.input)
+    kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
+    report = _build_report(args, result, tol, time.perf_counter() - started, kept or None)
     _write_maps(args, result, tol, report)
     _note_nothing_faired(args, result)
     if args.report:
@@ -300,13 +303,6 @@ def _objective(args):
 
 def _borders(args):
     return args.borders or "auto"
-
-
-def _converted(shape):
-    """The shape with every face a B-spline, as ``fair_shape(convert=True)`` fairs it."""
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-
-    return BRepBuilderAPI_NurbsConvert(shape, True).Shape()
 
 
 def _target_scales(target, infos):
@@ -387,7 +383,7 @@ def _faired(result):
             if f.status == "faired" and f.surface is not None and f.original is not None]
 
 
-def _build_report(args, result, tol, seconds):
+def _build_report(args, result, tol, seconds, kept=None):
     from .report import build_report, face_entry
     from .viz import fairness_measures
 
@@ -412,7 +408,7 @@ def _build_report(args, result, tol, seconds):
                         objective=_objective(args) if args.method == "adaptive" else None,
                         borders=_borders(args) if args.method == "adaptive" else None,
                         max_gap=result.max_gap,
-                        valid=result.valid, seconds=seconds,
+                        valid=result.valid, seconds=seconds, kept=kept,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
 
 

@@ -253,7 +253,7 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
 
 def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
                  method=None, objective=None, borders=None, max_gap=None, valid=None,
-                 maps=None, seconds=None, command=None, units="mm"):
+                 maps=None, seconds=None, command=None, units="mm", kept=None):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
     Returns
@@ -264,7 +264,9 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
         for the adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
         worst deviation, max gap between faces, validity, time), ``maps`` (name ->
-        PNG/VTP path) and ``skipped`` (index, reason).
+        PNG/VTP path), ``skipped`` (index, reason) and ``kept`` (what the output keeps of
+        the input besides geometry: counts of ``products``, ``instances``, ``colours``
+        and ``layers``, or ``None`` when the output is geometry only).
     """
     from . import __version__
 
@@ -288,7 +290,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command, "input": _str(input_path), "output": _str(output_path),
         "tolerance": tolerance, "units": units, "method": method, "objective": objective,
-        "borders": borders,
+        "borders": borders, "kept": kept,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
                     for f in faces if f["status"] in ("skipped", "failed")],
@@ -393,6 +395,11 @@ def _method(report):
     return f"{report['method']} ({', '.join(settings)})" if settings[0] else report["method"]
 
 
+def _kept(kept):
+    """``2 products, 3 instances, 2 colours, 0 layers``."""
+    return ", ".join(f"{count} {name}" for name, count in kept.items())
+
+
 def render_html(report):
     """The report as one self-contained HTML page (maps embedded as base64 PNG)."""
     s = report["summary"]
@@ -401,6 +408,8 @@ def render_html(report):
                 ("tolerance", f"{_fmt(report['tolerance'])} {report['units']}"),
                 ("method", _method(report)), ("command", report["command"]),
                 ("created", report["created"]), ("tool", report["tool"])]
+    if report.get("kept"):
+        settings.append(("kept from the input", _kept(report["kept"])))
     summary = [("faces ok / total", f"{s['faces_ok']} / {s['faces_total']}"),
                ("over tolerance", s["faces_tolerance_not_met"]),
                ("skipped", s["faces_skipped"]), ("failed", s["faces_failed"]),

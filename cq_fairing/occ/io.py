@@ -1,5 +1,9 @@
 """Model files in and out: STEP, IGES and BREP through OCCT's own readers and writers.
 
+STEP files are read into an XDE document (:mod:`cq_fairing.occ.document`): a model
+read with :func:`read_model`, faired in place and written with :func:`write_model`
+keeps its products, instances, names, colours and layers.
+
 Writing is atomic: OCCT writes the model into memory, Python writes those bytes to a
 temporary file ``.cq_fairing_*`` in the destination folder (so a full disk or a file
 size limit is an ordinary ``OSError`` whose reason is reported), that file is read
@@ -35,9 +39,10 @@ from OCP.TopoDS import TopoDS_Shape
 from ..errors import FileFormatError, OutputPathError
 from ..report import atomic_output, folder_error
 from .convert import as_shape, indexed_faces
+from .document import Model, document_step_bytes, read_step_model
 
-__all__ = ["read_shape", "write_shape", "step_length_unit", "quiet_occt", "READ_SUFFIXES",
-           "WRITE_SUFFIXES"]
+__all__ = ["read_shape", "read_model", "write_shape", "write_model", "step_length_unit",
+           "quiet_occt", "READ_SUFFIXES", "WRITE_SUFFIXES"]
 
 READ_SUFFIXES = {".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges",
                  ".brep": "brep", ".brp": "brep"}
@@ -72,19 +77,37 @@ def read_shape(path):
         The file is missing, empty, not readable, corrupt or truncated, or holds no shape
         with at least one face.
     """
+    return read_model(path).shape
+
+
+def read_model(path):
+    """Read a model file as :func:`read_shape` does, keeping a STEP file's XDE document.
+
+    Returns
+    -------
+    Model
+        The flat shape (the faces :func:`read_shape` gives, in its order) and, for STEP,
+        the document with the file's products, instances, names, colours and layers
+        (:mod:`cq_fairing.occ.document`); :func:`write_model` writes both back.
+
+    Raises
+    ------
+    FileFormatError
+        As :func:`read_shape`.
+    """
     path = Path(path)
     kind = _kind(path, READ_SUFFIXES, "read")
     if not path.is_file():
         raise FileFormatError(f"cannot read '{path}': no such file; check the path.")
     if path.stat().st_size == 0:
         raise FileFormatError(f"cannot read '{path}': the file is empty.")
-    shape = {"step": _read_step, "iges": _read_iges, "brep": _read_brep}[kind](path)
-    if shape is None or shape.IsNull() or not indexed_faces(shape):
+    model = {"step": _read_step, "iges": _read_iges, "brep": _read_brep}[kind](path)
+    if model.shape is None or model.shape.IsNull() or not indexed_faces(model.shape):
         raise FileFormatError(
             f"'{path}' was read as {kind.upper()} but holds no shape with faces; "
             "the file may be truncated or contain only points/curves."
         )
-    return shape
+    return model
 
 
 @contextmanager
@@ -144,7 +167,7 @@ def _flush_c_streams():
 
 
 def _read_with(reader, kind, path):
-    """Read and transfer all roots with an OCCT XSControl reader; None when it holds no shape."""
+    """All roots transferred by an OCCT XSControl reader (a ``None`` shape when there are none)."""
     with quiet_occt():
         status = reader.ReadFile(str(path))
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
@@ -153,11 +176,12 @@ def _read_with(reader, kind, path):
                 "it may be corrupt or truncated."
             )
         reader.TransferRoots()
-    return reader.OneShape() if reader.NbShapes() else None
+    return Model(reader.OneShape() if reader.NbShapes() else None)
 
 
 def _read_step(path):
-    return _read_with(STEPControl_Reader(), "STEP", path)
+    with quiet_occt():
+        return read_step_model(path)
 
 
 _UNIT_NAMES = {"millimetre": "MM", "millimeter": "MM", "metre": "M", "meter": "M",
@@ -207,7 +231,7 @@ def _read_brep(path):
         raise FileFormatError(
             f"'{path}' is not a readable BREP file; it may be corrupt or truncated."
         )
-    return shape
+    return Model(shape)
 
 
 def _check_output(path, force):
@@ -255,16 +279,31 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
         Unknown suffix, or the written file does not read back as a valid shape with the
         same number of faces.
     """
-    shape = as_shape(shape)
+    write_model(Model(as_shape(shape)), path, force=force, input_path=input_path, unit=unit)
+
+
+def write_model(model, path, *, force=False, input_path=None, unit=None):
+    """Write a :class:`~cq_fairing.occ.document.Model` as :func:`write_shape` writes a shape.
+
+    A model with a document written as STEP keeps the products, instances, names,
+    colours and layers it was read with (:func:`~cq_fairing.occ.document.document_step_bytes`);
+    as BREP, or without a document, only its shape is written.  Parameters and errors
+    as in :func:`write_shape`.
+    """
     path = Path(path)
     if input_path is not None and Path(input_path).resolve() == path.resolve():
         raise OutputPathError(
             f"refusing to write over the input file '{path}'; choose another output name."
         )
     kind = _check_output(path, force)
-    n_faces = len(indexed_faces(shape))
-    with quiet_occt():
-        data = _step_bytes(shape, unit) if kind == "step" else _brep_bytes(shape)
+    n_faces = len(indexed_faces(model.shape))
+    with quiet_occt(), _step_unit(unit):
+        if kind == "brep":
+            data = _brep_bytes(model.shape)
+        elif model.document is not None:
+            data = document_step_bytes(model.document)
+        else:
+            data = _step_bytes(model.shape)
     with atomic_output(path, force=force) as tmp:
         _write_bytes(tmp, data, path)
         _verify_written(tmp, n_faces)
@@ -300,16 +339,22 @@ def _free_space(path):
     return f"{info.f_bavail * info.f_frsize / 1e6:.1f} MB free on the device"
 
 
-def _step_bytes(shape, unit):
-    """The STEP file of ``shape`` as bytes (OCCT's writer, into memory)."""
+@contextmanager
+def _step_unit(unit):
+    """OCCT's ``write.step.unit`` set to ``unit`` for the block (unchanged for ``None``)."""
     previous = Interface_Static.CVal_s("write.step.unit")
-    writer = STEPControl_Writer()
     try:
         if unit is not None:
             Interface_Static.SetCVal_s("write.step.unit", str(unit).upper())
-        status = writer.Transfer(shape, STEPControl_AsIs)
+        yield
     finally:
         Interface_Static.SetCVal_s("write.step.unit", previous)
+
+
+def _step_bytes(shape):
+    """The STEP file of ``shape`` as bytes (OCCT's writer, into memory)."""
+    writer = STEPControl_Writer()
+    status = writer.Transfer(shape, STEPControl_AsIs)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(f"STEP transfer of the shape failed (status {status.name}).")
     stream = io.BytesIO()

@@ -100,13 +100,13 @@ def _selection(faces, count):
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
                convert=False, progress=None, boundary="free", target_degree=None,
                density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
-               borders="auto"):
+               borders="auto", in_place=False):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
     ----------
     shape : TopoDS_Shape or cadquery.Shape
-        Not modified.
+        Not modified (unless ``in_place``).
     tol : float, optional
         Per-face tolerance in model units; default 1e-3 of the shape's bounding-box
         diagonal (when ``n`` is also ``None``).
@@ -140,6 +140,12 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         ``jobs=1``); a face over the limit is reported ``'failed'`` ("time limit S s
         exceeded; kept the original"), keeps its original surface, and its worker is
         killed.  Default: no limit.
+    in_place : bool, optional
+        Fair on a copy as usual, then put the final surfaces into ``shape``'s own faces
+        and return ``shape`` itself: whatever shares those faces sees the faired
+        geometry (a STEP file's XDE document with its products, names and colours, see
+        :mod:`cq_fairing.occ.document`; every placement of a part used several times).
+        Not with ``convert``, which makes new faces.
 
     Returns
     -------
@@ -159,12 +165,18 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     check_options(tol, n, method, boundary, objective, borders)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
+    if in_place and convert:
+        raise InvalidInputError(
+            "in_place=True puts the faired surfaces into the shape's own faces, but "
+            "convert=True makes new ones; convert the shape first (for a STEP model: "
+            "Model.converted()) and fair that in place.")
     if tol is None and n is None:
         tol = default_tolerance(shape)
     if max_gap is not None:
         check_options(max_gap, None, method, boundary, objective, borders)
     max_gap = tol if max_gap is None else float(max_gap)
     _check_workers(jobs, face_timeout)
+    free_before = free_edge_count(shape)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
@@ -180,9 +192,11 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     finally:
         if pool is not None:
             pool.close()
+    if in_place:
+        copy = job.install_in_source()
     return ShapeFairResult(
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
-        tol, free_edge_count(shape), free_edge_count(copy), time.perf_counter() - start, gaps)
+        tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps)
 
 
 def _check_workers(jobs, face_timeout):
@@ -270,14 +284,30 @@ class _Job:
 
     def _build_once(self):
         copy = BRepBuilderAPI_Copy(self.source, True, False).Shape()
-        targets = indexed_faces(copy)
+        targets, touched = self.install(copy)
+        invalid = [i for i, (report, target) in enumerate(zip(self.reports, targets))
+                   if report.faired and not BRepCheck_Analyzer(target).IsValid()]
+        return copy, edge_gaps(copy, touched), invalid
+
+    def install(self, shape):
+        """Put every faired surface into the faces of ``shape`` in place and finish the
+        touched edges; ``shape`` is the source or a copy of it (same faces, same order).
+
+        Returns
+        -------
+        targets : list of TopoDS_Face
+            The faces of ``shape``, in :func:`indexed_faces` order.
+        touched : list of TopoDS_Edge
+            The edges of the faired faces.
+        """
+        targets = indexed_faces(shape)
         touched = []
         for report, target in zip(self.reports, targets):
             if report.faired:
                 touched += replace_surface(target, to_geom_surface(report.surface))
                 report.face = target
         emap = TopTools_IndexedDataMapOfShapeListOfShape()
-        TopExp.MapShapesAndAncestors_s(copy, TopAbs_EDGE, TopAbs_FACE, emap)
+        TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
         # an edge of one face only (a free border, or a seam whose rows fairing tied)
         # lies on that face alone: its 3-D curve is rebuilt on the new surface
         alone = [_single_face(emap.FindFromKey(e)) for e in touched]
@@ -285,10 +315,20 @@ class _Job:
         shared = [e for e, single in zip(touched, alone) if not single]
         finish_edges(free, rebuild_3d=True)
         finish_edges(shared)
-        settle_tolerances(copy, touched)
-        invalid = [i for i, (report, target) in enumerate(zip(self.reports, targets))
-                   if report.faired and not BRepCheck_Analyzer(target).IsValid()]
-        return copy, edge_gaps(copy, touched), invalid
+        settle_tolerances(shape, touched)
+        return targets, touched
+
+    def install_in_source(self):
+        """Put the final surfaces into the source's own faces and return the source.
+
+        The reports' ``original`` faces move to an untouched copy first: deviation maps
+        and reports compare the faired faces with them.
+        """
+        untouched = indexed_faces(BRepBuilderAPI_Copy(self.source, True, False).Shape())
+        for report, original in zip(self.reports, untouched):
+            report.original = original
+        self.install(self.source)
+        return self.source
 
     def close_gaps(self, copy, gaps, max_gap):
         """Re-fair (halved tolerance) or restore the faired faces next to large gaps."""

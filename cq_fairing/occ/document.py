@@ -1,0 +1,174 @@
+"""STEP product structure, names, colours and layers kept through fairing (OCCT's XDE).
+
+A STEP file from a CAD system is more than its geometry: an assembly of products, each
+placed once or many times, with names on products and instances, colours on parts and
+on single faces, and layers.  :func:`read_step_model` reads all of it into an XDE
+document (``STEPCAFControl_Reader`` into a ``TDocStd_Document``) and flattens the
+geometry to one shape (``XCAFDoc_ShapeTool::GetOneShape``), the shape every other part
+of cq-fairing sees: the same faces, in the same order, as ``STEPControl_Reader`` gives.
+
+The flat shape shares its ``TopoDS_TShape`` objects with the document's labels: a part
+placed three times appears three times in the flat shape (three locations) over one
+set of faces.  Fairing *in place* (``fair_shape(..., in_place=True)``) puts the new
+surfaces into those very faces, so every label of the document (product, instance,
+coloured face) sees the faired geometry, and :func:`document_step_bytes` writes the
+document back with ``STEPCAFControl_Writer``: the same products, instances, names,
+colours and layers, around faired faces.
+
+Validation properties (a product's area, volume and centroid stored in the file) are
+not read: written back they would describe the geometry before fairing.
+"""
+
+from dataclasses import dataclass, replace
+
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+from OCP.IFSelect import IFSelect_ReturnStatus
+from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
+from OCP.STEPControl import STEPControl_AsIs
+from OCP.TCollection import TCollection_ExtendedString
+from OCP.TDF import TDF_LabelSequence
+from OCP.TDocStd import TDocStd_Document
+from OCP.TNaming import TNaming_Builder
+from OCP.TopoDS import TopoDS_Shape
+from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
+
+from ..errors import FileFormatError
+
+__all__ = ["Model", "read_step_model", "document_step_bytes"]
+
+
+@dataclass(frozen=True)
+class Model:
+    """A model read from a file: its flat shape and, for STEP, its XDE document.
+
+    Attributes
+    ----------
+    shape : TopoDS_Shape
+        All the geometry as one shape (a compound when there are several roots).
+    document : TDocStd_Document or None
+        The STEP file's products, instances, names, colours and layers, sharing their
+        faces with ``shape``; ``None`` for IGES and BREP files.
+    """
+
+    shape: TopoDS_Shape
+    document: TDocStd_Document = None
+
+    def converted(self):
+        """The model with every face a B-spline (``BRepBuilderAPI_NurbsConvert``, exact).
+
+        With a document, each part is converted on its own label and its coloured or
+        named faces are moved to their converted faces, so the document still describes
+        the flat shape.
+        """
+        if self.document is None:
+            return replace(self, shape=BRepBuilderAPI_NurbsConvert(self.shape, True).Shape())
+        tool = _shape_tool(self.document)
+        for label in _part_labels(tool):
+            _convert_part(tool, label)
+        tool.UpdateAssemblies()
+        return replace(self, shape=tool.GetOneShape())
+
+    def contents(self):
+        """What the document carries besides geometry, as counts (empty without one).
+
+        Returns
+        -------
+        dict
+            ``products`` (parts and assemblies), ``instances`` (placements of a product
+            in an assembly), ``colours`` and ``layers`` (distinct ones defined).
+        """
+        if self.document is None:
+            return {}
+        main = self.document.Main()
+        tool = _shape_tool(self.document)
+        products = [XCAFDoc_ShapeTool.NbComponents_s(label) for label in _labels(tool.GetShapes)]
+        colours = _labels(XCAFDoc_DocumentTool.ColorTool_s(main).GetColors)
+        layers = _labels(XCAFDoc_DocumentTool.LayerTool_s(main).GetLayerLabels)
+        return {"products": len(products), "instances": sum(products),
+                "colours": sum(1 for _ in colours), "layers": sum(1 for _ in layers)}
+
+
+def read_step_model(path):
+    """Read a STEP file into an XDE document and its flat shape.
+
+    Returns
+    -------
+    Model
+        ``shape`` is ``None`` (or null) when the file transfers no geometry.
+
+    Raises
+    ------
+    FileFormatError
+        The file is not readable STEP.
+    """
+    document = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+    reader = STEPCAFControl_Reader()
+    for set_mode in (reader.SetNameMode, reader.SetColorMode, reader.SetLayerMode):
+        set_mode(True)
+    reader.SetPropsMode(False)  # area/volume/centroid of the unfaired geometry
+    status = reader.ReadFile(str(path))
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(
+            f"'{path}' is not a readable STEP file (reader status {status.name}); "
+            "it may be corrupt or truncated."
+        )
+    reader.Transfer(document)
+    return Model(_shape_tool(document).GetOneShape(), document)
+
+
+def document_step_bytes(document):
+    """The STEP file of ``document`` as bytes: products, instances, names, colours, layers.
+
+    Raises
+    ------
+    FileFormatError
+        The transfer or the writing failed.
+    """
+    import io
+
+    writer = STEPCAFControl_Writer()
+    for set_mode in (writer.SetNameMode, writer.SetColorMode, writer.SetLayerMode):
+        set_mode(True)
+    writer.SetPropsMode(False)
+    if not writer.Transfer(document, STEPControl_AsIs):
+        raise FileFormatError("STEP transfer of the model's document failed.")
+    stream = io.BytesIO()
+    status = writer.WriteStream(stream)
+    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise FileFormatError(f"writing the STEP data failed (status {status.name}).")
+    return stream.getvalue()
+
+
+def _shape_tool(document):
+    return XCAFDoc_DocumentTool.ShapeTool_s(document.Main())
+
+
+def _labels(getter):
+    """Yield the labels a ``getter(TDF_LabelSequence)`` fills.
+
+    OCP hands out references into the sequence, not copies: a label kept after the
+    sequence is freed points at freed memory.  The generator keeps the sequence alive
+    for as long as the iteration runs; use each label inside it.
+    """
+    labels = TDF_LabelSequence()
+    getter(labels)
+    for i in range(1, labels.Length() + 1):
+        yield labels.Value(i)
+
+
+def _part_labels(tool):
+    """Yield the top-level labels holding geometry (not assemblies: those place parts)."""
+    for label in _labels(tool.GetShapes):
+        if not XCAFDoc_ShapeTool.IsAssembly_s(label):
+            yield label
+
+
+def _convert_part(tool, label):
+    """NURBS-convert one part's shape on its label, its sub-shape labels moved along."""
+    part = XCAFDoc_ShapeTool.GetShape_s(label)
+    converter = BRepBuilderAPI_NurbsConvert(part, True)
+    for sub in _labels(lambda labels: XCAFDoc_ShapeTool.GetSubShapes_s(label, labels)):
+        converted = converter.ModifiedShape(XCAFDoc_ShapeTool.GetShape_s(sub))
+        # the builder clears the label's shape when it is made: look the shape up first
+        TNaming_Builder(sub).Generated(converted)
+    tool.SetShape(label, converter.Shape())

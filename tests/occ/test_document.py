@@ -1,0 +1,260 @@
+"""STEP assemblies through fairing: products, instances, names, colours and layers kept.
+
+The input is a real STEP assembly written by OCCT's own XDE writer: a product "rotor"
+placing one freeform part "blade" three times (instances "blade_0".."blade_2"), the
+part red, one of its B-spline faces green and on layer "SKIN".  The output is read
+back here with OCCT's XDE reader directly (no cq_fairing code) and compared.
+"""
+
+import json
+import re
+
+import numpy as np
+import pytest
+from OCP.BRep import BRep_Tool
+from OCP.Quantity import Quantity_Color, Quantity_TOC_RGB
+from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
+from OCP.TCollection import TCollection_ExtendedString
+from OCP.TDataStd import TDataStd_Name
+from OCP.TDF import TDF_LabelSequence
+from OCP.TDocStd import TDocStd_Document
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS
+from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType, XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
+from OCP.gp import gp_Trsf, gp_Vec
+
+from cq_fairing.cli import main
+from cq_fairing.errors import InvalidInputError
+from cq_fairing.occ import fair_shape, read_shape
+from cq_fairing.occ.io import read_model, write_model
+from tests.conftest import REAL_DATA
+from tests.occ.helpers import area, faces_of
+
+RED, GREEN = (0.8, 0.1, 0.1), (0.1, 0.8, 0.1)
+SHIFT = 30.0  # y offset between the instances
+
+
+def _blade():
+    """A lofted solid between two wavy profiles: two of its faces are B-splines."""
+    import cadquery as cq
+
+    def profile(z, ys, back):
+        points = list(zip(np.linspace(0, 40, len(ys)), ys))
+        return (cq.Workplane("XY").workplane(offset=z).spline(points)
+                .lineTo(40, back).lineTo(0, back).close().wires().val())
+
+    return cq.Solid.makeLoft([profile(0, [0, 1.3, -0.7, 0.4, 0, 0.6, -0.2, 0], -10),
+                              profile(15, [0.5, -1.1, 1.2, -0.3, 0.2, -0.5, 0.3, 0.1], -12)]).wrapped
+
+
+def _bspline_face(shape):
+    return next(f for f in faces_of(shape)
+                if BRep_Tool.Surface_s(f).DynamicType().Name() == "Geom_BSplineSurface"
+                and BRep_Tool.Surface_s(f).NbUPoles() > 4)
+
+
+def _name(label, text):
+    TDataStd_Name.Set_s(label, TCollection_ExtendedString(text))
+
+
+@pytest.fixture(scope="module")
+def rotor_step(tmp_path_factory):
+    """The rotor assembly as a STEP file."""
+    document = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+    main_label = document.Main()
+    shapes = XCAFDoc_DocumentTool.ShapeTool_s(main_label)
+    colours = XCAFDoc_DocumentTool.ColorTool_s(main_label)
+    layers = XCAFDoc_DocumentTool.LayerTool_s(main_label)
+    blade = _blade()
+    rotor = shapes.NewShape()
+    _name(rotor, "rotor")
+    part = shapes.AddShape(blade, False)
+    _name(part, "blade")
+    colours.SetColor(part, Quantity_Color(*RED, Quantity_TOC_RGB), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
+    skin = shapes.AddSubShape(part, _bspline_face(blade))
+    colours.SetColor(skin, Quantity_Color(*GREEN, Quantity_TOC_RGB), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
+    layers.SetLayer(skin, TCollection_ExtendedString("SKIN"))
+    for i in range(3):
+        move = gp_Trsf()
+        move.SetTranslation(gp_Vec(0, SHIFT * i, 0))
+        _name(shapes.AddComponent(rotor, part, TopLoc_Location(move)), f"blade_{i}")
+    shapes.UpdateAssemblies()
+    writer = STEPCAFControl_Writer()
+    writer.SetNameMode(True)
+    writer.SetColorMode(True)
+    writer.SetLayerMode(True)
+    writer.Transfer(document, STEPControl_AsIs)
+    path = tmp_path_factory.mktemp("rotor") / "rotor.step"
+    writer.Write(str(path))
+    return path
+
+
+class _ReadBack:
+    """An XDE document read with OCCT's reader, and what the tests ask of it."""
+
+    def __init__(self, path):
+        self.document = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+        reader = STEPCAFControl_Reader()
+        for set_mode in (reader.SetNameMode, reader.SetColorMode, reader.SetLayerMode):
+            set_mode(True)
+        reader.ReadFile(str(path))
+        reader.Transfer(self.document)
+        main_label = self.document.Main()
+        self.shapes = XCAFDoc_DocumentTool.ShapeTool_s(main_label)
+        self.colours = XCAFDoc_DocumentTool.ColorTool_s(main_label)
+        self.layers = XCAFDoc_DocumentTool.LayerTool_s(main_label)
+
+    @staticmethod
+    def labels(getter, *args):
+        """The labels ``getter(*args, sequence)`` fills, and the sequence: OCP returns
+        references into it, so the caller keeps it alive while using the labels."""
+        sequence = TDF_LabelSequence()
+        getter(*args, sequence)
+        return [sequence.Value(i) for i in range(1, sequence.Length() + 1)], sequence
+
+    def part(self):
+        """The one top-level label that is not an assembly, and its sequence."""
+        labels, sequence = self.labels(self.shapes.GetShapes)
+        parts = [label for label in labels if not XCAFDoc_ShapeTool.IsAssembly_s(label)]
+        assert len(parts) == 1
+        return parts[0], sequence
+
+    def colour(self, label):
+        colour = Quantity_Color()
+        if not XCAFDoc_ColorTool.GetColor_s(label, XCAFDoc_ColorType.XCAFDoc_ColorSurf, colour):
+            return None
+        return np.array([colour.Red(), colour.Green(), colour.Blue()])
+
+    def layer_names(self, label):
+        names = self.layers.GetLayers(label)
+        return [names.Value(i).ToExtString() for i in range(1, names.Length() + 1)]
+
+
+def _poles(face):
+    surface = BRep_Tool.Surface_s(face)
+    return np.array([[(p.X(), p.Y(), p.Z()) for p in row] for row in
+                     [[surface.Pole(i, j) for j in range(1, surface.NbVPoles() + 1)]
+                      for i in range(1, surface.NbUPoles() + 1)]])
+
+
+def _face_pole_counts(shape):
+    return [(BRep_Tool.Surface_s(f).NbUPoles(), BRep_Tool.Surface_s(f).NbVPoles())
+            if BRep_Tool.Surface_s(f).DynamicType().Name() == "Geom_BSplineSurface" else None
+            for f in faces_of(shape)]
+
+
+@pytest.mark.parametrize("name", ["IEA_15MW_CFD.stp", "linkrods.step"])
+def test_read_model_gives_the_plain_readers_faces_in_its_order(name, rotor_step):
+    for path in (REAL_DATA / name, rotor_step):
+        plain = STEPControl_Reader()
+        plain.ReadFile(str(path))
+        plain.TransferRoots()
+        expected = [area(f) for f in faces_of(plain.OneShape())]
+        got = [area(f) for f in faces_of(read_model(path).shape)]
+        assert got == pytest.approx(expected, rel=1e-12, abs=1e-12)
+
+
+def _step_names(text):
+    """Product names, and instance names with the product definition each places, read
+    from the STEP text itself."""
+    products = re.findall(r"PRODUCT\('([^']*)'", text)
+    instances = re.findall(r"NEXT_ASSEMBLY_USAGE_OCCURRENCE\('[^']*','([^']*)','[^']*',#\d+,(#\d+)", text)
+    return sorted(products), sorted(instances)
+
+
+def test_fairing_a_step_assembly_keeps_products_instances_names_colours_layers(rotor_step, tmp_path):
+    out, report = tmp_path / "faired.step", tmp_path / "report.json"
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05",
+                 "--report", str(report)]) == 0
+    products, instances = _step_names(out.read_text())
+    assert products == ["blade", "rotor"]
+    assert [name for name, _ in instances] == ["blade_0", "blade_1", "blade_2"]
+    assert len({placed for _, placed in instances}) == 1  # one part, placed three times
+    assert out.read_text().count("B_SPLINE_SURFACE_WITH_KNOTS") == 3  # its faces written once
+    kept = json.loads(report.read_text())["kept"]
+    assert kept == {"products": 2, "instances": 3, "colours": 2, "layers": 1}
+
+
+def test_the_coloured_face_is_the_faired_one_and_keeps_colour_and_layer(rotor_step, tmp_path):
+    out = tmp_path / "faired.step"
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05"]) == 0
+    source_skin = _bspline_face(read_shape(rotor_step))
+    back = _ReadBack(out)
+    part, _alive = back.part()
+    assert np.allclose(back.colour(part), RED, atol=1e-6)
+    subs, _alive_too = back.labels(XCAFDoc_ShapeTool.GetSubShapes_s, part)
+    assert len(subs) == 1
+    sub = subs[0]
+    assert np.allclose(back.colour(sub), GREEN, atol=1e-6)
+    assert back.layer_names(sub) == ["SKIN"]
+    skin = TopoDS.Face_s(XCAFDoc_ShapeTool.GetShape_s(sub))
+    source_poles, faired_poles = _poles(source_skin), _poles(skin)
+    assert faired_poles.shape[0] < source_poles.shape[0]  # the coloured face was faired
+    assert area(skin) == pytest.approx(area(source_skin), rel=1e-3)
+
+
+def test_the_document_gets_the_same_surfaces_as_a_plain_fair(rotor_step, tmp_path):
+    """Fairing in place on the document = fairing a copy of the plain shape, face by face;
+    the three placements of the part share one faired part (poles shifted by SHIFT)."""
+    out = tmp_path / "faired.step"
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05"]) == 0
+    plain = fair_shape(read_shape(rotor_step), tol=0.05).shape
+    written = read_shape(out)
+    assert _face_pole_counts(written) == _face_pole_counts(plain)
+    for a, b in zip(faces_of(written), faces_of(plain)):
+        if _face_pole_counts(a)[0] is not None:
+            assert np.allclose(_poles(a), _poles(b), atol=1e-9)
+    skins = [f for f in faces_of(written) if _face_pole_counts(f)[0] is not None
+             and _poles(f).shape == _poles(_bspline_face(written)).shape]
+    first = _poles(skins[0])
+    offsets = sorted({round(float(np.mean(_poles(f) - first, axis=(0, 1))[1]), 9) for f in skins})
+    assert offsets == [0.0, SHIFT, 2 * SHIFT]
+
+
+def test_convert_keeps_the_document_and_leaves_only_bspline_faces(rotor_step, tmp_path):
+    out = tmp_path / "converted.step"
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05", "--convert"]) == 0
+    assert all(count is not None for count in _face_pole_counts(read_shape(out)))
+    products, instances = _step_names(out.read_text())
+    assert products == ["blade", "rotor"] and len(instances) == 3
+    back = _ReadBack(out)
+    part, _alive = back.part()
+    subs, _alive_too = back.labels(XCAFDoc_ShapeTool.GetSubShapes_s, part)
+    assert np.allclose(back.colour(subs[0]), GREEN, atol=1e-6)
+    assert back.layer_names(subs[0]) == ["SKIN"]
+
+
+def test_in_place_returns_the_input_and_reports_keep_the_original_faces(rotor_step):
+    shape = read_shape(rotor_step)
+    before = _face_pole_counts(shape)
+    source_poles = [_poles(f) if c else None for f, c in zip(faces_of(shape), before)]
+    result = fair_shape(shape, tol=0.05, in_place=True)
+    assert result.shape.IsSame(shape) and result.valid
+    after = _face_pole_counts(shape)
+    faired = [r for r in result.faces if r.faired]
+    assert faired and all(after[r.index] != before[r.index] for r in faired
+                          if r.poles_after != r.poles_before)
+    for r in faired:
+        assert np.array_equal(_poles(r.original), source_poles[r.index])
+        assert r.face.IsSame(faces_of(shape)[r.index])
+    with pytest.raises(InvalidInputError, match="convert"):
+        fair_shape(shape, tol=0.05, in_place=True, convert=True)
+
+
+def test_write_model_honours_the_unit_with_a_document(rotor_step, tmp_path):
+    model = read_model(rotor_step)
+    write_model(model, tmp_path / "inch.step", unit="INCH")
+    text = (tmp_path / "inch.step").read_text()
+    assert "INCH" in text
+    expected = [area(f) for f in faces_of(model.shape)]
+    assert [area(f) for f in faces_of(read_shape(tmp_path / "inch.step"))] == pytest.approx(
+        expected, rel=1e-9)
+
+
+def test_brep_output_of_a_step_assembly_is_geometry_only(rotor_step, tmp_path):
+    out, report = tmp_path / "faired.brep", tmp_path / "report.json"
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05",
+                 "--report", str(report)]) == 0
+    assert json.loads(report.read_text())["kept"] is None
+    assert len(faces_of(read_shape(out))) == 18
