@@ -17,7 +17,7 @@ boundaries in place.
 """
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp
+from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
@@ -223,6 +224,7 @@ class _Job:
         self.pool = pool
         self.reports = [None] * len(originals)
         self.tol = {}
+        self.part_face = _part_faces(originals)
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
@@ -243,17 +245,43 @@ class _Job:
         self.fair([i for i in range(total) if i in selected], tol, n, report)
 
     def fair(self, indices, tol, n, report=None):
-        """Fair the faces ``indices`` (serially, or in the pool's workers)."""
+        """Fair the faces ``indices`` (serially, or in the pool's workers).
+
+        A face that is another placement of a face already in ``indices`` (one part
+        placed several times in an assembly: the same ``TShape`` at another location)
+        is not faired again: it gets that face's report moved rigidly to its place.
+        """
         report = report or self.reports.__setitem__
         for index in indices:
             self.tol[index] = tol
+        first = {}
+        for index in indices:
+            first.setdefault(self.part_face[index], index)
+        leaders = [index for index in indices if first[self.part_face[index]] == index]
         options = dict(self.options, tol=tol, n=n)
         if self.pool is None:
-            for index in indices:
+            for index in leaders:
                 report(index, fair_one_face(index, self.originals[index], options))
-            return
-        self.pool.run([(index, self.originals[index], options) for index in indices],
-                      lambda index, outcome: report(index, self._from_worker(index, outcome)))
+        else:
+            self.pool.run([(index, self.originals[index], options) for index in leaders],
+                          lambda index, outcome: report(index, self._from_worker(index, outcome)))
+        for index in indices:
+            leader = first[self.part_face[index]]
+            if leader != index:
+                report(index, self._placed(self.reports[leader], index))
+
+    def _placed(self, leader_report, index):
+        """``leader_report`` for the face ``index``, the same face at another location."""
+        original = self.originals[index]
+        motion = original.Location().Multiplied(leader_report.original.Location().Inverted())
+        matrix = _affine(motion.Transformation())
+        note = f"another placement of face {leader_report.index + 1}'s part, faired with it"
+        return replace(
+            leader_report, face=original, original=original, index=index, result=None,
+            seconds=0.0, message="; ".join(filter(None, (leader_report.message, note))),
+            surface=leader_report.surface and replace(
+                leader_report.surface, poles=_moved(leader_report.surface.poles, matrix)),
+            deviation=leader_report.deviation and _moved_samples(leader_report.deviation, matrix))
 
     def _from_worker(self, index, outcome):
         """A :class:`FaceFairReport` from a worker's outcome (the face built here)."""
@@ -365,6 +393,32 @@ class _Job:
             self.originals[index], "unchanged", f"kept the original surface: fairing opened "
             f"a gap larger than max_gap={max_gap:g} along a shared edge even at "
             f"tol={self.tol[index]:g}", index, self.tol[index], self.reports[index].seconds)
+
+
+def _part_faces(faces):
+    """For each face, the index of its ``TShape`` among the faces' (a part placed several
+    times shares its faces' ``TShape`` between the placements)."""
+    unplaced = TopTools_IndexedMapOfShape()
+    return [unplaced.Add(face.Located(TopLoc_Location())) for face in faces]
+
+
+def _affine(trsf):
+    """The 3 x 4 matrix ``[A | t]`` of a ``gp_Trsf`` (x -> A x + t)."""
+    return np.array([[trsf.Value(row, col) for col in range(1, 5)] for row in range(1, 4)])
+
+
+def _moved(points, matrix):
+    """``points`` (..., 3) moved by the affine ``matrix``."""
+    return points @ matrix[:, :3].T + matrix[:, 3]
+
+
+def _moved_samples(deviation, matrix):
+    """Deviation samples of a face moved to another placement: points and normals move,
+    distances stay."""
+    moved = dict(deviation, points=_moved(deviation["points"], matrix),
+                 faired_points=_moved(deviation["faired_points"], matrix))
+    moved["normals"] = deviation["normals"] @ matrix[:, :3].T
+    return moved
 
 
 def fair_one_face(index, face, options):
