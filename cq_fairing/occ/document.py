@@ -26,10 +26,15 @@ from OCP.IFSelect import IFSelect_ReturnStatus
 from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs
 from OCP.TCollection import TCollection_ExtendedString
-from OCP.TDF import TDF_LabelSequence
+from OCP.TDataStd import TDataStd_Name
+from OCP.TDF import TDF_Label, TDF_LabelSequence
 from OCP.TDocStd import TDocStd_Document
 from OCP.TNaming import TNaming_Builder
+from OCP.TopAbs import TopAbs_FACE
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Shape
+from OCP.TopTools import TopTools_IndexedMapOfShape
 from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
 
 from ..errors import FileFormatError
@@ -86,6 +91,25 @@ class Model:
         layers = _labels(XCAFDoc_DocumentTool.LayerTool_s(main).GetLayerLabels)
         return {"products": len(products), "instances": sum(products),
                 "colours": sum(1 for _ in colours), "layers": sum(1 for _ in layers)}
+
+    def face_parts(self):
+        """Where each face sits in the product structure, by name.
+
+        Returns
+        -------
+        list of str or None
+            For each face of ``shape`` (:func:`~cq_fairing.occ.convert.indexed_faces`
+            order) the names from the top product down to the placed part, joined by
+            ``/`` (``"rotor/blade_1"``: instance names where the file gives them, else
+            the product's); ``None`` for every face without a document.
+        """
+        faces = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(self.shape, TopAbs_FACE, faces)
+        owners = [None] * faces.Extent()
+        if self.document is not None:
+            for label in _labels(_shape_tool(self.document).GetFreeShapes):
+                _name_faces(label, TopLoc_Location(), [_name(label)], faces, owners)
+        return owners
 
 
 def read_step_model(path):
@@ -161,6 +185,41 @@ def _part_labels(tool):
     for label in _labels(tool.GetShapes):
         if not XCAFDoc_ShapeTool.IsAssembly_s(label):
             yield label
+
+
+def _name(label):
+    """The label's ``TDataStd_Name``, or ``None``."""
+    if not label.IsAttribute(TDataStd_Name.GetID_s()):
+        return None
+    attribute = TDataStd_Name()
+    label.FindAttribute(TDataStd_Name.GetID_s(), attribute)
+    return attribute.Get().ToExtString()
+
+
+def _instance_name(component, part):
+    """A component's own name, or its part's when the reader only made one up
+    (``"=>[0:1:1:2]"``, a reference to the part's label)."""
+    name = _name(component)
+    return _name(part) if name is None or name.startswith("=>") else name
+
+
+def _name_faces(label, location, path, faces, owners):
+    """Write ``"/".join(path)`` into ``owners`` for the faces of the part at ``label``
+    placed at ``location``; assemblies recurse into their components."""
+    if not XCAFDoc_ShapeTool.IsAssembly_s(label):
+        placed = XCAFDoc_ShapeTool.GetShape_s(label).Moved(location)
+        explorer = TopExp_Explorer(placed, TopAbs_FACE)
+        while explorer.More():
+            index = faces.FindIndex(explorer.Current())
+            if index:
+                owners[index - 1] = "/".join(name or "?" for name in path)
+            explorer.Next()
+        return
+    for component in _labels(lambda seq: XCAFDoc_ShapeTool.GetComponents_s(label, seq, False)):
+        part = TDF_Label()
+        XCAFDoc_ShapeTool.GetReferredShape_s(component, part)
+        _name_faces(part, location.Multiplied(XCAFDoc_ShapeTool.GetLocation_s(component)),
+                    path + [_instance_name(component, part)], faces, owners)
 
 
 def _convert_part(tool, label):

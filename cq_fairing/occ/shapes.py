@@ -275,7 +275,7 @@ class _Job:
         original = self.originals[index]
         motion = original.Location().Multiplied(leader_report.original.Location().Inverted())
         matrix = _affine(motion.Transformation())
-        note = f"another placement of face {leader_report.index + 1}'s part, faired with it"
+        note = f"another placement of face {leader_report.index + 1}'s part (its result, computed once)"
         return replace(
             leader_report, face=original, original=original, index=index, result=None,
             seconds=0.0, message="; ".join(filter(None, (leader_report.message, note))),

@@ -22,7 +22,7 @@ from OCP.TDocStd import TDocStd_Document
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType, XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
-from OCP.gp import gp, gp_Trsf, gp_Vec
+from OCP.gp import gp, gp_Pnt, gp_Trsf, gp_Vec
 
 from cq_fairing.cli import main
 from cq_fairing.errors import InvalidInputError
@@ -58,6 +58,25 @@ def _name(label, text):
     TDataStd_Name.Set_s(label, TCollection_ExtendedString(text))
 
 
+def _placement(shift, degrees):
+    """A turn about z by ``degrees``, then a shift along y."""
+    move, turn = gp_Trsf(), gp_Trsf()
+    move.SetTranslation(gp_Vec(0, shift, 0))
+    turn.SetRotation(gp.OZ_s(), np.radians(degrees))
+    move.Multiply(turn)
+    return move
+
+
+def _write_step(document, path):
+    writer = STEPCAFControl_Writer()
+    writer.SetNameMode(True)
+    writer.SetColorMode(True)
+    writer.SetLayerMode(True)
+    writer.Transfer(document, STEPControl_AsIs)
+    writer.Write(str(path))
+    return path
+
+
 @pytest.fixture(scope="module")
 def rotor_step(tmp_path_factory):
     """The rotor assembly as a STEP file."""
@@ -76,20 +95,35 @@ def rotor_step(tmp_path_factory):
     colours.SetColor(skin, Quantity_Color(*GREEN, Quantity_TOC_RGB), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
     layers.SetLayer(skin, TCollection_ExtendedString("SKIN"))
     for i in range(3):  # placements turned by 0, 60 and 120 degrees about z, and shifted
-        move, turn = gp_Trsf(), gp_Trsf()
-        move.SetTranslation(gp_Vec(0, SHIFT * i, 0))
-        turn.SetRotation(gp.OZ_s(), np.radians(60.0 * i))
-        move.Multiply(turn)
-        _name(shapes.AddComponent(rotor, part, TopLoc_Location(move)), f"blade_{i}")
+        placement = TopLoc_Location(_placement(SHIFT * i, 60.0 * i))
+        _name(shapes.AddComponent(rotor, part, placement), f"blade_{i}")
     shapes.UpdateAssemblies()
-    writer = STEPCAFControl_Writer()
-    writer.SetNameMode(True)
-    writer.SetColorMode(True)
-    writer.SetLayerMode(True)
-    writer.Transfer(document, STEPControl_AsIs)
-    path = tmp_path_factory.mktemp("rotor") / "rotor.step"
-    writer.Write(str(path))
-    return path
+    return _write_step(document, tmp_path_factory.mktemp("rotor") / "rotor.step")
+
+
+NESTED = {"machine/stage_0/blade_0": [(0, 0)], "machine/stage_0/blade_1": [(SHIFT, 45)],
+          "machine/stage_1/blade_0": [(0, 90), (0, 0)],
+          "machine/stage_1/blade_1": [(0, 90), (SHIFT, 45)]}  # placements, outermost first
+
+
+@pytest.fixture(scope="module")
+def machine_step(tmp_path_factory):
+    """Two stages ("machine" places the assembly "rotor" twice, turned by 90 degrees),
+    each placing the part "blade" twice: four placements, two levels deep."""
+    document = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+    shapes = XCAFDoc_DocumentTool.ShapeTool_s(document.Main())
+    part = shapes.AddShape(_blade(), False)
+    _name(part, "blade")
+    rotor, machine = shapes.NewShape(), shapes.NewShape()
+    _name(rotor, "rotor")
+    _name(machine, "machine")
+    for i in range(2):
+        placement = TopLoc_Location(_placement(SHIFT * i, 45.0 * i))
+        _name(shapes.AddComponent(rotor, part, placement), f"blade_{i}")
+        _name(shapes.AddComponent(machine, rotor, TopLoc_Location(_placement(0, 90.0 * i))),
+              f"stage_{i}")
+    shapes.UpdateAssemblies()
+    return _write_step(document, tmp_path_factory.mktemp("machine") / "machine.step")
 
 
 class _ReadBack:
@@ -274,3 +308,33 @@ def test_a_part_placed_three_times_is_faired_once_and_moved_to_each_placement(ro
         assert np.allclose(_poles(r.face), r.surface.poles, atol=1e-12)
         for key in ("points", "faired_points", "normals", "distance"):
             assert np.allclose(r.deviation[key], alone.deviation[key], atol=1e-9)
+
+
+def _centre(faces):
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    for face in faces:
+        BRepGProp.SurfaceProperties_s(face, props)
+    centre = props.CentreOfMass()
+    return np.array([centre.X(), centre.Y(), centre.Z()])
+
+
+def test_face_parts_name_each_placement_of_a_nested_assembly(machine_step):
+    """Each face is named by its placement path, and the faces named so sit where that
+    chain of placements puts the part."""
+    model = read_model(machine_step)
+    owners = model.face_parts()
+    faces = faces_of(model.shape)
+    assert sorted(set(owners)) == sorted(NESTED)
+    blade_centre = _centre(faces_of(_blade()))
+    for path, chain in NESTED.items():
+        mine = [f for f, owner in zip(faces, owners) if owner == path]
+        assert len(mine) == len(faces_of(_blade()))
+        expected = gp_Trsf()
+        for shift, degrees in chain:
+            expected.Multiply(_placement(shift, degrees))
+        point = gp_Pnt(*blade_centre).Transformed(expected)
+        assert np.allclose(_centre(mine), [point.X(), point.Y(), point.Z()], atol=1e-6)
+    assert read_model(REAL_DATA / "testtoler.brep").face_parts() == [None] * 56
