@@ -40,6 +40,7 @@ then renamed into place; the input file is never modified.
 """
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -49,6 +50,7 @@ from .errors import (FairingError, FileFormatError, InvalidInputError, OutputPat
 
 EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
 EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a writer whose reader left
 
 __all__ = ["main", "build_parser"]
 
@@ -472,17 +474,25 @@ def _deviation_map(args, faired, tol):
 
 # -- inspect ---------------------------------------------------------------------------------
 def command_inspect(args):
-    from .occ import list_faces, read_shape
+    from .occ import list_faces
+    from .occ.io import read_model
 
-    infos = list_faces(read_shape(args.input))
-    print(f"{'face':>5}  {'type':<14} {'degree':>7} {'poles':>9}  rational periodic trimmed in-solid")
-    for info in infos:
+    model = read_model(args.input)
+    infos = list_faces(model.shape)
+    parts = model.face_parts()
+    show_parts = len(set(parts)) > 1  # an assembly: say which placement each face is on
+    if model.contents():
+        from .report import kept_text
+        print("model:", kept_text(model.contents()))
+    print(f"{'face':>5}  {'type':<14} {'degree':>7} {'poles':>9}  rational periodic trimmed "
+          f"in-solid{'  part' if show_parts else ''}")
+    for info, part in zip(infos, parts):
         degree = f"{info.u_degree}x{info.v_degree}" if info.u_degree else "-"
         poles = f"{info.n_poles_u}x{info.n_poles_v}" if info.n_poles_u else "-"
         periodic = "".join(d for d, p in (("u", info.u_periodic), ("v", info.v_periodic)) if p)
         print(f"{info.index + 1:>5}  {info.surface_type:<14} {degree:>7} {poles:>9}  "
               f"{_yes(info.rational):<8} {periodic or 'no':<8} {_yes(info.trimmed):<7} "
-              f"{_yes(info.in_solid)}")
+              f"{_yes(info.in_solid):<8}{'  ' + str(part) if show_parts else ''}".rstrip())
     counts = {}
     for info in infos:
         counts[info.surface_type] = counts.get(info.surface_type, 0) + 1
@@ -637,6 +647,9 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("cq-fairing: interrupted; no output was written.", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (``| head``): stop quietly, like cat
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except FairingError as exc:
         code = next(code for kind, code in _EXIT_BY_ERROR if isinstance(exc, kind))
         print(f"cq-fairing: error: {exc}", file=sys.stderr)

@@ -395,9 +395,10 @@ def _method(report):
     return f"{report['method']} ({', '.join(settings)})" if settings[0] else report["method"]
 
 
-def _kept(kept):
-    """``2 products, 3 instances, 2 colours, 0 layers``."""
-    return ", ".join(f"{count} {name}" for name, count in kept.items())
+def kept_text(kept):
+    """``2 products, 3 instances, 1 colour, 0 layers`` from the report's ``kept`` counts."""
+    return ", ".join(f"{count} {name[:-1] if count == 1 else name}"
+                     for name, count in kept.items())
 
 
 def render_html(report):
@@ -409,7 +410,7 @@ def render_html(report):
                 ("method", _method(report)), ("command", report["command"]),
                 ("created", report["created"]), ("tool", report["tool"])]
     if report.get("kept"):
-        settings.append(("kept from the input", _kept(report["kept"])))
+        settings.append(("kept from the input", kept_text(report["kept"])))
     summary = [("faces ok / total", f"{s['faces_ok']} / {s['faces_total']}"),
                ("over tolerance", s["faces_tolerance_not_met"]),
                ("skipped", s["faces_skipped"]), ("failed", s["faces_failed"]),

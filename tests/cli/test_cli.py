@@ -81,6 +81,20 @@ def test_inspect_lists_every_face_of_linkrods(tmp_path):
     assert "37 faces: 18 BSpline, 4 Cylinder, 6 Plane, 9 Torus" in proc.stdout
 
 
+def test_a_reader_that_leaves_early_ends_the_command_quietly(tmp_path):
+    """``cq-fairing inspect model | head -0``: exit 141 (SIGPIPE's), nothing on stderr.
+
+    The pipe is closed before the model is read (0.8 s), so the first line written
+    meets a reader that has gone."""
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    proc = subprocess.Popen([sys.executable, "-m", "cq_fairing.cli", "inspect",
+                             str(REAL_DATA / "impeller.igs")], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, cwd=tmp_path, env=env)
+    proc.stdout.close()
+    assert proc.wait(timeout=600) == 141
+    assert proc.stderr.read() == b""
+
+
 @pytest.mark.parametrize("content", [b"", os.urandom(4096),
                                      b"ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(("])
 def test_bad_input_files_give_one_line_errors_and_exit_3(tmp_path, content):

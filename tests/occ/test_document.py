@@ -338,3 +338,12 @@ def test_face_parts_name_each_placement_of_a_nested_assembly(machine_step):
         point = gp_Pnt(*blade_centre).Transformed(expected)
         assert np.allclose(_centre(mine), [point.X(), point.Y(), point.Z()], atol=1e-6)
     assert read_model(REAL_DATA / "testtoler.brep").face_parts() == [None] * 56
+
+
+def test_inspect_names_the_placement_of_each_face(machine_step, capsys):
+    assert main(["inspect", str(machine_step)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "model: 3 products, 4 instances, 0 colours, 0 layers"
+    assert lines[1].split()[-1] == "part"
+    rows = [line.split() for line in lines[2:-1]]
+    assert [row[-1] for row in rows] == read_model(machine_step).face_parts()
