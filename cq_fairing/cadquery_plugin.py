@@ -17,6 +17,8 @@ objects on the stack.  The numbers behind each result (deviation, poles before/a
 status per face) are on ``Workplane.fair_report`` of the returned Workplane.
 """
 
+from collections import Counter
+
 import cadquery as cq
 
 from .errors import InvalidInputError
@@ -98,13 +100,23 @@ def fair(self, tol=None, n=None, method="wavelet", objective="compact", jobs=1,
     * Free faces: each is faired alone, in this process (``jobs`` does not apply;
       ``face_timeout`` is refused, since no worker runs them).
     * Nothing selected: the first solid found on the chain.
+    * Edges, wires, vertices and compounds without faces hold nothing to fair: they are
+      refused (``InvalidInputError`` naming them), also on a stack mixed with faces or
+      solids, so a selection that went wrong (``.edges()`` for ``.faces()``) is never
+      half faired with the rest passed through as if faired.
 
     ``method``, ``objective``, ``jobs``, ``face_timeout`` and the other options as in
     :func:`fair_shape`.
+
+    Raises
+    ------
+    InvalidInputError
+        An object on the stack holds no face, or bad options (see :func:`fair_shape`).
     """
     objects = [o for o in self.objects if isinstance(o, cq.Shape)]
     if not objects:
         objects = [self.findSolid()]
+    _check_faces_on_stack(objects)
     faces = [o for o in objects if isinstance(o, cq.Face)]
     parent = _parent_solid(self) if faces and len(faces) == len(objects) else None
     reports = []
@@ -131,6 +143,22 @@ def fair(self, tol=None, n=None, method="wavelet", objective="compact", jobs=1,
     new = self.newObject(results)
     new.fair_report = reports
     return new
+
+
+def _check_faces_on_stack(objects):
+    """Refuse the objects on the stack that hold no face (edges, wires, vertices...)."""
+    idle = Counter(type(o).__name__ for o in objects if not o.Faces())
+    if not idle:
+        return
+    kinds = [f"{count} {name} object{'s' if count > 1 else ''}" for name, count in idle.items()]
+    what = " and ".join(filter(None, (", ".join(kinds[:-1]), kinds[-1])))
+    rest = len(objects) - sum(idle.values())
+    besides = (f" (and {rest} object{'s' if rest > 1 else ''} with faces: a mixed stack is "
+               "refused whole)" if rest else "")
+    raise InvalidInputError(
+        f"Workplane.fair fairs faces and the shells, solids and compounds that hold them, "
+        f"but the stack holds {what} with no face{besides}; select faces with "
+        ".faces(...) or a solid with .solids() (or fair the part itself), then call .fair().")
 
 
 def _parent_solid(workplane):

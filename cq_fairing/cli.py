@@ -368,7 +368,7 @@ def _all_requested_met(args, result):
     return True
 
 
-_STATUS = {"faired": "ok", "unchanged": "ok", "tolerance-not-met": "tolerance-not-met",
+_STATUS = {"faired": "ok", "unchanged": "unchanged", "tolerance-not-met": "tolerance-not-met",
            "failed": "failed"}
 
 

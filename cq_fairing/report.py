@@ -3,10 +3,10 @@
 A report is a plain dict (see :func:`build_report`) with one entry per face:
 control points before -> after, the largest true distance between original and
 faired face against the tolerance, fairness before -> after (bending energy,
-curvature range, wiggle count), the time, and the status (``ok``,
-``tolerance-not-met``, ``skipped`` with the reason).  :func:`write_json` and
-:func:`write_html` write it; the HTML page embeds the PNG maps as base64 so it is
-one file an engineer can mail to a colleague.
+curvature range, wiggle count), the time, and the status (``ok``: faired,
+``unchanged``: kept its surface, ``tolerance-not-met``, ``skipped`` or ``failed``
+with the reason).  :func:`write_json` and :func:`write_html` write it; the HTML page
+embeds the PNG maps as base64 so it is one file an engineer can mail to a colleague.
 
 Every writer here goes through :func:`atomic_output`: the data is written to a
 temporary file next to the target and renamed over it only when complete, so a
@@ -44,8 +44,11 @@ TEMP_PREFIX = ".cq_fairing_"
 #: Age (seconds since the last change) after which a ``.cq_fairing_*`` file is stale.
 STALE_SECONDS = 24 * 3600.0
 
-#: Face statuses that count as success.
-OK_STATUSES = ("ok",)
+#: Face statuses that count as success: faired (``ok``), or kept as it was within the
+#: tolerance (``unchanged``: nothing to reduce, or restored to close a gap).
+OK_STATUSES = ("ok", "unchanged")
+#: Face statuses of faces the run did not handle (their poles are not summed).
+NOT_HANDLED = ("skipped", "failed")
 
 
 # -- safe output ----------------------------------------------------------------------------
@@ -228,7 +231,9 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
     index : int
         1-based face index, as listed by ``cq-fairing inspect``.
     status : str
-        ``ok``, ``tolerance-not-met``, ``skipped`` or ``failed``.
+        ``ok`` (the surface was replaced by the faired one), ``unchanged`` (the original
+        surface was kept: nothing to reduce, or restored to close a gap),
+        ``tolerance-not-met``, ``skipped`` or ``failed``.
     poles_before, poles_after : (int, int)
         Control net sizes.
     max_deviation : float
@@ -256,6 +261,14 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
                  maps=None, seconds=None, command=None, units="mm", kept=None):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
+    The summary counts ``faces_total``, ``faces_ok`` (``ok`` and ``unchanged``),
+    ``faces_faired`` (``ok``: the surface was replaced), ``faces_unchanged``,
+    ``faces_tolerance_not_met``, ``faces_skipped`` and ``faces_failed``; it sums
+    ``poles_before``/``poles_after`` and takes ``worst_deviation`` over the faces the
+    run handled (all but ``skipped`` and ``failed``): a kept face counts the same poles
+    before and after, so the difference is what fairing removed and the totals what
+    those faces hold in the output.
+
     Returns
     -------
     dict
@@ -271,17 +284,18 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
     from . import __version__
 
     faces = list(faces)
-    faired = [f for f in faces if f["status"] not in ("skipped", "failed")]
-    deviations = [f["max_deviation"] for f in faired if f["max_deviation"] is not None]
+    handled = [f for f in faces if f["status"] not in NOT_HANDLED]
+    deviations = [f["max_deviation"] for f in handled if f["max_deviation"] is not None]
     summary = {
         "faces_total": len(faces),
-        "faces_faired": len(faired),
+        "faces_faired": sum(f["status"] == "ok" for f in faces),
+        "faces_unchanged": sum(f["status"] == "unchanged" for f in faces),
         "faces_ok": sum(f["status"] in OK_STATUSES for f in faces),
         "faces_tolerance_not_met": sum(f["status"] == "tolerance-not-met" for f in faces),
         "faces_skipped": sum(f["status"] == "skipped" for f in faces),
         "faces_failed": sum(f["status"] == "failed" for f in faces),
-        "poles_before": sum(_count(f["poles_before"]) for f in faired),
-        "poles_after": sum(_count(f["poles_after"]) for f in faired),
+        "poles_before": sum(_count(f["poles_before"]) for f in handled),
+        "poles_after": sum(_count(f["poles_after"]) for f in handled),
         "worst_deviation": max(deviations) if deviations else None,
         "max_gap": max_gap, "valid": valid, "seconds": seconds,
     }
@@ -293,7 +307,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "borders": borders, "kept": kept,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
-                    for f in faces if f["status"] in ("skipped", "failed")],
+                    for f in faces if f["status"] in NOT_HANDLED],
     })
 
 
@@ -354,7 +368,8 @@ def summary_table(report):
     lines.insert(1, "  ".join("-" * w for w in widths))
     s = report["summary"]
     lines.append(
-        f"{s['faces_ok']}/{s['faces_total']} faces ok, {s['faces_tolerance_not_met']} over "
+        f"{s['faces_ok']}/{s['faces_total']} faces ok ({s['faces_faired']} faired, "
+        f"{s['faces_unchanged']} unchanged), {s['faces_tolerance_not_met']} over "
         f"tolerance, {s['faces_skipped']} skipped, {s['faces_failed']} failed; poles "
         f"{s['poles_before']} -> {s['poles_after']}; worst deviation "
         f"{_fmt(s['worst_deviation'])} {report['units']} (tolerance {_fmt(report['tolerance'])})"
@@ -377,7 +392,8 @@ def _image(path, caption):
 
 
 def _html_table(report):
-    cls = {"ok": "ok", "tolerance-not-met": "bad", "failed": "bad", "skipped": "skip"}
+    cls = {"ok": "ok", "unchanged": "ok", "tolerance-not-met": "bad", "failed": "bad",
+           "skipped": "skip"}
     head = "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS + ("curvature H",))
     body = []
     for face in report["faces"]:
@@ -412,6 +428,7 @@ def render_html(report):
     if report.get("kept"):
         settings.append(("kept from the input", kept_text(report["kept"])))
     summary = [("faces ok / total", f"{s['faces_ok']} / {s['faces_total']}"),
+               ("faired", s["faces_faired"]), ("unchanged", s["faces_unchanged"]),
                ("over tolerance", s["faces_tolerance_not_met"]),
                ("skipped", s["faces_skipped"]), ("failed", s["faces_failed"]),
                ("control points", f"{s['poles_before']} -> {s['poles_after']}"),

@@ -31,7 +31,7 @@ from .spaces import SplineSpace
 
 __all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult",
            "SurfaceDetails", "target_space", "project_curve", "project_surface",
-           "checked_plan", "resolved_plan", "largest_resolved_scale"]
+           "checked_plan", "resolved_plan", "largest_resolved_scale", "check_search_options"]
 
 
 class SurfaceDetails(NamedTuple):
@@ -486,7 +486,8 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     schedule : {"auto", "direct", "hybrid"}
         Spaces visited, see :mod:`cq_fairing.core.schedule`.
     strategy, order, deviation
-        Accuracy-control settings used with ``tol``.
+        Accuracy-control settings of the tolerance search (with ``tol``, see
+        :func:`~cq_fairing.core.accuracy.fair_curve_to_tolerance`); refused with ``n``.
     method : {"wavelet", "adaptive", "energy"}
         ``"adaptive"``: the exact L2 projection onto a target whose knots follow the
         error (:mod:`cq_fairing.core.adaptive`), usually fewer poles than the
@@ -510,7 +511,8 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     Raises
     ------
     InvalidInputError
-        Bad poles, knots, weights or arguments.
+        Bad poles, knots, weights or arguments; a tolerance-search option (``strategy``,
+        ``order``, ``deviation``) other than its default given with ``n`` instead of ``tol``.
     InvalidTargetError
         ``n`` out of range.
     InvalidToleranceError, ToleranceNotMetError
@@ -529,6 +531,8 @@ def fair_curve(poles, n=None, *, tol=None, knots=None, degree=None, weights=None
     """
     curve = make_curve(poles, knots, degree, weights)
     method = _tolerance_method(method, objective, n, tol)
+    check_search_options(n, tol, (("strategy", strategy, "guaranteed"), ("order", order, 6),
+                                  ("deviation", deviation, "geometric")))
     if method == "energy":
         from .energy import fair_curve_energy
 
@@ -586,7 +590,8 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         Default ``min(source degree, 3)`` per direction.
     schedule : {"auto", "direct", "hybrid"}
     strategy, deviation
-        Accuracy-control settings used with ``tol``.
+        Accuracy-control settings of the tolerance search (with ``tol``, see
+        :func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`); refused with ``n``.
     method : {"wavelet", "adaptive", "energy"}
         ``"adaptive"``: exact projection onto u and v targets whose knots follow the
         error (:mod:`cq_fairing.core.adaptive`; polynomial surfaces).  ``"energy"``:
@@ -602,7 +607,8 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
     window : (u0, u1, v0, v1), optional
         With ``tol`` and ``method="wavelet"``: measure the deviation only in this
         parameter box (a trimmed face's UV box), both ways; default the whole domain
-        (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`).
+        (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`).  Refused with
+        ``n`` and with the other methods.
 
     Returns
     -------
@@ -610,14 +616,15 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 
     Raises
     ------
-    InvalidInputError, InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
+    InvalidInputError
+        Bad poles, knots, weights or arguments; ``strategy``, ``deviation`` or ``window``
+        other than its default given with ``n`` instead of ``tol``.
+    InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
     """
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
-    method = _tolerance_method(method, objective, n, tol, borders)
-    if window is not None and (method != "wavelet" or tol is None):
-        raise InvalidInputError(
-            f"window applies to the tolerance search of method='wavelet' (with tol), got "
-            f"method={method!r}, tol={tol!r}; drop window or give tol.")
+    method = _tolerance_method(method, objective, n, tol, borders, window)
+    check_search_options(n, tol, (("strategy", strategy, "guaranteed"),
+                                  ("deviation", deviation, "geometric"), ("window", window, None)))
     if method == "energy":
         from .energy import fair_surface_energy
 
@@ -649,9 +656,10 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 METHODS = ("wavelet", "adaptive", "energy")
 
 
-def _tolerance_method(method, objective, n, tol, borders="auto"):
+def _tolerance_method(method, objective, n, tol, borders="auto", window=None):
     """Validate ``method`` (and ``objective``, ``borders``, which belong to the adaptive
-    method); the tolerance-only methods need ``tol``, no ``n``."""
+    method, and ``window``, which belongs to the wavelet one); the tolerance-only methods
+    need ``tol``, no ``n``."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
     for name, value, default in (("objective", objective, "compact"), ("borders", borders, "auto")):
@@ -659,6 +667,10 @@ def _tolerance_method(method, objective, n, tol, borders="auto"):
             raise InvalidInputError(
                 f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
                 f"add method='adaptive' or drop {name}.")
+    if method != "wavelet" and window is not None:
+        raise InvalidInputError(
+            f"window applies to the tolerance search of method='wavelet' only, got "
+            f"window={window!r} with method={method!r}; drop window or use method='wavelet'.")
     if method != "wavelet" and (n is not None or tol is None):
         what = ("keeps the control points" if method == "energy"
                 else "chooses the target itself")
@@ -666,6 +678,50 @@ def _tolerance_method(method, objective, n, tol, borders="auto"):
             f"method={method!r} {what} and needs tol (the largest allowed deviation) and "
             f"no n; got n={n!r}, tol={tol!r}.")
     return method
+
+
+def check_search_options(n, tol, options):
+    """Refuse tolerance-search options given with an explicit target scale.
+
+    The options of the tolerance search (``tol=...``) choose how the target is searched;
+    with ``n`` (and no ``tol``) nothing is searched, so a non-default value would be
+    ignored silently.  Called once at each public boundary (:func:`fair_curve`,
+    :func:`fair_surface`, :func:`cq_fairing.occ.fair_face`).
+
+    Parameters
+    ----------
+    n, tol : object
+        The call's target scale and tolerance (``None`` when not given).
+    options : iterable of (str, object, object)
+        ``(name, value, default)`` of each tolerance-search option of the call.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n`` is given without ``tol`` and some option is not at its default.
+    """
+    given = [(name, value) for name, value, default in options if _differs(value, default)]
+    if not given or n is None or tol is not None:
+        return
+    names = _listed([name for name, _ in given])
+    values = ", ".join(f"{name}={value!r}" for name, value in given)
+    verb = "applies" if len(given) == 1 else "apply"
+    raise InvalidInputError(
+        f"{names} {verb} to the tolerance search (tol=...), which does not run with an "
+        f"explicit target scale n: got {values} with n={n!r}; drop {names} or give tol "
+        "instead of n.")
+
+
+def _listed(words):
+    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
+    return " and ".join(filter(None, (", ".join(words[:-1]), words[-1])))
+
+
+def _differs(value, default):
+    """True when an option's value is not its default (``None``: any value given)."""
+    if default is None:
+        return value is not None
+    return not (np.ndim(value) == 0 and value == default)
 
 
 def _direction_target(space, n, degree):

@@ -37,7 +37,7 @@ from OCP.Bnd import Bnd_Box
 from OCP.TopoDS import TopoDS
 
 from ..core.adaptive import BORDERS
-from ..core.fairing import SurfaceFairResult, fair_surface, target_space
+from ..core.fairing import SurfaceFairResult, check_search_options, fair_surface, target_space
 from ..core.geometry import BSplineSurface
 from ..core.spaces import SplineSpace
 from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
@@ -123,12 +123,15 @@ def default_tolerance(shape):
     return 1e-3 * float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
 
 
-def check_options(tol, n, method, boundary, objective="compact", borders="auto"):
+def check_options(tol, n, method, boundary, objective="compact", borders="auto",
+                  search="local"):
     """Validate the shared options of :func:`fair_face` and ``fair_shape`` once.
 
     ``method="adaptive"`` chooses its targets itself and ``method="energy"`` keeps the
     net: both need ``tol`` (or the default tolerance, ``n`` and ``tol`` both ``None``)
-    and refuse ``n``; ``objective`` and ``borders`` apply to the adaptive method only.
+    and refuse ``n``; ``objective`` and ``borders`` apply to the adaptive method only;
+    ``search`` belongs to the tolerance search and is refused with ``n`` (as the core's
+    search options are, :func:`~cq_fairing.core.fairing.check_search_options`).
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -156,6 +159,9 @@ def check_options(tol, n, method, boundary, objective="compact", borders="auto")
             "Give tol, or use method='wavelet' for explicit scales.")
     if boundary not in BOUNDARIES:
         raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
+    if search not in SEARCHES:
+        raise InvalidInputError(f"search must be one of {SEARCHES}, got {search!r}.")
+    check_search_options(n, tol, (("search", search, "local"),))
 
 
 def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", convert=False,
@@ -211,6 +217,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         (the core's accuracy control, measured on the whole parameter domain).  Either
         way OCCT's projection checks the result; if it fails, the local search runs
         again with the parametric distance, an upper bound of the true distance.
+        Refused with ``n`` (no search runs).
     borders : {"auto", "free", "pinned"}
         ``method="adaptive"`` only: the border rows of the core's target
         (:func:`cq_fairing.core.adaptive.fair_surface_adaptive`).  ``"auto"`` pins them
@@ -226,13 +233,13 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     Raises
     ------
     InvalidInputError, InvalidToleranceError, InvalidTargetError
-        Bad arguments.
+        Bad arguments (also ``search="core"`` with ``n``).
     ToleranceNotMetError
         No target keeps the face within ``tol`` (checked with OCCT's projection).
     """
     start = time.perf_counter()
     face = as_face(face)
-    check_options(tol, n, method, boundary, objective, borders)
+    check_options(tol, n, method, boundary, objective, borders, search)
     info = face_info(face)
     if not info.is_bspline:
         if not convert:
@@ -243,8 +250,6 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         face = TopoDS.Face_s(BRepBuilderAPI_NurbsConvert(face, True).Shape())
     if tol is None and n is None:
         tol = default_tolerance(face)
-    if search not in SEARCHES:
-        raise InvalidInputError(f"search must be one of {SEARCHES}, got {search!r}.")
     criteria = _criteria(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)

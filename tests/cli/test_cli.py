@@ -46,10 +46,35 @@ def test_fair_blade_writes_a_valid_step_and_report(blade_run):
     faired = [f for f in report["faces"] if f["poles_after"] != f["poles_before"]]
     assert faired, "no face was reduced"
     for face in report["faces"]:
-        assert face["status"] == "ok"
+        assert face["status"] in ("ok", "unchanged")
         assert face["max_deviation"] <= 0.001
     assert "3/3 faces ok" in proc.stdout
     assert "Statistics on Transfer" not in proc.stdout  # OCCT's banner is silenced
+
+
+def test_a_face_kept_as_it_was_is_counted_unchanged_not_faired(blade_run):
+    """The blade's 4 x 17 root face has no coarser target (the fairing keeps it): the
+    summary counted it among the faired faces.  Now it is ``unchanged``, the faired count
+    is the two faces whose surface was replaced, and the poles are summed over all three
+    (the root face adds 68 on both sides), in the JSON, the terminal line and the HTML."""
+    from cq_fairing.report import render_html
+
+    work, proc, _ = blade_run
+    report = json.loads((work / "r.json").read_text())
+    assert [f["status"] for f in report["faces"]] == ["unchanged", "ok", "ok"]
+    root = report["faces"][0]
+    assert root["poles_before"] == root["poles_after"] == [4, 17]
+    assert "nothing to fair" in root["message"]
+    summary = report["summary"]
+    assert (summary["faces_ok"], summary["faces_faired"], summary["faces_unchanged"]) == (3, 2, 1)
+    assert summary["poles_before"] == 68 + sum(
+        np.prod(f["poles_before"]) for f in report["faces"][1:])
+    assert summary["poles_before"] - summary["poles_after"] == sum(
+        np.prod(f["poles_before"]) - np.prod(f["poles_after"]) for f in report["faces"][1:])
+    assert "3/3 faces ok (2 faired, 1 unchanged), 0 over tolerance" in proc.stdout
+    page = render_html(report)
+    assert "<th>faired</th><td class='l'>2</td>" in page
+    assert "<th>unchanged</th><td class='l'>1</td>" in page
 
 
 def _colours(path):

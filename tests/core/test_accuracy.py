@@ -55,6 +55,61 @@ def test_bad_options():
         cf.fair_curve(poles, tol=0.1, deviation="hausdorff")
 
 
+def _refusal(call):
+    """The message of the plain InvalidInputError ``call()`` raises."""
+    with pytest.raises(cf.InvalidInputError) as info:
+        call()
+    assert type(info.value) is cf.InvalidInputError
+    return str(info.value)
+
+
+@pytest.mark.parametrize("options, names", [
+    (dict(strategy="linear"), "strategy applies"),
+    (dict(order=4), "order applies"),
+    (dict(deviation="parametric"), "deviation applies"),
+    (dict(strategy="polyfit", order=3, deviation="parametric"),
+     "strategy, order and deviation apply"),
+])
+def test_curve_search_options_are_refused_with_an_explicit_scale(options, names):
+    """They were ignored silently with n: the caller believed they did something."""
+    message = _refusal(lambda: cf.fair_curve(noisy_poles(20, 0.01, 0), 8, **options))
+    assert message.startswith(f"{names} to the tolerance search (tol=...)")
+    for name, value in options.items():
+        assert f"{name}={value!r}" in message
+    assert "with n=8;" in message and message.endswith("or give tol instead of n.")
+
+
+@pytest.mark.parametrize("options, names", [
+    (dict(strategy="linear"), "strategy applies"),
+    (dict(deviation="parametric"), "deviation applies"),
+    (dict(window=(0.0, 0.7, 0.0, 1.0)), "window applies"),
+    (dict(strategy="polyfit", window=(0.0, 0.7, 0.0, 1.0)), "strategy and window apply"),
+])
+def test_surface_search_options_are_refused_with_an_explicit_scale(options, names):
+    message = _refusal(lambda: cf.fair_surface(_wavy_edge_net(), (5, None), **options))
+    assert message.startswith(f"{names} to the tolerance search (tol=...)")
+    for name, value in options.items():
+        assert f"{name}={value!r}" in message
+    assert "with n=(5, None);" in message and "or give tol instead of n." in message
+
+
+def test_search_options_at_their_defaults_still_work_with_an_explicit_scale():
+    poles, net = noisy_poles(20, 0.01, 0), _wavy_edge_net()
+    curve = cf.fair_curve(poles, 8, strategy="guaranteed", order=6, deviation="geometric")
+    np.testing.assert_array_equal(curve.poles, cf.fair_curve(poles, 8).poles)
+    surface = cf.fair_surface(net, (5, 7), strategy="guaranteed", deviation="geometric",
+                              window=None)
+    np.testing.assert_array_equal(surface.poles, cf.fair_surface(net, (5, 7)).poles)
+    assert surface.poles.shape == (8, 10, 3)
+
+
+def test_a_window_with_another_method_names_the_method_it_belongs_to():
+    message = _refusal(lambda: cf.fair_surface(_wavy_edge_net(), tol=3e-3, method="energy",
+                                               window=(0.0, 0.7, 0.0, 1.0)))
+    assert "method='wavelet' only" in message and "method='energy'" in message
+    assert message.endswith("drop window or use method='wavelet'.")
+
+
 def test_tolerance_not_met():
     poles = noisy_poles(30, 0.05, 1)
     with pytest.raises(cf.ToleranceNotMetError) as info:

@@ -104,3 +104,35 @@ def test_face_selections_that_are_not_lists_of_indices_are_refused(linkrods):
                             ([True], "integer face indices")):
         with pytest.raises(InvalidInputError, match=fragment):
             fair_shape(shape, tol=5e-3, faces=faces)
+
+
+@pytest.mark.parametrize("select, held", [
+    (lambda part: part.edges(), "12 Edge objects with no face;"),
+    (lambda part: part.vertices(">Z"), "4 Vertex objects with no face;"),
+    (lambda part: part.wires(">Z"), "1 Wire object with no face;"),
+    (lambda part: cq.Workplane().add(cq.Compound.makeCompound(part.edges().vals())),
+     "1 Compound object with no face;"),
+])
+def test_workplane_fair_refuses_objects_without_faces(select, held):
+    """Edges and vertices on the stack came back as they were, with empty reports, as if
+    faired; now the refusal names them, what fair takes and what to select instead."""
+    register()
+    with pytest.raises(InvalidInputError) as info:
+        select(cq.Workplane().box(1, 1, 1)).fair(tol=0.01)
+    message = str(info.value)
+    assert type(info.value) is InvalidInputError
+    assert message.startswith("Workplane.fair fairs faces and the shells, solids and "
+                              "compounds that hold them, but the stack holds " + held)
+    assert message.endswith("select faces with .faces(...) or a solid with .solids() (or fair "
+                            "the part itself), then call .fair().")
+
+
+def test_workplane_fair_refuses_a_stack_mixing_faces_and_edges_whole(linkrods):
+    register()
+    mixed = linkrods.faces("%BSPLINE").add(linkrods.edges("%LINE"))
+    with pytest.raises(InvalidInputError) as info:
+        mixed.fair(tol=5e-3)
+    edges = len(linkrods.edges("%LINE").vals())
+    assert edges > 1
+    assert f"holds {edges} Edge objects with no face (and 18 objects with faces: a mixed " \
+           "stack is refused whole);" in str(info.value)

@@ -222,6 +222,27 @@ def test_bad_arguments(real):
         fair_face(face, boundary="glued")
 
 
+def test_the_search_option_is_refused_with_an_explicit_scale(real):
+    """``search`` chooses how the tolerance search runs; with ``n`` none runs, and the
+    option was ignored silently.  It is refused as the core's search options are, and
+    checked before a face that is not a B-spline is skipped."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    with pytest.raises(InvalidInputError) as info:
+        fair_face(face, n=(None, 12), search="core", details=False)
+    assert type(info.value) is InvalidInputError
+    message = str(info.value)
+    assert message.startswith("search applies to the tolerance search (tol=...)")
+    assert "search='core' with n=(None, 12);" in message
+    assert message.endswith("drop search or give tol instead of n.")
+    report = fair_face(face, n=(None, 12), search="local", details=False)
+    assert report.status == "faired" and report.poles_after == (17, 15)
+    plane = faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[0]
+    with pytest.raises(InvalidInputError, match="search must be one of"):
+        fair_face(plane, search="fast")
+
+
 def test_rational_fallback_when_weights_go_non_positive():
     """A weight spike (100 among 0.01) makes the homogeneous projection undershoot."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
