@@ -256,7 +256,8 @@ def command_fair(args):
                         face_timeout=args.face_timeout, in_place=True)
     write_model(model, args.output, force=args.force, input_path=args.input)
     kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
-    report = _build_report(args, result, tol, time.perf_counter() - started, kept or None)
+    report = _build_report(args, result, tol, time.perf_counter() - started, kept or None,
+                           model.face_parts())
     _write_maps(args, result, tol, report)
     _note_nothing_faired(args, result)
     if args.report:
@@ -385,7 +386,7 @@ def _faired(result):
             if f.status == "faired" and f.surface is not None and f.original is not None]
 
 
-def _build_report(args, result, tol, seconds, kept=None):
+def _build_report(args, result, tol, seconds, kept=None, parts=None):
     from .report import build_report, face_entry
     from .viz import fairness_measures
 
@@ -404,7 +405,7 @@ def _build_report(args, result, tol, seconds, kept=None):
             poles_before=face.poles_before, poles_after=face.poles_after,
             max_deviation=face.max_deviation, tolerance=face.tolerance,
             fairness_before=before, fairness_after=after, seconds=face.seconds,
-            deviation=stats))
+            deviation=stats, part=parts[index] if parts else None))
     return build_report(entries, input_path=args.input, output_path=args.output,
                         tolerance=tol, method=args.method,
                         objective=_objective(args) if args.method == "adaptive" else None,

@@ -223,7 +223,7 @@ def _clean(value):
 def face_entry(index, *, surface_type=None, status, message="", poles_before=None,
                poles_after=None, max_deviation=None, tolerance=None, fairness_before=None,
                fairness_after=None, seconds=None, deviation=None, degree_before=None,
-               degree_after=None):
+               degree_after=None, part=None):
     """One face of a report (a dict; ``None`` for what does not apply).
 
     Parameters
@@ -242,6 +242,8 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
         See :func:`cq_fairing.viz.fairness_measures`.
     deviation : dict, optional
         ``max``, ``mean``, ``rms`` of the dense deviation sample.
+    part : str, optional
+        In an assembly, the placement the face is on (``"rotor/blade_1"``).
     """
     within = None
     if max_deviation is not None and tolerance is not None:
@@ -252,7 +254,7 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
         "degree_before": degree_before, "degree_after": degree_after,
         "max_deviation": max_deviation, "tolerance": tolerance, "within_tolerance": within,
         "deviation": deviation, "fairness_before": fairness_before,
-        "fairness_after": fairness_after, "seconds": seconds,
+        "fairness_after": fairness_after, "seconds": seconds, "part": part,
     })
 
 
@@ -350,20 +352,28 @@ def _fair(face, key, fmt=_fmt):
 COLUMNS = ("face", "type", "poles", "max dev", "tol", "energy", "wiggles", "time s", "status")
 
 
-def _row(face):
+def _columns(report):
+    """The table's columns: a ``part`` column when the faces lie on several placements."""
+    several = len({face.get("part") for face in report["faces"]}) > 1
+    return COLUMNS + (("part",) if several else ())
+
+
+def _row(face, columns=COLUMNS):
+    part = (face.get("part") or "-",) if "part" in columns else ()
     return (str(face["index"]), face.get("surface_type") or "-",
             f"{_fmt(face['poles_before'])} -> {_fmt(face['poles_after'])}"
             if face["poles_after"] else _fmt(face["poles_before"]),
             _fmt(face["max_deviation"]), _fmt(face["tolerance"]),
             _fair(face, "bending_energy", lambda v: _fmt(v, 3)),
             _fair(face, "wiggles", lambda v: _fmt(v, 3)),
-            _fmt(face["seconds"], 3), face["status"])
+            _fmt(face["seconds"], 3), face["status"]) + part
 
 
 def summary_table(report):
     """A fixed-width text table of the faces and a summary line (for the terminal)."""
-    rows = [COLUMNS] + [_row(f) for f in report["faces"]]
-    widths = [max(len(r[i]) for r in rows) for i in range(len(COLUMNS))]
+    columns = _columns(report)
+    rows = [columns] + [_row(f, columns) for f in report["faces"]]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(columns))]
     lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     s = report["summary"]
@@ -394,11 +404,13 @@ def _image(path, caption):
 def _html_table(report):
     cls = {"ok": "ok", "unchanged": "ok", "tolerance-not-met": "bad", "failed": "bad",
            "skipped": "skip"}
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in COLUMNS + ("curvature H",))
+    columns = _columns(report)
+    left = {1, 8, 9} if "part" in columns else {1, 8}  # type, status, part
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns + ("curvature H",))
     body = []
     for face in report["faces"]:
-        cells = _row(face) + (_fair(face, "mean_curvature_range", _range),)
-        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i in (1, 8)
+        cells = _row(face, columns) + (_fair(face, "mean_curvature_range", _range),)
+        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i in left
                       else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
         body.append(f"<tr class='{cls.get(face['status'], '')}'>{tds}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"

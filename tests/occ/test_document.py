@@ -208,8 +208,11 @@ def test_fairing_a_step_assembly_keeps_products_instances_names_colours_layers(r
     assert [name for name, _ in instances] == ["blade_0", "blade_1", "blade_2"]
     assert len({placed for _, placed in instances}) == 1  # one part, placed three times
     assert out.read_text().count("B_SPLINE_SURFACE_WITH_KNOTS") == 3  # its faces written once
-    kept = json.loads(report.read_text())["kept"]
-    assert kept == {"products": 2, "instances": 3, "colours": 2, "layers": 1}
+    written = json.loads(report.read_text())
+    assert written["kept"] == {"products": 2, "instances": 3, "colours": 2, "layers": 1}
+    parts = [face["part"] for face in written["faces"]]
+    assert parts == read_model(rotor_step).face_parts()
+    assert sorted(set(parts)) == ["rotor/blade_0", "rotor/blade_1", "rotor/blade_2"]
 
 
 def test_the_coloured_face_is_the_faired_one_and_keeps_colour_and_layer(rotor_step, tmp_path):
@@ -338,6 +341,14 @@ def test_face_parts_name_each_placement_of_a_nested_assembly(machine_step):
         point = gp_Pnt(*blade_centre).Transformed(expected)
         assert np.allclose(_centre(mine), [point.X(), point.Y(), point.Z()], atol=1e-6)
     assert read_model(REAL_DATA / "testtoler.brep").face_parts() == [None] * 56
+
+
+def test_the_terminal_table_names_the_placement_of_each_face(machine_step, tmp_path, capsys):
+    assert main(["fair", str(machine_step), "-o", str(tmp_path / "out.step"), "--tol", "0.05"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[-2:] == ["status", "part"]
+    rows = [line.split() for line in lines[2:-1]]
+    assert [row[-1] for row in rows] == read_model(machine_step).face_parts()
 
 
 def test_inspect_names_the_placement_of_each_face(machine_step, capsys):
