@@ -488,7 +488,7 @@ def _surface_error(surface, degrees, schedule, deviation, window=None):
     return err, chain_u, chain_v
 
 
-def _check_window(window, surface):
+def check_window(window, surface):
     """``window`` as four floats ``(u0, u1, v0, v1)`` with ``u0 < u1``, ``v0 < v1`` inside
     the domain (to rounding), or ``None``."""
     if window is None:
@@ -640,7 +640,7 @@ def fair_surface_to_tolerance(surface, tol, *, target_degree=(None, None), sched
     """
     tol = check_tolerance(tol)
     _check_options(strategy, order)
-    window = _check_window(window, surface)
+    window = check_window(window, surface)
     tdu, tdv = (None, None) if target_degree is None else target_degree
     pu = _check_degree(tdu, surface.u_degree, "target_degree (u)")
     pv = _check_degree(tdv, surface.v_degree, "target_degree (v)")

@@ -631,12 +631,14 @@ def _degree(value, source_degree):
 class _SurfaceFit:
     """Exact tensor projections of one source surface, with their deviation on a grid."""
 
-    def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free"):
+    def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free",
+                 region=None):
         if surface.is_rational:
             raise UnsupportedGeometryError(
                 "adaptive fairing needs a polynomial surface; fair rational ones with "
                 "method='wavelet'.")
         self.surface, self.tol, self.degrees = surface, tol, degrees
+        self.region = region
         self.pinned = borders == "pinned"
         u = sample_parameters(surface.u_space, per_span=per_span)
         v = sample_parameters(surface.v_space, per_span=per_span)
@@ -656,7 +658,7 @@ class _SurfaceFit:
     def probe(self):
         """The search grid's :class:`~cq_fairing.core.measures.SurfaceProbe`, built on
         first use (a faithful fit that passes never measures on it)."""
-        return SurfaceProbe(self.surface, uv=self._uv, keep_feet=True)
+        return SurfaceProbe(self.surface, uv=self._uv, keep_feet=True, region=self.region)
 
     @cached_property
     def coarse_probe(self):
@@ -664,7 +666,8 @@ class _SurfaceFit:
         the search probe's last feet and keeping none of its own
         (:meth:`screened_trial`)."""
         u, v = self._uv
-        probe = SurfaceProbe(self.surface, uv=(u[::SCREEN_STRIDE], v[::SCREEN_STRIDE]))
+        probe = SurfaceProbe(self.surface, uv=(u[::SCREEN_STRIDE], v[::SCREEN_STRIDE]),
+                             region=self.region)
         probe.adopt_feet(self.probe)
         return probe
 
@@ -1036,7 +1039,8 @@ def _lowered(fit, spaces, result, axis, n, tol, rounds):
 
 
 def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compact", polish=True,
-                          borders="auto", per_span=8, max_samples=400_000, _safety=SAFETY):
+                          borders="auto", per_span=8, max_samples=400_000, region=None,
+                          _safety=SAFETY):
     r"""Fair ``surface`` into adaptive (non-uniform) u and v targets within ``tol``.
 
     ``"compact"``: the knot families start from the source's breakpoint densities.
@@ -1087,6 +1091,12 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         the compact net is grown by one span along u or v (knots from its error
         density, the smaller net first) and checked again, and only if neither passes
         is the search repeated with a tighter working tolerance (down to 0.9 ``tol``).
+    region : callable, optional
+        ``region(u, v) -> bool array (len(u), len(v))``: where the deviation counts,
+        e.g. a trimmed face's domain (:class:`~cq_fairing.core.measures.SurfaceProbe`).
+        Search, knot placement and the final check then see only those samples: the
+        net follows the surface where the face is, not under the trimmed-away part.
+        Default: the whole parameter domain.
 
     Returns
     -------
@@ -1105,10 +1115,14 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     tol = check_tolerance(tol)
     faithful = _objective(objective) == "faithful"
     _borders(borders)
+    if region is not None and not callable(region):
+        raise InvalidInputError(
+            f"region must be a callable region(u, v) -> boolean array or None, got "
+            f"{type(region).__name__}; pass a function of the two sample vectors.")
     tdu, tdv = target_degree if isinstance(target_degree, (tuple, list)) else (target_degree,) * 2
     degrees = (_degree(tdu, surface.u_degree), _degree(tdv, surface.v_degree))
     fit = _SurfaceFit(surface, _safety * tol, degrees, per_span, max_samples,
-                      "pinned" if borders == "pinned" else "free")
+                      "pinned" if borders == "pinned" else "free", region)
     dens = [_source_density(s) for s in (surface.u_space, surface.v_space)]
     tops = [surface.u_space.n_spans, surface.v_space.n_spans]
 
@@ -1116,7 +1130,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         return [equidistributed_space(b, r, max(1, int(np.ceil(t * top - 1e-9))), p)
                 for (b, r), top, p in zip(dens, tops, degrees)]
 
-    check = _final_check(surface, 2 * per_span, 4 * max_samples)
+    check = _final_check(surface, 2 * per_span, 4 * max_samples, region)
     table, found = (), None
     if faithful:
         spaces, sigma = _faithful_net(fit, family, dens, tops)
@@ -1136,7 +1150,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
             return fair_surface_adaptive(surface, tol, target_degree=target_degree,
                                          objective=objective, polish=polish,
                                          borders=borders, per_span=per_span,
-                                         max_samples=max_samples,
+                                         max_samples=max_samples, region=region,
                                          _safety=_safety * tol / e - 0.005)
         except ToleranceNotMetError:
             pass  # nothing within the tighter working tolerance: this net's refusal says why
@@ -1484,7 +1498,7 @@ def _axis_start(fit, full, top_result, dens, tops, degrees, order):
     return spaces, result
 
 
-def _final_check(surface, per_span, max_samples):
+def _final_check(surface, per_span, max_samples, region=None):
     """``check(faired)``: the exact two-sided maximum at ``per_span`` samples per span of
     the merged breakpoints of source and result, halved while the source's grid would
     exceed ``max_samples`` but never below the 8 per span of
@@ -1500,7 +1514,7 @@ def _final_check(surface, per_span, max_samples):
     def check(faired, search=None):
         uv = (sample_parameters(surface.u_space, faired.u_space, per_span=per_span),
               sample_parameters(surface.v_space, faired.v_space, per_span=per_span))
-        probe = SurfaceProbe(surface, uv=uv, hold_grid=False)
+        probe = SurfaceProbe(surface, uv=uv, hold_grid=False, region=region)
         if search is not None:
             probe.adopt_feet(search)
         return probe.max_deviation(faired)[0]

@@ -605,10 +605,12 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         L2 projection, exact reconstruction and often the faster search; ``"pinned"``
         keeps the corners; ``"auto"`` pins them only when the net gets smaller).
     window : (u0, u1, v0, v1), optional
-        With ``tol`` and ``method="wavelet"``: measure the deviation only in this
-        parameter box (a trimmed face's UV box), both ways; default the whole domain
-        (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`).  Refused with
-        ``n`` and with the other methods.
+        With ``tol``: measure the deviation only in this parameter box (a trimmed face's
+        UV box), both ways; default the whole domain
+        (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`; for
+        ``method="adaptive"`` the box is the ``region`` of
+        :func:`~cq_fairing.core.adaptive.fair_surface_adaptive`).  Refused with ``n`` and
+        with ``method="energy"``.
 
     Returns
     -------
@@ -634,7 +636,8 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 
         return fair_surface_adaptive(surface, tol,
                                      target_degree=split_pair(target_degree, "target_degree"),
-                                     objective=objective, borders=borders)
+                                     objective=objective, borders=borders,
+                                     region=_window_region(window, surface))
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
@@ -656,10 +659,19 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 METHODS = ("wavelet", "adaptive", "energy")
 
 
+def _window_region(window, surface):
+    """The adaptive search's ``region`` for a checked ``window``, or ``None``."""
+    from .accuracy import check_window
+    from .measures import box_region
+
+    box = check_window(window, surface)
+    return None if box is None else box_region(box)
+
+
 def _tolerance_method(method, objective, n, tol, borders="auto", window=None):
     """Validate ``method`` (and ``objective``, ``borders``, which belong to the adaptive
-    method, and ``window``, which belongs to the wavelet one); the tolerance-only methods
-    need ``tol``, no ``n``."""
+    method, and ``window``, which belongs to the tolerance searches); the tolerance-only
+    methods need ``tol``, no ``n``."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
     for name, value, default in (("objective", objective, "compact"), ("borders", borders, "auto")):
@@ -667,10 +679,11 @@ def _tolerance_method(method, objective, n, tol, borders="auto", window=None):
             raise InvalidInputError(
                 f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
                 f"add method='adaptive' or drop {name}.")
-    if method != "wavelet" and window is not None:
+    if method == "energy" and window is not None:
         raise InvalidInputError(
-            f"window applies to the tolerance search of method='wavelet' only, got "
-            f"window={window!r} with method={method!r}; drop window or use method='wavelet'.")
+            f"window applies to the tolerance searches of method='wavelet' and 'adaptive', "
+            f"got window={window!r} with method='energy', which moves every pole within "
+            "tol; drop window or use another method.")
     if method != "wavelet" and (n is not None or tol is None):
         what = ("keeps the control points" if method == "energy"
                 else "chooses the target itself")

@@ -543,6 +543,24 @@ class CurveProbe:
                            tol)
 
 
+def box_region(box):
+    """The ``region`` of a parameter box ``(u0, u1, v0, v1)``: the samples inside it,
+    its borders included."""
+    u0, u1, v0, v1 = box
+    return lambda u, v: np.outer((u >= u0) & (u <= u1), (v >= v0) & (v <= v1))
+
+
+def _region_mask(region, u, v):
+    """``region(u, v)`` checked: a boolean array of shape (len(u), len(v))."""
+    mask = np.asarray(region(u, v))
+    if mask.shape != (u.size, v.size) or mask.dtype != bool:
+        raise InvalidInputError(
+            f"region(u, v) must return a boolean array of shape ({u.size}, {v.size}) "
+            f"(one flag per sample), got {mask.dtype} of shape {mask.shape}; fix the "
+            "region callable.")
+    return mask
+
+
 class SurfaceProbe:
     """Dense grid samples of a source surface, reused to measure many candidates.
 
@@ -559,6 +577,10 @@ class SurfaceProbe:
     bounds : ((u0, u1), (v0, v1)), optional
         Parameter box of both geometries that the foot points stay in (a face's UV box,
         with ``uv`` sampled inside it); default the source's whole domain.
+    region : callable, optional
+        ``region(u, v) -> bool array (len(u), len(v))``: the samples whose deviation
+        counts (a trimmed face's domain); the others count as 0, so a candidate is
+        measured, and its error spread, only where the face is.  Default: everywhere.
     hold_grid : bool
         Keep the source's grid points and each candidate's in full (the adaptive search's
         probe, capped at 400k samples, whose path depends on the rounding of those
@@ -570,10 +592,11 @@ class SurfaceProbe:
     """
 
     def __init__(self, source, per_span=8, method="geometric", uv=None, keep_feet=False,
-                 hold_grid=True, bounds=None):
+                 hold_grid=True, bounds=None, region=None):
         _check_method(method)
         self.source = source
         self.bounds = bounds
+        self.region = region
         self.method = method
         self.per_span = per_span
         self.keep_feet = keep_feet
@@ -590,6 +613,7 @@ class SurfaceProbe:
         self.points = (self.source.evaluate_grid(u, v) if self.hold_grid
                        else _LazyGrid(self.source, u, v))
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
+        self._outside = None if self.region is None else ~_region_mask(self.region, u, v)
         self._feet = {}
         self._source_blocks = None
         self._collocations = {}
@@ -636,13 +660,17 @@ class SurfaceProbe:
 
     def bound(self, faired):
         """Faired points on the grid (a :class:`_LazyGrid` without ``hold_grid``) and the
-        same-parameter distance at every sample, shape (len(u), len(v))."""
-        if self.hold_grid:
-            other = self._grid_of(faired)
-            return other, _distance(other, self.points)
-        blocks = self._bound_blocks(faired)
-        return _LazyGrid(faired, self.u, self.v), np.concatenate(
-            [blocks.block(b) for b in range(blocks.n_blocks)])
+        same-parameter distance at every sample, shape (len(u), len(v)); 0 outside the
+        ``region``, whose samples are then never measured further."""
+        if not self.hold_grid:
+            blocks = self._bound_blocks(faired)
+            return _LazyGrid(faired, self.u, self.v), np.concatenate(
+                [blocks.block(b) for b in range(blocks.n_blocks)])
+        other = self._grid_of(faired)
+        bound = _distance(other, self.points)
+        if self._outside is not None:
+            bound[self._outside] = 0.0
+        return other, bound
 
     def _grid_of(self, faired):
         """``faired.evaluate_grid(u, v)``, the same values, with the collocation matrices
@@ -668,7 +696,8 @@ class SurfaceProbe:
         step = max(1, BLOCK_SAMPLES // self.v.size)
         if self._source_blocks is None or self._source_blocks.step != step:
             self._source_blocks = self.source.grid_blocks(self.u, self.v, step)
-        return _BoundBlocks(self._source_blocks, faired.grid_blocks(self.u, self.v, step))
+        return _BoundBlocks(self._source_blocks, faired.grid_blocks(self.u, self.v, step),
+                            self._outside)
 
     def true_distance(self, faired, other, flat_idx, window=2, tol=None, verdict=False):
         """Two-sided true distance at flat grid indices ``flat_idx``.
@@ -756,7 +785,7 @@ class SurfaceProbe:
         if tol is not None and stride > 1 and min(self.points.shape[:2]) > 4 * stride:
             self._adapt(faired)
             sub = SurfaceProbe(self.source, method=self.method,
-                               uv=(self.u[::stride], self.v[::stride]))
+                               uv=(self.u[::stride], self.v[::stride]), region=self.region)
             value, k = sub.max_deviation(faired, tol, stride=1)
             if value > tol:
                 i, j = np.unravel_index(k, sub.points.shape[:2])
@@ -819,14 +848,17 @@ class _BoundBlocks:
     of rows at a time (two :class:`~cq_fairing.core.geometry.GridBlocks` with the same
     grid and ``step``)."""
 
-    def __init__(self, source, faired):
-        self._source, self._faired = source, faired
+    def __init__(self, source, faired, outside=None):
+        self._source, self._faired, self._outside = source, faired, outside
         self.step, self.n_blocks, self.n_u = source.step, source.n_blocks, source.n_u
         self.rows_of = source.rows_of
 
     def block(self, b):
-        """Shape (rows of block ``b``, n_v)."""
-        return _distance(self._faired.block(b), self._source.block(b))
+        """Shape (rows of block ``b``, n_v); 0 at the samples ``outside`` the region."""
+        distance = _distance(self._faired.block(b), self._source.block(b))
+        if self._outside is not None:
+            distance[self._outside[self.rows_of(b)]] = 0.0
+        return distance
 
 
 class _RowBound:

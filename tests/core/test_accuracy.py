@@ -106,8 +106,8 @@ def test_search_options_at_their_defaults_still_work_with_an_explicit_scale():
 def test_a_window_with_another_method_names_the_method_it_belongs_to():
     message = _refusal(lambda: cf.fair_surface(_wavy_edge_net(), tol=3e-3, method="energy",
                                                window=(0.0, 0.7, 0.0, 1.0)))
-    assert "method='wavelet' only" in message and "method='energy'" in message
-    assert message.endswith("drop window or use method='wavelet'.")
+    assert "method='wavelet' and 'adaptive'" in message and "method='energy'" in message
+    assert message.endswith("drop window or use another method.")
 
 
 def test_tolerance_not_met():
@@ -274,6 +274,54 @@ def test_window_must_be_a_box_in_the_domain_for_the_wavelet_tolerance_search():
         with pytest.raises(cf.InvalidInputError, match="window"):
             cf.fair_surface(net, tol=3e-3, window=window)
     with pytest.raises(cf.InvalidInputError, match="window applies"):
-        cf.fair_surface(net, tol=3e-3, method="adaptive", window=(0.0, 0.7, 0.0, 1.0))
+        cf.fair_surface(net, tol=3e-3, method="energy", window=(0.0, 0.7, 0.0, 1.0))
     with pytest.raises(cf.InvalidInputError, match="window applies"):
         cf.fair_surface(net, (5, 5), window=(0.0, 0.7, 0.0, 1.0))
+    with pytest.raises(cf.InvalidInputError, match="window must be a parameter box"):
+        cf.fair_surface(net, tol=3e-3, method="adaptive", window=(0.0, 1.5, 0.0, 1.0))
+
+
+def _nearest(points, cloud):
+    """Distance from each of ``points`` (n, 3) to the nearest of ``cloud`` (m, 3)."""
+    from scipy.spatial import cKDTree
+
+    return cKDTree(cloud).query(points)[0]
+
+
+def test_adaptive_window_fits_the_box_only():
+    """The adaptive search with the box u <= 0.7 keeps fewer poles than over the whole
+    domain, and is within tol inside the box both ways, by nearest points of dense
+    clouds (1200 x 1200 samples of each surface; a cloud's spacing adds at most ~1e-3 /
+    2 to a true distance, so the bound is tol + 1e-3), not over the whole domain."""
+    net = _wavy_edge_net()
+    source = cf.make_surface(net)
+    tol = 3e-3
+    whole = cf.fair_surface(net, tol=tol, method="adaptive", borders="free")
+    part = cf.fair_surface(net, tol=tol, method="adaptive", borders="free",
+                           window=(0.0, 0.7, 0.0, 1.0))
+    assert np.prod(part.surface.shape) < np.prod(whole.surface.shape)
+    box = np.linspace(0.0, 0.7, 300), np.linspace(0.0, 1.0, 300)
+    dense = np.linspace(0.0, 1.0, 1200), np.linspace(0.0, 1.0, 1200)
+    source_cloud = source.evaluate_grid(*dense).reshape(-1, 3)
+    faired_cloud = part.surface.evaluate_grid(*dense).reshape(-1, 3)
+    there = _nearest(source.evaluate_grid(*box).reshape(-1, 3), faired_cloud)
+    back = _nearest(part.surface.evaluate_grid(*box).reshape(-1, 3), source_cloud)
+    assert max(there.max(), back.max()) <= tol + 1e-3
+    assert part.max_deviation <= tol
+    assert M.deviation(source, part.surface).max > tol
+
+
+def test_an_everywhere_region_changes_nothing_and_a_bad_one_is_refused():
+    """A region that keeps every sample gives the net of no region, bit for bit."""
+    from cq_fairing.core.adaptive import fair_surface_adaptive
+
+    source = cf.make_surface(_wavy_edge_net())
+    plain = fair_surface_adaptive(source, 3e-3)
+    everywhere = fair_surface_adaptive(
+        source, 3e-3, region=lambda u, v: np.ones((u.size, v.size), dtype=bool))
+    assert np.array_equal(plain.surface.poles, everywhere.surface.poles)
+    assert plain.max_deviation == everywhere.max_deviation
+    with pytest.raises(cf.InvalidInputError, match="region must be a callable"):
+        fair_surface_adaptive(source, 3e-3, region=(0.0, 0.7, 0.0, 1.0))
+    with pytest.raises(cf.InvalidInputError, match="boolean array of shape"):
+        fair_surface_adaptive(source, 3e-3, region=lambda u, v: np.ones(u.size, dtype=bool))
