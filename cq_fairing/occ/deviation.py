@@ -22,15 +22,15 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.BRepTools import BRepTools
-from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
 from OCP.Extrema import Extrema_GenLocateExtPS
 from OCP.GeomAdaptor import GeomAdaptor_Surface
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
-from OCP.TopAbs import TopAbs_IN, TopAbs_ON, TopAbs_REVERSED
-from OCP.gp import gp_Pnt, gp_Pnt2d
+from OCP.TopAbs import TopAbs_REVERSED
+from OCP.gp import gp_Pnt
 
 from ..errors import InvalidInputError
 from .convert import as_face
+from .trims import face_region
 
 __all__ = ["sample_face_deviation", "face_uv_grid", "DEFAULT_DENSITY"]
 
@@ -64,22 +64,18 @@ def face_uv_grid(face, density=DEFAULT_DENSITY, classify=True):
     u : ndarray, shape (n_u,)
     v : ndarray, shape (n_v,)
     inside : ndarray of bool, shape (n_u, n_v)
-        ``True`` where ``BRepTopAdaptor_FClass2d`` classifies the point IN or ON the face.
+        ``True`` where ``BRepTopAdaptor_FClass2d`` classifies the point IN or ON the face
+        (:func:`~cq_fairing.occ.trims.face_region`: the same answers, asked of OCCT only
+        near the trim).
     """
     nu, nv = _density(density)
     u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
     s0, s1, t0, t1 = BRep_Tool.Surface_s(face).Bounds()
     u = np.clip(np.linspace(u0, u1, nu), s0, s1)
     v = np.clip(np.linspace(v0, v1, nv), t0, t1)
-    inside = np.ones((nu, nv), dtype=bool)
     if not classify:
-        return u, v, inside
-    classifier = BRepTopAdaptor_FClass2d(face, 1e-9)
-    for i, uu in enumerate(u):
-        for j, vv in enumerate(v):
-            state = classifier.Perform(gp_Pnt2d(float(uu), float(vv)))
-            inside[i, j] = state in (TopAbs_IN, TopAbs_ON)
-    return u, v, inside
+        return u, v, np.ones((nu, nv), dtype=bool)
+    return u, v, face_region(face)(u, v)
 
 
 PROJECTIONS = ("local", "global")

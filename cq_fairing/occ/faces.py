@@ -36,7 +36,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 from OCP.Bnd import Bnd_Box
 from OCP.TopoDS import TopoDS
 
-from ..core.adaptive import BORDERS
+from ..core.adaptive import BORDERS, fair_surface_adaptive
 from ..core.fairing import SurfaceFairResult, check_search_options, fair_surface, target_space
 from ..core.geometry import BSplineSurface
 from ..core.spaces import SplineSpace
@@ -44,7 +44,8 @@ from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
                       ToleranceNotMetError, UnsupportedGeometryError)
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, face_uv_grid, reference_samples
-from .search import max_scales, project, search_scales
+from .search import max_scales, search_scales
+from .trims import face_region
 
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
            "check_options"]
@@ -314,7 +315,6 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
         notes.append("boundary='fixed' keeps the surface's border rows; this trimmed face's "
                      "edges lie inside the surface, so they may still move")
     sampler = _Sampler(face_uv_grid(face, density, classify=info.trimmed), surface)
-    source = surface
     finish = _finisher(surface, info.unperiodized, boundary)
     if max_scales(surface, degree) == (None, None) and n is None:
         return _unchanged(face, info, surface, "the net is already at its coarsest "
@@ -333,18 +333,8 @@ def _check_samples(face, grid, trimmed):
     """Search grid plus the centres of its cells: the OCCT check sees between samples."""
     u, v, _ = grid
     cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
-    inside = _classify(face, cu, cv) if trimmed else np.ones((cu.size, cv.size), dtype=bool)
+    inside = face_region(face)(cu, cv) if trimmed else np.ones((cu.size, cv.size), dtype=bool)
     return reference_samples(face, grid, (cu, cv, inside))
-
-
-def _classify(face, u, v):
-    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
-    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
-    from OCP.gp import gp_Pnt2d
-
-    classifier = BRepTopAdaptor_FClass2d(face, 1e-9)
-    return np.array([[classifier.Perform(gp_Pnt2d(float(a), float(b))) in (TopAbs_IN, TopAbs_ON)
-                      for b in v] for a in u], dtype=bool)
 
 
 def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish, details,
@@ -357,10 +347,11 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
     """
     measured, refusals = [], []
     check = None
+    region = face_region(face) if info.trimmed else None
     for criterion, goal in criteria:
         try:
             target, faired, result = _choose(source, goal, n, degree, sampler, finish,
-                                             criterion)
+                                             criterion, region)
         except ToleranceNotMetError as exc:
             measured.append(exc.best_deviation)
             refusals.append((goal, str(exc)))
@@ -435,12 +426,13 @@ def _target_degree(surface, target_degree):
     return int(pair[0]), int(pair[1])
 
 
-def _choose(source, tol, n, degree, sampler, finish, criterion):
+def _choose(source, tol, n, degree, sampler, finish, criterion, region=None):
     """Target scales, the faired (finished) surface and the core result if computed.
 
     For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
-    pair of non-uniform spaces the core chose; energy fairing (``criterion`` ``"energy"``)
-    keeps the source's spaces and has no target (``None``).
+    pair of non-uniform spaces the core chose, measured only on the face (``region``,
+    :func:`~cq_fairing.occ.trims.face_region` of a trimmed face); energy fairing
+    (``criterion`` ``"energy"``) keeps the source's spaces and has no target (``None``).
     """
     if criterion == "energy":
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
@@ -449,12 +441,9 @@ def _choose(source, tol, n, degree, sampler, finish, criterion):
                               weights=source.weights, method="energy")
         return None, finish(result.surface), result
     if isinstance(criterion, AdaptiveTarget):
-        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
-                              v_knots=source.v_knots,
-                              degree=(source.u_degree, source.v_degree),
-                              weights=source.weights, target_degree=degree,
-                              method="adaptive", objective=criterion.objective,
-                              borders=criterion.borders)
+        result = fair_surface_adaptive(source, tol, target_degree=degree,
+                                       objective=criterion.objective,
+                                       borders=criterion.borders, region=region)
         spaces = (result.surface.u_space, result.surface.v_space)
         return spaces, finish(result.surface), result
     if criterion == "core":
