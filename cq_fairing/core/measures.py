@@ -64,6 +64,7 @@ __all__ = [
 
 DEVIATIONS = ("geometric", "parametric")
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
+HALVINGS = 12        # a Newton step that increases the distance is halved up to this often
 BLOCK_SAMPLES = 65_536  # grid samples per block of rows when a probe does not hold its grid
 COLLOCATIONS = 128     # collocation matrices a probe keeps (per target space and axis)
 
@@ -262,8 +263,13 @@ def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2, tol=No
     return best
 
 
-def _damped(trial, active, step, dist, halvings=5):
-    """Halve steps until the distance does not grow; returns the last trial per point."""
+def _damped(trial, active, step, dist, halvings=HALVINGS):
+    """Halve steps until the distance does not grow; returns the last trial per point.
+
+    Only the points whose distance grew pay for a halving.  A Newton step can overshoot
+    by far more than 2^5: on a fillet whose u domain is 6e-4 long (``|S_u|`` about 2e3,
+    ``|S_v|`` about 2), the first step from a point 0.08 off was twice the u domain, and
+    the point stopped there, 30 times its true distance (0.0024) away."""
     new, d_new = trial(active, step)
     for _ in range(halvings):
         worse = d_new > dist[active]
@@ -711,6 +717,8 @@ class SurfaceProbe:
         """
         if flat_idx.size == 0:
             return np.zeros(0)
+        if self._outside is not None and self._outside.ravel()[flat_idx].any():
+            return self._inside_only(faired, other, flat_idx, window, tol, verdict)
         shape = self.points.shape[:2]
         i, j = np.unravel_index(flat_idx, shape)
         d_fs = self._one_way(faired, self.points, other, i, j, window, tol)
@@ -722,6 +730,17 @@ class SurfaceProbe:
             d_fs[back] = np.maximum(d_fs[back], self._one_way(
                 self.source, other, self.points, i[back], j[back], window, tol))
         return d_fs
+
+    def _inside_only(self, faired, other, flat_idx, window, tol, verdict):
+        """:meth:`true_distance` with 0 at the samples outside the ``region``, which count
+        as 0 everywhere (a maximum that asks for the largest bound of every row, as
+        ``_pruned_max`` does on a grid of at most 64 rows, asks for rows wholly outside
+        too)."""
+        inside = ~self._outside.ravel()[flat_idx]
+        distance = np.zeros(flat_idx.size)
+        distance[inside] = self.true_distance(faired, other, flat_idx[inside], window, tol,
+                                              verdict)
+        return distance
 
     def _one_way(self, target, here, there, i, j, window, tol=None):
         """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid).

@@ -455,3 +455,46 @@ def test_foot_points_slide_along_a_border_from_a_corner(shear, stretch, point, c
     brute = np.linalg.norm(grid - p[0], axis=2).min()
     assert dist[0] <= brute + 1e-9
     assert dist[0] >= brute - 5e-3  # the grid's own spacing bounds how far below it can be
+
+
+def test_newton_recovers_from_steps_far_past_a_short_domain():
+    """A strip 30 mm long on a u domain 6e-4 long (|S_u| about 5e4, |S_v| about 2), points
+    near it started from parameters up to a third of the domain away: a Newton step there
+    can overshoot by more than 2^5, and with five halvings one of these 300 foot points
+    stopped 5.07 away where the nearest point is 0.032 away (such a measure refused
+    correct fits of impeller fillets).  Every one now ends at the nearest point."""
+    x = np.linspace(0.0, 30.0, 12)
+    row = np.stack([x, 3.0 * np.sin(x / 6.0), 0.2 * x], axis=1)
+    poles = np.stack([row, row + [0.0, 0.5, 1.0], row + [0.0, 1.0, 2.0]], axis=1)
+    graded = np.geomspace(1.0, 1.0 / 64.0, 9)
+    span = 6e-4
+    u_knots = np.r_[[0.0] * 4, np.cumsum(graded[:-1]) / graded.sum() * span, [span] * 4]
+    strip = cf.make_surface(poles, u_knots=u_knots, degree=(3, 2))
+    rng = np.random.default_rng(0)
+    u0, v0 = rng.uniform(0.0, span, 300), rng.uniform(0.0, 1.0, 300)
+    near_u = np.clip(u0 + rng.normal(scale=span / 4, size=300), 0.0, span)
+    points = M.surface_derivatives(strip, near_u, v0, 0)[(0, 0)] + \
+        rng.normal(scale=0.05, size=(300, 3))
+    dense = strip.evaluate_grid(np.linspace(0.0, span, 4000), np.linspace(0.0, 1.0, 200))
+    nearest_sample = cKDTree(dense.reshape(-1, 3)).query(points)[0]
+    _, _, found = M.closest_points_surface(strip, points, u0, v0)
+    assert np.all(found <= nearest_sample + 1e-9)
+
+
+def test_a_region_excludes_whole_rows_from_the_maximum():
+    """Samples outside a probe's region count as 0.  The exact maximum first asks for the
+    largest bound of each of the 64 rows of largest maximum: on a grid of fewer rows that
+    included rows wholly outside the region (their bound 0, their first sample asked
+    for), and a bump there was reported as the maximum (0.5 instead of 0)."""
+    u = np.linspace(0.0, 1.0, 5)
+    flat = cf.make_surface(np.dstack([*np.meshgrid(u, u, indexing="ij"), np.zeros((5, 5))]))
+    bumped_poles = flat.poles.copy()
+    bumped_poles[0, 0, 2] = 0.5          # a bump at the corner u = v = 0
+    bumped = cf.make_surface(bumped_poles)
+    region = M.box_region((0.5, 1.0, 0.0, 1.0))
+    probe = M.SurfaceProbe(flat, per_span=4, region=region, hold_grid=False)
+    assert probe.u.size < 64
+    value, _ = probe.max_deviation(bumped)
+    assert value == pytest.approx(0.0, abs=1e-12)
+    whole = M.SurfaceProbe(flat, per_span=4, hold_grid=False).max_deviation(bumped)[0]
+    assert whole > 0.2
