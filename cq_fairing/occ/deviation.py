@@ -1,9 +1,15 @@
-r"""How far a faired face moved, measured by OCCT itself.
+r"""How far a faired face moved, measured by OCCT itself, both ways.
 
 For UV samples :math:`(u_i, v_i)` inside the original face (``BRepTopAdaptor_FClass2d``),
 the original points :math:`p_i = S_0(u_i, v_i)` come from ``BRepAdaptor_Surface`` and the
 *true* distance :math:`d_i = \min_{(s,t)} |S_1(s, t) - p_i|` from
-``GeomAPI_ProjectPointOnSurf`` on the faired surface :math:`S_1`.  The *parametric*
+``GeomAPI_ProjectPointOnSurf`` on the faired surface :math:`S_1`.  The way back is
+measured the same way: the faired points :math:`q_i = S_1(u_i, v_i)` (the faired face
+keeps the original's trim and parameter domain) and their distances
+:math:`b_i = \min_{(s,t)} |S_0(s, t) - q_i|` to the original surface.  The way there
+alone misses a faired face that reaches beyond the original: an impeller fillet faired
+onto one cubic span in u was 0.0082 from every original sample but 0.070 away at its
+own samples (tol 0.01).  The *parametric*
 distance :math:`|S_1(u_i, v_i) - p_i|` is an upper bound of :math:`d_i` (fairing keeps
 the parameter domain).  OCCT's projection finds orthogonal extrema only, so near a
 border, where the nearest point of the bounded patch may be a border point, it can
@@ -107,9 +113,12 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
     dict
         ``uv`` (N, 2), ``points`` (N, 3) on the original, ``faired_points`` (N, 3) at the
         same parameters on the faired face, ``normals`` (N, 3) of the original,
-        ``distance`` (N,) true distance (OCCT projection), ``parametric`` (N,),
-        ``signed`` (N,), and the summaries ``max``, ``mean``, ``rms`` (of ``distance``)
-        and ``max_parametric``.
+        ``distance`` (N,) true distance of the original points to the faired surface
+        (OCCT projection), ``distance_back`` (N,) of the faired points to the original
+        surface, ``parametric`` (N,), ``signed`` (N,) (``distance`` with the side of the
+        original's normal); the summaries ``max`` (two-sided: the largest of
+        ``distance`` and ``distance_back``), ``mean``, ``rms`` (of ``distance``) and
+        ``max_parametric``.
     """
     original_face = as_face(original_face, "original_face")
     faired_face = as_face(faired_face, "faired_face")
@@ -139,21 +148,33 @@ def deviation_on_grid(original_face, faired_face, grid, projection="local", refe
     uv, points, normals = reference or reference_samples(original_face, grid)
     faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
     parametric = np.linalg.norm(faired_points - points, axis=1)
-    surface = BRep_Tool.Surface_s(faired_face)
-    borders = _Borders(surface)
-    distance, projected = _project(surface, points, uv, projection == "global", borders)
-    closer = parametric < distance
-    distance[closer] = parametric[closer]
-    projected[closer] = faired_points[closer]
-    _refine_largest(surface, points, distance, projected, borders)
+    use_global = projection == "global"
+    distance, projected = _distances_to(faired_face, points, uv, faired_points, parametric,
+                                        use_global)
+    back, _ = _distances_to(original_face, faired_points, uv, points, parametric, use_global)
     sign = np.sign(np.einsum("ij,ij->i", projected - points, normals))
     return {
         "uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
-        "distance": distance, "parametric": parametric, "signed": sign * distance,
-        "max": float(distance.max()), "mean": float(distance.mean()),
-        "rms": float(np.sqrt(np.mean(distance ** 2))),
+        "distance": distance, "distance_back": back, "parametric": parametric,
+        "signed": sign * distance, "max": float(max(distance.max(), back.max())),
+        "mean": float(distance.mean()), "rms": float(np.sqrt(np.mean(distance ** 2))),
         "max_parametric": float(parametric.max()),
     }
+
+
+def _distances_to(face, points, uv, same_parameter, parametric, use_global):
+    """Distances of ``points`` (taken at ``uv``) to ``face``'s surface and the nearest
+    points found: :func:`_project`, capped by the ``same_parameter`` points of the
+    surface at ``parametric`` distance, the largest measured again
+    (:func:`_refine_largest`)."""
+    surface = BRep_Tool.Surface_s(face)
+    borders = _Borders(surface)
+    distance, projected = _project(surface, points, uv, use_global, borders)
+    closer = parametric < distance
+    distance[closer] = parametric[closer]
+    projected[closer] = same_parameter[closer]
+    _refine_largest(surface, points, distance, projected, borders)
+    return distance, projected
 
 
 def _points_and_normals(face, uv, normals=True):

@@ -289,18 +289,24 @@ def _criteria(tol, search, method, objective, borders):
     With explicit ``n``: one attempt.  ``method="adaptive"``: the core's adaptive search
     (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``;
     ``method="energy"`` likewise with the criterion ``"energy"``.
-    Otherwise the requested search (``"local"`` with the normal-distance estimate, or the core's
-    ``fair_surface(tol=...)``), then the local search with the parametric distance, an
-    upper bound of the true distance; they aim at ``MARGIN * tol`` (room for excursions
-    between samples), the last one at ``tol``.
+    Otherwise the requested search (``"local"`` with the normal-distance estimate, then
+    the core's ``fair_surface(tol=...)``; ``"core"``: the core's alone), then the local
+    search with the parametric distance, an upper bound of the true distance; they aim
+    at ``MARGIN * tol`` (room for excursions between samples), the last one at ``tol``.
+    The normal distance looks from the original's samples only; where the faired face
+    reaches beyond the original (OCCT's check measures both ways), the core's two-sided
+    search still finds a coarse net, where the parametric distance of a face with
+    strongly graded knots keeps nearly all poles (an impeller fillet: 20 x 3 poles
+    against 48 x 3).
     """
     if tol is None:
         return [(None, None)]
     if method in TOLERANCE_ONLY:
         target = AdaptiveTarget(objective, borders) if method == "adaptive" else "energy"
         return [(target, tol), (target, MARGIN * tol)]
-    first = "core" if search == "core" else "normal"
-    return [(first, MARGIN * tol), ("parametric", MARGIN * tol), ("parametric", tol)]
+    first = ["core"] if search == "core" else ["normal", "core"]
+    return [(criterion, MARGIN * tol) for criterion in first + ["parametric"]] + \
+        [("parametric", tol)]
 
 
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria):

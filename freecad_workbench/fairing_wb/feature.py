@@ -46,7 +46,7 @@ PROPERTIES = (
     ("App::PropertyString", "PolesBefore", "Figures", "Control points of the source", True),
     ("App::PropertyString", "PolesAfter", "Figures", "Control points of the result", True),
     ("App::PropertyLength", "MaxDeviation", "Figures",
-     "Largest closest-point distance faired -> source at 30 x 30 samples", True),
+     "Largest closest-point distance between faired and source face, both ways", True),
     ("App::PropertyFloat", "FairingTime", "Figures", "Seconds of the last recompute", True),
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )

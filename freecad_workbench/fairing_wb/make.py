@@ -48,8 +48,9 @@ class FairedShape:
     poles_before, poles_after : tuple of int
         ``(k_u, k_v)`` for a face, ``(k,)`` for an edge.
     max_deviation : float
-        Largest closest-point distance faired -> source at ``DEVIATION_SAMPLES`` squared
-        samples (model units, mm); the same measure as the deviation map.
+        Largest closest-point distance between faired and source surface, both ways, at
+        ``DEVIATION_SAMPLES`` squared samples of each on the face (model units, mm); the
+        deviation map shows the way faired -> source.
     seconds : float
         Wall time of conversion + fairing + rebuild.
     note : str
@@ -325,11 +326,13 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
                               borders, uv_range)
     faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
-    _, distances = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
+    _, there = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
+    _, back = analysis.signed_deviation(faired, source, uv_range, DEVIATION_SAMPLES)
+    both = np.maximum(np.abs(there), np.abs(back))
     inside = conversion.inside_mask(
         face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
     # over the face's trim; a trim too thin to hold a sample falls back on its UV box
-    deviation = float(np.abs(distances[inside] if inside.any() else distances).max())
+    deviation = float((both[inside] if inside.any() else both).max())
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "

@@ -1,10 +1,14 @@
-"""OCCT's deviation check against brute force: the largest distances are measured again."""
+"""OCCT's deviation check against brute force: the largest distances are measured again,
+and the way back from the faired face too."""
 
 import numpy as np
+import pytest
 
 import cq_fairing as cf
+from cq_fairing.occ.builders import surface_to_natural_face
 from cq_fairing.occ.convert import to_geom_surface
-from cq_fairing.occ.deviation import _refine_largest
+from cq_fairing.occ.deviation import _refine_largest, sample_face_deviation
+from tests.occ.helpers import global_distance
 
 
 def test_the_largest_upper_bounds_are_measured_again_down_to_a_true_maximum():
@@ -33,3 +37,25 @@ def test_the_largest_upper_bounds_are_measured_again_down_to_a_true_maximum():
     untouched = bound < distance.max()
     assert untouched.any() and np.array_equal(distance[untouched], bound[untouched])
     np.testing.assert_allclose(np.linalg.norm(projected - points, axis=1), distance)
+
+
+def test_a_faired_face_reaching_beyond_the_original_is_measured_on_the_way_back():
+    """The faired patch covers the original and half a unit more (x up to 10.5 where the
+    original ends at 10): every original point lies on it (the way there is 0), but its
+    own points reach 0.5 beyond.  The check measures both ways, as OCCT's own projection
+    of the faired points onto the original finds."""
+    u = np.linspace(0.0, 1.0, 4)
+    grid = np.stack(list(np.meshgrid(u, u, indexing="ij")), axis=-1)
+
+    def patch(length):
+        net = np.concatenate([grid * [length, 1.0], np.zeros((4, 4, 1))], axis=-1)
+        return surface_to_natural_face(cf.make_surface(net))
+
+    original, faired = patch(10.0), patch(10.5)
+    samples = sample_face_deviation(original, faired, density=21)
+    assert samples["distance"].max() <= 1e-9
+    independent = global_distance(samples["faired_points"], original)
+    beyond = samples["faired_points"][:, 0] > 10.0
+    independent[beyond] = samples["faired_points"][beyond, 0] - 10.0   # nearest: the end x = 10
+    np.testing.assert_allclose(samples["distance_back"], independent, atol=1e-9)
+    assert samples["max"] == pytest.approx(0.5)
