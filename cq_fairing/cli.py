@@ -9,7 +9,7 @@ Subcommands
 [--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
     ``--method adaptive`` lets the knots follow the error (fewer poles at the same
-    tolerance; polynomial faces only, rational ones are skipped) and takes
+    tolerance; rational faces stay rational, without the energy polish) and takes
     ``--objective faithful`` to stop at the estimated noise level instead of at the
     fewest poles, or ``--objective fair`` for the fairest of the fewest poles and a few
     more, and ``--borders free|pinned`` to choose the target's border rows

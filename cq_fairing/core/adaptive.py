@@ -70,6 +70,18 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     (separable, since the interior indices form a tensor grid; the polish adds its
     energy to both).  Corners stay exact, which keeps a B-rep's vertices; on a real
     impeller blade face the compact net drops from 9 x 12 to 8 x 12 poles.
+
+6.  **Rational sources.**  As in the uniform fairing, the projections act on the
+    homogeneous net :math:`(w P, w)` (the curve of a rational curve, the surface of a
+    rational surface), the candidate is the rational spline of the projected net, and
+    its deviation is measured in space against the rational source.  Along a direction
+    whose target space contains the source's nothing is approximated: a fillet whose
+    section is one rational quadratic span (a circular arc) keeps that section with its
+    three poles while the sweep direction is reduced (impeller fillets: 50 x 3 -> 9 x 3
+    poles, where a polynomial approximation needs 4 to 6 poles across).  A candidate
+    with a weight :math:`\le 0` fails.  The energy polish and the objective ``"fair"`` act on
+    polynomial geometry and are not applied (the energy of the homogeneous net is not
+    that of the surface).
 """
 
 from functools import cache, cached_property
@@ -79,7 +91,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import solveh_banded
 
-from ..errors import InvalidInputError, ToleranceNotMetError, UnsupportedGeometryError
+from ..errors import InvalidInputError, ToleranceNotMetError
 from .accuracy import check_tolerance
 from .banded import BandedSPD
 from .decomposition import decomposition
@@ -633,11 +645,10 @@ class _SurfaceFit:
 
     def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free",
                  region=None):
-        if surface.is_rational:
-            raise UnsupportedGeometryError(
-                "adaptive fairing needs a polynomial surface; fair rational ones with "
-                "method='wavelet'.")
         self.surface, self.tol, self.degrees = surface, tol, degrees
+        self.rational = surface.is_rational
+        # what the projections act on: the poles, or (w P, w) for a rational source
+        self.coefficients = surface.homogeneous() if self.rational else surface.poles
         self.region = region
         self.pinned = borders == "pinned"
         u = sample_parameters(surface.u_space, per_span=per_span)
@@ -682,7 +693,7 @@ class _SurfaceFit:
     def _half(self, space_u):
         """``<Phi_Tu|Phi_Su> P``, shape (k_tu, k_v, d)."""
         def build():
-            p = self.surface.poles
+            p = self.coefficients
             b = gram_matrix(space_u, self.surface.u_space)
             return (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
         return self._cached(("half", space_u.key), build)
@@ -710,7 +721,8 @@ class _SurfaceFit:
         return self._cached(("cross v", tv.key), lambda: gram_matrix(tv, self.surface.v_space))
 
     def _weighted(self, tu, tv):
-        """:class:`~cq_fairing.core.weighted.SpanWeightedProjection` onto ``tu x tv``."""
+        """:class:`~cq_fairing.core.weighted.SpanWeightedProjection` onto ``tu x tv`` (the
+        polish's stages: polynomial sources only)."""
         return self._cached(("weighted", tu.key, tv.key),
                             lambda: SpanWeightedProjection(self.surface, tu, tv))
 
@@ -758,7 +770,7 @@ class _SurfaceFit:
         With ``lam > 0`` the edge's matrix gains the curves' polish term
         :math:`\lambda G^{(3)}` (scaled as in :func:`_scaled_energy`).
         """
-        p = self.surface.poles
+        p = self.coefficients
         net = np.zeros((tu.dimension, tv.dimension, p.shape[-1]))
         half = self._half(tu)
         along_u = self._edge_factors(tu, lam)
@@ -831,10 +843,29 @@ class _SurfaceFit:
 
     def _faired(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
         """The candidate surface: :meth:`project` onto ``tu x tv``."""
-        net = self.project(tu, tv, lam, weights, edge_lam)
-        return BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+        return self.geometry((tu, tv), self.project(tu, tv, lam, weights, edge_lam))
+
+    def geometry(self, spaces, net):
+        """The surface of a projected ``net`` on ``spaces``: rational (``net`` holds
+        :math:`(w P, w)`) for a rational source."""
+        tu, tv = spaces
+        if not self.rational:
+            return BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree)
+        w = net[..., -1]
+        return BSplineSurface(net[..., :-1] / w[..., None], tu.knots, tv.knots, tu.degree,
+                              tv.degree, w)
+
+    def unweighted(self, faired):
+        """True for a rational candidate with a weight ``<= 0``: it may pass through
+        infinity between samples, so it fails whatever its samples say."""
+        return self.rational and not np.all(faired.weights > 0)
 
     def _measured(self, faired):
+        if self.unweighted(faired):
+            # its samples say nothing about where the error is: all get twice the
+            # tolerance, which keeps the knot density as it is (as for curves)
+            self.evaluations += 1
+            return faired, np.full((self.probe.u.size, self.probe.v.size), 2 * self.tol), np.inf
         values = self.errors(faired)
         return faired, values, float(values.max())
 
@@ -859,7 +890,7 @@ class _SurfaceFit:
         if key in self._refused:
             return self._refused[key]
         faired = self._faired(tu, tv, lam)
-        excess = self._coarse_excess(faired)
+        excess = np.inf if self.unweighted(faired) else self._coarse_excess(faired)
         if excess is not None:
             self.evaluations += 1
             self._refused[key] = (faired, None, excess)
@@ -1057,7 +1088,9 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     Parameters
     ----------
     surface : BSplineSurface
-        Validated polynomial source (``cq_fairing.make_surface``).
+        Validated source (``cq_fairing.make_surface``).  A rational one is projected in
+        homogeneous coordinates (module notes, 6.): the result is rational, not polished,
+        and ``"fair"`` gives the ``"compact"`` answer.
     tol : float
         Largest allowed true (two-sided, closest-point) deviation, ``> 0``.
     target_degree : int or (int, int), optional
@@ -1109,8 +1142,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
 
     Raises
     ------
-    InvalidToleranceError, InvalidInputError, ToleranceNotMetError,
-    UnsupportedGeometryError (rational)
+    InvalidToleranceError, InvalidInputError, ToleranceNotMetError
     """
     tol = check_tolerance(tol)
     faithful = _objective(objective) == "faithful"
@@ -1135,14 +1167,13 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
     if faithful:
         spaces, sigma = _faithful_net(fit, family, dens, tops)
         table = (("noise", sigma),)
-        faired = BSplineSurface(fit.project(*spaces), spaces[0].knots, spaces[1].knots,
-                                *degrees)
-        e = check(faired)
+        faired = fit.geometry(spaces, fit.project(*spaces))
+        e = np.inf if fit.unweighted(faired) else check(faired)
         found = (spaces, faired, e, 0.0, 1.0) if e <= tol else None
     if found is None:
         candidates = _compact_candidates(fit, family, dens, tops, tol, borders == "auto")
         found = _checked_compact(fit, candidates, polish, tol, check)
-        if objective == "fair" and found[2] <= tol:
+        if objective == "fair" and found[2] <= tol and not fit.rational:
             found = _fairest_of(fit, candidates, found, polish, tol, check)
     spaces, faired, e, lam, span_weight = found
     if e > tol and _safety > 0.9:
@@ -1284,7 +1315,7 @@ def _polished_and_checked(fit, spaces, result, polish, tol, check):
     (``lambda`` down by tens, then zero).  ``(spaces, faired, deviation, lambda, largest
     span weight)``."""
     faired, lam = result[0], 0.0
-    if polish and min(fit.degrees) >= 2:
+    if polish and min(fit.degrees) >= 2 and not fit.rational:
         (faired, _, _), lam = _polish(lambda x: fit.screened_trial(*spaces, x), fit.tol, result,
                                       steps=8)
         for staged, stage_lam, weights in reversed(_constrained_stages(fit, spaces, faired, lam)):
@@ -1294,8 +1325,7 @@ def _polished_and_checked(fit, spaces, result, polish, tol, check):
     e = check(faired, fit.probe)
     while e > tol and lam > 0.0:
         lam = lam / 10.0 if lam > 1e-8 else 0.0
-        faired = BSplineSurface(fit.project(*spaces, lam), spaces[0].knots, spaces[1].knots,
-                                *fit.degrees)
+        faired = fit.geometry(spaces, fit.project(*spaces, lam))
         e = check(faired, fit.probe)
     return spaces, faired, e, lam, 1.0
 
@@ -1433,9 +1463,8 @@ def _faithful_net(fit, family, dens, tops):
     residual = SurfaceResidual(fit.surface)
 
     def variance(spaces):
-        net = fit.project(*spaces)
-        return residual.variance(BSplineSurface(net, spaces[0].knots, spaces[1].knots,
-                                                *fit.degrees))
+        faired = fit.geometry(spaces, fit.project(*spaces))
+        return np.inf if fit.unweighted(faired) else residual.variance(faired)
 
     @cache
     def at_fraction(fraction):

@@ -13,7 +13,9 @@ Special cases handled, not refused:
 * **rational** faces are faired in homogeneous coordinates :math:`(w P, w)`; if a
   weight of the result is not positive, a non-rational least-squares approximation in
   the same spline spaces is faired instead and ``message`` says so.  The adaptive
-  method fairs polynomial surfaces only: a rational face gets status
+  method projects :math:`(w P, w)` too and refuses candidates with a weight
+  :math:`\le 0` (no polish: :mod:`cq_fairing.core.adaptive`, note 6).  Energy fairing
+  keeps the net and fairs polynomial surfaces only: a rational face gets status
   ``'skipped-rational'`` and is left unchanged;
 * **periodic** directions are faired on the unperiodized (clamped) net and the first
   and last rows are tied to their mean afterwards, so the surface stays closed (G0 at
@@ -71,7 +73,7 @@ class FaceFairReport:
         The faired face, or the original one when it was not faired.
     status : str
         ``'faired'``, ``'unchanged'`` (nothing to reduce), ``'skipped-not-bspline'``,
-        ``'skipped-rational'`` (``method="adaptive"``), ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
+        ``'skipped-rational'`` (``method="energy"``), ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
     message : str
         One line for the user (empty when there is nothing to say).
     result : SurfaceFairResult or None
@@ -189,8 +191,10 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
         energy fairing that keeps the net, each pole within ``tol`` of its place
         (``cq_fairing.fair_surface(method="energy")``), so the same-parameter distance,
         and with it the true distance, stays within ``tol``.  ``"adaptive"`` and
-        ``"energy"`` need ``tol`` (or the default), refuse ``n`` and ignore ``search``;
-        they fair polynomial faces only (rational ones: ``'skipped-rational'``).
+        ``"energy"`` need ``tol`` (or the default), refuse ``n`` and ignore ``search``.
+        ``"wavelet"`` and ``"adaptive"`` fair rational faces in homogeneous coordinates
+        (``"adaptive"`` without its polish); ``"energy"`` fairs polynomial faces only
+        (rational ones: ``'skipped-rational'``).
     objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
         ``"faithful"``: stop where the residual reaches the net's estimated noise level
@@ -254,24 +258,24 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", 
     criteria = _criteria(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
-    except UnsupportedGeometryError as exc:  # weights; energy: a degree-1 direction
-        if method not in TOLERANCE_ONLY:
+    except UnsupportedGeometryError as exc:  # energy: weights, a degree-1 direction
+        if method != "energy":
             raise
-        report = _not_for_this_method(face, info, method, tol, exc)
+        report = _not_for_energy(face, info, tol, exc)
     report.original = face
     report.seconds = time.perf_counter() - start
     return report
 
 
-def _not_for_this_method(face, info, method, tol, refusal):
-    """Report of a face the adaptive or energy method does not fair: rational faces (also
-    those ``convert=True`` made rational, a cylinder's) are ``'skipped-rational'``; any
-    other refusal of the core (energy fairing of a face with a degree-1 direction)
-    leaves the face ``'unchanged'`` with the core's reason."""
+def _not_for_energy(face, info, tol, refusal):
+    """Report of a face the energy method does not fair: rational faces (also those
+    ``convert=True`` made rational, a cylinder's) are ``'skipped-rational'``; any other
+    refusal of the core (a face with a degree-1 direction) leaves the face
+    ``'unchanged'`` with the core's reason."""
     if face_info(face).rational:
         return FaceFairReport(face, "skipped-rational", (
-            f"rational face left unchanged: method={method!r} fairs polynomial surfaces "
-            "only; use method='wavelet' for it."), info=info, tolerance=tol)
+            "rational face left unchanged: method='energy' fairs polynomial surfaces only; "
+            "use method='wavelet' or 'adaptive' for it."), info=info, tolerance=tol)
     return FaceFairReport(face, "unchanged", f"face left unchanged: {refusal}", info=info,
                           tolerance=tol)
 

@@ -121,14 +121,6 @@ def _check_adaptive_only(method, objective, borders):
                 f"{method!r}; choose method 'adaptive' or {name} {default!r}.")
 
 
-def _check_polynomial(source, method):
-    """The adaptive method fairs polynomial surfaces only (the core refuses weights)."""
-    if method == "adaptive" and source.weights is not None:
-        raise cf.UnsupportedGeometryError(
-            "this face is rational (its control points have weights) and the adaptive "
-            "method fairs polynomial faces only; choose the wavelet method for it.")
-
-
 def _require_accuracy_control():
     if importlib.util.find_spec("cq_fairing.core.accuracy") is None:
         raise cf.InvalidInputError(
@@ -257,7 +249,6 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
     keywords = _core_keywords(method, objective, tolerance, borders)
-    _check_polynomial(source, method)
     if tolerance is not None:
         _require_accuracy_control()
         box = {"window": window} if method == "wavelet" and window is not None else {}
@@ -288,7 +279,8 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     method : {"wavelet", "energy", "adaptive"}
         ``wavelet``: quasi-uniform targets (ARWFA/DWFA); ``energy``: thin-plate fairing that
         keeps the net; ``adaptive``: exact L2 projection onto targets whose knots follow
-        the error, usually far fewer poles at the same tolerance (polynomial faces only).
+        the error, usually far fewer poles at the same tolerance (rational faces in
+        homogeneous coordinates, without the energy polish).
         ``energy`` and ``adaptive`` need ``tolerance``.
     boundary : {"free", "corners", "edges"}
         ``free``: L2-best surface, the boundary may move within the tolerance;
@@ -315,8 +307,8 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     Raises
     ------
     cq_fairing.FairingError
-        Any user error (non-B-spline face, rational face with ``adaptive`` or boundary
-        ``edges``, bad tolerance or target, target mode with ``energy``/``adaptive``,
+        Any user error (non-B-spline face, rational face with boundary ``edges``, bad
+        tolerance or target, target mode with ``energy``/``adaptive``,
         unmet tolerance, a trim that cannot be rebuilt).
     """
     start = time.perf_counter()

@@ -21,8 +21,8 @@ from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_s
 from cq_fairing.core.energy import fair_surface_energy
 from cq_fairing.core.gram import gram_matrix
 from cq_fairing.core.measures import deviation
-from cq_fairing.errors import (InvalidInputError, InvalidToleranceError, ToleranceNotMetError,
-                               UnsupportedGeometryError)
+from cq_fairing.errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
+from tests.reliability.independent import distance_to_surface, surface_points
 
 
 def _trapezoid(y, x):
@@ -481,11 +481,82 @@ def test_a_refusal_names_the_wavelet_targets_for_a_source_with_multiple_knots():
     assert "wavelet" not in str(refused.value)
 
 
-def test_rational_surface_is_refused():
-    poles = np.random.default_rng(1).normal(size=(6, 6, 3))
-    surface = cf.make_surface(poles, weights=np.full((6, 6), 2.0))
-    with pytest.raises(UnsupportedGeometryError):
-        fair_surface_adaptive(surface, 0.1)
+def test_constant_weights_give_the_polynomial_net():
+    """Homogeneous coordinates with one weight w everywhere are w times the poles: the
+    projections, the search and the answer are the polynomial ones (the polish, which
+    rational sources skip, is off for both)."""
+    poles = np.random.default_rng(1).normal(size=(12, 10, 3))
+    polynomial = fair_surface_adaptive(cf.make_surface(poles), 0.3, polish=False)
+    rational = fair_surface_adaptive(cf.make_surface(poles, weights=np.full((12, 10), 2.0)),
+                                     0.3, polish=False)
+    assert rational.surface.is_rational and np.allclose(rational.surface.weights, 2.0)
+    assert rational.surface.shape == polynomial.surface.shape
+    np.testing.assert_allclose(rational.surface.u_knots, polynomial.surface.u_knots)
+    np.testing.assert_allclose(rational.surface.poles, polynomial.surface.poles, atol=1e-12)
+    assert rational.max_deviation == pytest.approx(polynomial.max_deviation, rel=1e-9)
+
+
+def _fillet(sections=40, angle=0.5 * np.pi, seed=3):
+    """A swept fillet: along u a wavy spine with noisy radii (cubic, ``sections`` pole
+    rows), across v a circular arc of ``angle`` as one rational quadratic span (poles
+    c + r e_0, c + r / cos(angle / 2) e_mid, c + r e_1, weights 1, cos(angle / 2), 1).
+    Every row has the same weights and the arc's directions, so every section of the
+    surface is an exact circular arc in a plane x = const."""
+    rng = np.random.default_rng(seed)
+    x = np.linspace(0.0, 60.0, sections)
+    centre = np.stack([x, 2.0 * np.sin(x / 15.0), 0.5 * np.cos(x / 9.0)], axis=1)
+    radius = 4.0 + 0.5 * np.sin(x / 20.0) + rng.normal(scale=0.01, size=sections)
+    half = 0.5 * angle
+    directions = np.array([[0.0, 1.0, 0.0],
+                           [0.0, np.cos(half) / np.cos(half), np.sin(half) / np.cos(half)],
+                           [0.0, np.cos(angle), np.sin(angle)]])
+    poles = centre[:, None, :] + radius[:, None, None] * directions[None, :, :]
+    weights = np.tile([1.0, np.cos(half), 1.0], (sections, 1))
+    return cf.make_surface(poles, degree=(3, 2), weights=weights)
+
+
+def _independent_two_sided(a, b, n=60):
+    """Two-sided distance of two surfaces on one domain at n x n samples each, measured
+    with the reliability suite's independent evaluation and search (scipy's BSpline, a
+    KD-tree start, golden-section refinement): an upper bound at those samples."""
+    def on(s):
+        return lambda u, v: surface_points(s.poles, s.u_knots, s.v_knots,
+                                           (s.u_degree, s.v_degree), s.weights, u, v)
+
+    u, v = (g.ravel() for g in np.meshgrid(np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, n),
+                                           indexing="ij"))
+    there = distance_to_surface(on(a)(u, v), on(b), b.domain, (u, v))
+    back = distance_to_surface(on(b)(u, v), on(a), a.domain, (u, v))
+    return float(max(there.max(), back.max()))
+
+
+def test_rational_fillet_keeps_its_circular_sections():
+    """The projection acts on (w P, w): along the arc the target is the source's own
+    rational quadratic span, so the answer keeps three poles there and every section is
+    still an exact circular arc, while the sweep is reduced within tol."""
+    fillet, tol = _fillet(), 0.05
+    result = fair_surface_adaptive(fillet, tol)
+    faired = result.surface
+    assert faired.is_rational and np.all(faired.weights > 0)
+    assert faired.shape[1] == 3 and faired.v_degree == 2
+    assert faired.shape[0] < fillet.shape[0] / 3
+    assert result.max_deviation <= tol
+    assert _independent_two_sided(fillet, faired) <= tol
+    for u in np.linspace(0.0, 1.0, 7):
+        arc = faired.evaluate_grid(np.array([u]), np.linspace(0.0, 1.0, 9))[0]
+        assert np.ptp(arc[:, 0]) <= 1e-9                      # in a plane x = const
+        a, b, c = arc[0, 1:], arc[4, 1:], arc[-1, 1:]         # circle through 3 points
+        centre = _circumcentre(a, b, c)
+        radii = np.linalg.norm(arc[:, 1:] - centre, axis=1)
+        assert np.ptp(radii) <= 1e-9 * radii.mean()
+
+
+def _circumcentre(a, b, c):
+    """Centre of the circle through three points of the plane."""
+    d = 2.0 * (a[0] * (b[1] - c[1]) + b[0] * (c[1] - a[1]) + c[0] * (a[1] - b[1]))
+    sq = [p @ p for p in (a, b, c)]
+    return np.array([sq[0] * (b[1] - c[1]) + sq[1] * (c[1] - a[1]) + sq[2] * (a[1] - b[1]),
+                     sq[0] * (c[0] - b[0]) + sq[1] * (a[0] - c[0]) + sq[2] * (b[0] - a[0])]) / d
 
 
 def test_a_coarse_search_grid_never_loosens_the_final_check(blade):

@@ -6,7 +6,7 @@ import pytest
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
 
 from cq_fairing.core.examples import blade_surface
-from cq_fairing.errors import InvalidInputError
+from cq_fairing.errors import InvalidInputError, ToleranceNotMetError
 from cq_fairing.occ import fair_face, fair_shape, list_faces
 from cq_fairing.occ.builders import surface_to_natural_face
 from tests.occ.helpers import faces_of, global_distance, occ_points, uv_box_grid
@@ -52,14 +52,36 @@ def test_faithful_lands_closer_to_the_truth_than_compact(blade):
     assert rms["faithful"] < 0.8 * rms["compact"], rms
 
 
-def test_rational_face_is_skipped_in_one_line():
+def test_rational_impeller_fillets_fair_in_homogeneous_coordinates(real):
+    """Rational fillets of the impeller (N x 3 poles, degree 3 x 2, a circular arc
+    across): within tol by OCCT's own projection, still rational with positive weights
+    and three poles across (the arc's span is kept), the sweep reduced to no more poles
+    than the wavelet method keeps."""
+    shape = real("impeller.igs")
+    fillets = [face for face, info in zip(faces_of(shape), list_faces(shape))
+               if info.rational and info.n_poles_v == 3 and info.n_poles_u >= 40][:2]
+    assert len(fillets) == 2
+    for face in fillets:
+        report = fair_face(face, tol=0.01, method="adaptive", details=False)
+        check_within(report, face, 0.01)
+        faired = report.surface
+        assert faired.is_rational and faired.weights.min() > 0
+        assert faired.shape[1] == 3 and faired.shape[0] <= report.poles_before[0] / 4
+        wavelet = fair_face(face, tol=0.01, details=False)
+        assert np.prod(report.poles_after) <= np.prod(wavelet.poles_after)
+
+
+def test_a_rational_face_with_multiple_knots_is_refused_in_one_line():
+    """A cylinder made NURBS (a rational circle of 7 poles on 3 spans, knots doubled):
+    the adaptive family's simple knots cannot hold its kinks, and the refusal says to
+    use the wavelet method."""
     cylinder = BRepPrimAPI_MakeCylinder(5.0, 10.0).Shape()
     lateral = next(face for face, info in zip(faces_of(cylinder), list_faces(cylinder))
-                   if info.surface_type == "Cylinder")  # NURBS-converted: rational
-    report = fair_face(lateral, tol=0.01, method="adaptive", convert=True)
-    assert report.status == "skipped-rational"
-    assert "\n" not in report.message and "method='wavelet'" in report.message
-    assert report.face.IsSame(report.original)
+                   if info.surface_type == "Cylinder")
+    with pytest.raises(ToleranceNotMetError) as refused:
+        fair_face(lateral, tol=0.01, method="adaptive", convert=True)
+    assert "\n" not in str(refused.value) and "multiple knots" in str(refused.value)
+    assert "method 'wavelet'" in str(refused.value)
 
 
 def test_adaptive_option_errors():

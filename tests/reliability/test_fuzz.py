@@ -276,7 +276,8 @@ def test_adaptive_curve_meets_tol_when_it_succeeds(data, case):
 @given(data=st.data(), case=surfaces())
 def test_adaptive_surface_meets_tol_when_it_succeeds(data, case):
     """The adaptive method with each border choice under property 3 (rational nets are
-    refused with a typed error)."""
+    projected in homogeneous coordinates, and their answers must keep positive
+    weights)."""
     poles, u_knots, v_knots, degree, weights = case
     size = _size(poles)
     tol = data.draw(tolerances(size), label="tol")
@@ -288,7 +289,10 @@ def test_adaptive_surface_meets_tol_when_it_succeeds(data, case):
     if result is None:
         return
     _check_finite(result.surface)
-    event(f"met ({dict(result.table)['borders']} borders)")
+    if weights is not None:
+        assert np.all(result.surface.weights > 0)
+    event(f"met ({dict(result.table)['borders']} borders, "
+          f"{'rational' if weights is not None else 'polynomial'})")
     _assert_within(result, result.surface, _surface_deviation, tol, size)
 
 
