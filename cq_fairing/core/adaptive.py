@@ -127,6 +127,7 @@ WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
 SCREEN_STRIDE = 4    # a verdict-only trial looks at every 4th search sample first ...
 SCREEN_SAMPLES = 16  # ... and the true distance at its 16 largest bounds
+TOP_GROWTH = 2       # a failing top below the source's degree doubles its spans this often
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -1403,14 +1404,14 @@ def _degree_hint(fit):
 def _compact_net(fit, family, dens, tops, tol):
     """Smallest net within tol from three starts: ``(spaces, trial)``.  Two starts on the
     same net are reduced once (the IEA face's axis starts both stop at 17 x 31 poles)."""
+    full, top_result = _top(fit, family, tops)
     steps = max(tops)
-    full = family(1.0)
-    top_result = fit.trial(*full)
     if top_result[2] > fit.tol:
+        spans = " x ".join(str(s.n_spans) for s in full)
         raise ToleranceNotMetError(
-            f"no adaptive target within tol={tol:g}: simple knots on the source's "
-            f"breakpoints at degrees {fit.degrees} deviate by {top_result[2]:.4g}; raise "
-            f"the tolerance{_degree_hint(fit)}"
+            f"no adaptive target within tol={tol:g}: the finest, simple knots on {spans} "
+            f"spans following the source's breakpoints at degrees {fit.degrees}, deviates "
+            f"by {top_result[2]:.4g}; raise the tolerance{_degree_hint(fit)}"
             f"{_multiple_knots_hint(fit.surface.u_space, fit.surface.v_space)}.",
             tolerance=tol, best_deviation=top_result[2])
     starts = [_diagonal_start(fit, family, steps, top_result),
@@ -1425,6 +1426,28 @@ def _compact_net(fit, family, dens, tops, tol):
         if best is None or _net_size(spaces) < _net_size(best[0]):
             best = (spaces, result)
     return best
+
+
+def _top(fit, family, tops):
+    """The top of the knot family, ``family(1.0)``, and its trial.
+
+    At the source's degree the top is the source's own breakpoints.  A lower target
+    degree may need more spans than the source has (impeller faces of degree 5 on 8 x 7
+    spans: 0.0101 at degree 3 on those breakpoints, tol 0.01); where the top fails, each
+    direction whose target degree is below the source's gets twice its spans, up to
+    ``TOP_GROWTH`` doublings.  ``tops`` is changed in place, and ``family`` reads it."""
+    source = (fit.surface.u_degree, fit.surface.v_degree)
+    lower = [axis for axis in (0, 1) if fit.degrees[axis] < source[axis]]
+    full = family(1.0)
+    result = fit.trial(*full)
+    for _ in range(TOP_GROWTH if lower else 0):
+        if result[2] <= fit.tol:
+            break
+        for axis in lower:
+            tops[axis] *= 2
+        full = family(1.0)
+        result = fit.trial(*full)
+    return full, result
 
 
 def _multiple_knots_hint(*spaces):

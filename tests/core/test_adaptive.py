@@ -575,9 +575,10 @@ def test_a_search_too_coarse_to_converge_is_refused_not_returned(blade):
     rejects; after each search the product grows such a net by a span, tightens the
     search if that fails too, and either returns a net that ``deviation`` confirms or
     says so instead of returning one.  Which tolerances end where follows the search's
-    path: at degree 3, 0.045-0.06 end with a confirmed net; at degree 2, 0.03 and 0.05
-    are refused (at 0.03 the tightened search finds nothing below its working tolerance,
-    and the refusal is still the denser check's, not a deviation below tol)."""
+    path: at degree 3, 0.045-0.06 end with a confirmed net; at degree 2, 0.05 is refused
+    (the refusal is still the denser check's, not a deviation below tol) and 0.03 ends
+    with a confirmed net: the tightened search's top, on the source's breakpoints, fails
+    at degree 2 and doubles its spans (before that, 0.03 was refused too)."""
     outcomes = {}
     for degree, tol in ((3, 0.045), (3, 0.05), (3, 0.06), (2, 0.03), (2, 0.05)):
         try:
@@ -590,7 +591,7 @@ def test_a_search_too_coarse_to_converge_is_refused_not_returned(blade):
             assert deviation(blade, result.surface).max <= tol
             outcomes[degree, tol] = "returned"
     assert outcomes == {(3, 0.045): "returned", (3, 0.05): "returned", (3, 0.06): "returned",
-                        (2, 0.03): "refused", (2, 0.05): "refused"}
+                        (2, 0.03): "returned", (2, 0.05): "refused"}
 
 
 @pytest.mark.parametrize("borders", ["free", "pinned"])
@@ -814,3 +815,22 @@ def test_a_curve_refused_by_the_denser_check_grows_until_it_passes():
         counts.append(result.curve.n_poles)
     assert counts == sorted(counts, reverse=True)
     assert counts[2] < cf.fair_curve(poles, tol=0.05, target_degree=1).curve.n_poles
+
+
+def test_a_lower_target_degree_may_use_more_spans_than_the_source():
+    """A quintic Bezier patch (one span each way) faired at the default cubic degree:
+    one cubic span cannot hold it within 0.01, so the family's top doubles its spans
+    where the degree was lowered (before: refused, 'simple knots on the source's
+    breakpoints'); the answer is within tol by the independent measure."""
+    u = np.linspace(0.0, 1.0, 6)
+    grid = np.stack(np.meshgrid(u, u, indexing="ij"), axis=-1)
+    height = np.sin(5 * grid[..., 0]) * np.cos(4 * grid[..., 1])
+    quintic = cf.make_surface(np.dstack([10 * grid, height[..., None]]), degree=(5, 5))
+    result = fair_surface_adaptive(quintic, 0.01)
+    faired = result.surface
+    assert (faired.u_degree, faired.v_degree) == (3, 3)
+    assert faired.u_space.n_spans + faired.v_space.n_spans > 2
+    assert result.max_deviation <= 0.01
+    assert _independent_two_sided(quintic, faired) <= 0.01
+    with pytest.raises(ToleranceNotMetError, match=r"the finest, simple knots on 4 x 4 spans"):
+        fair_surface_adaptive(quintic, 1e-6)
