@@ -92,7 +92,7 @@ import scipy.sparse.linalg as spla
 from scipy.linalg import solveh_banded
 
 from ..errors import InvalidInputError, ToleranceNotMetError
-from .accuracy import check_tolerance
+from .accuracy import check_tolerance, check_window
 from .banded import BandedSPD
 from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
@@ -100,7 +100,7 @@ from .fidelity import (NOISE_FRACTION, CurveResidual, SurfaceResidual, noise_lev
                        noise_limit)
 from .geometry import BSplineCurve, BSplineSurface
 from .gram import gram_matrix
-from .measures import CurveProbe, SurfaceProbe, sample_parameters
+from .measures import CurveProbe, SurfaceProbe, box_region, sample_parameters
 from .spaces import SplineSpace
 from .weighted import SpanWeightedProjection
 
@@ -645,19 +645,17 @@ class _SurfaceFit:
     """Exact tensor projections of one source surface, with their deviation on a grid."""
 
     def __init__(self, surface, tol, degrees, per_span, max_samples, borders="free",
-                 region=None):
+                 region=None, edges=None):
         self.surface, self.tol, self.degrees = surface, tol, degrees
         self.rational = surface.is_rational
         # what the projections act on: the poles, or (w P, w) for a rational source
         self.coefficients = surface.homogeneous() if self.rational else surface.poles
         self.region = region
         self.pinned = borders == "pinned"
-        u = sample_parameters(surface.u_space, per_span=per_span)
-        v = sample_parameters(surface.v_space, per_span=per_span)
+        u, v = _grid((surface,), per_span, edges)
         while u.size * v.size > max_samples and per_span > 1:
             per_span -= 1
-            u = sample_parameters(surface.u_space, per_span=per_span)
-            v = sample_parameters(surface.v_space, per_span=per_span)
+            u, v = _grid((surface,), per_span, edges)
         self._uv = (u, v)
         self._span_starts = (np.searchsorted(u, surface.u_space.breakpoints[:-1]),
                              np.searchsorted(v, surface.v_space.breakpoints[:-1]))
@@ -1072,7 +1070,7 @@ def _lowered(fit, spaces, result, axis, n, tol, rounds):
 
 def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compact", polish=True,
                           borders="auto", per_span=8, max_samples=400_000, region=None,
-                          _safety=SAFETY):
+                          window=None, _safety=SAFETY):
     r"""Fair ``surface`` into adaptive (non-uniform) u and v targets within ``tol``.
 
     ``"compact"``: the knot families start from the source's breakpoint densities.
@@ -1131,6 +1129,13 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         Search, knot placement and the final check then see only those samples: the
         net follows the surface where the face is, not under the trimmed-away part.
         Default: the whole parameter domain.
+    window : (u0, u1, v0, v1), optional
+        A parameter box (a trimmed face's UV box): the deviation counts inside it only
+        (and inside ``region``), and its four bounds are sample lines of every grid, so
+        the border of a face trimmed to a box inside the surface's domain is measured
+        where the largest errors of a projection sit (a linkrods face on v in [0.122,
+        0.878] trimmed at 0.125 and 0.875: 0.0067 measured on the samples inside,
+        0.0139 on the trim's border, tol 0.01).
 
     Returns
     -------
@@ -1152,10 +1157,11 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         raise InvalidInputError(
             f"region must be a callable region(u, v) -> boolean array or None, got "
             f"{type(region).__name__}; pass a function of the two sample vectors.")
+    counted, edges = _restriction(region, check_window(window, surface))
     tdu, tdv = target_degree if isinstance(target_degree, (tuple, list)) else (target_degree,) * 2
     degrees = (_degree(tdu, surface.u_degree), _degree(tdv, surface.v_degree))
     fit = _SurfaceFit(surface, _safety * tol, degrees, per_span, max_samples,
-                      "pinned" if borders == "pinned" else "free", region)
+                      "pinned" if borders == "pinned" else "free", counted, edges)
     dens = [_source_density(s) for s in (surface.u_space, surface.v_space)]
     tops = [surface.u_space.n_spans, surface.v_space.n_spans]
 
@@ -1163,7 +1169,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         return [equidistributed_space(b, r, max(1, int(np.ceil(t * top - 1e-9))), p)
                 for (b, r), top, p in zip(dens, tops, degrees)]
 
-    check = _final_check(surface, 2 * per_span, 4 * max_samples, region)
+    check = _final_check(surface, 2 * per_span, 4 * max_samples, counted, edges)
     table, found = (), None
     if faithful:
         spaces, sigma = _faithful_net(fit, family, dens, tops)
@@ -1183,7 +1189,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
                                          objective=objective, polish=polish,
                                          borders=borders, per_span=per_span,
                                          max_samples=max_samples, region=region,
-                                         _safety=_safety * tol / e - 0.005)
+                                         window=window, _safety=_safety * tol / e - 0.005)
         except ToleranceNotMetError:
             pass  # nothing within the tighter working tolerance: this net's refusal says why
     if e > tol:
@@ -1550,7 +1556,7 @@ def _axis_start(fit, full, top_result, dens, tops, degrees, order):
     return spaces, result
 
 
-def _final_check(surface, per_span, max_samples, region=None):
+def _final_check(surface, per_span, max_samples, region=None, edges=None):
     """``check(faired)``: the exact two-sided maximum at ``per_span`` samples per span of
     the merged breakpoints of source and result, halved while the source's grid would
     exceed ``max_samples`` but never below the 8 per span of
@@ -1564,14 +1570,34 @@ def _final_check(surface, per_span, max_samples, region=None):
     per_span = max(per_span, FINAL_MIN_PER_SPAN)
 
     def check(faired, search=None):
-        uv = (sample_parameters(surface.u_space, faired.u_space, per_span=per_span),
-              sample_parameters(surface.v_space, faired.v_space, per_span=per_span))
+        uv = _grid((surface, faired), per_span, edges)
         probe = SurfaceProbe(surface, uv=uv, hold_grid=False, region=region)
         if search is not None:
             probe.adopt_feet(search)
         return probe.max_deviation(faired)[0]
 
     return check
+
+
+def _grid(surfaces, per_span, edges=None):
+    """Sample axes: ``per_span`` per span of the merged breakpoints of ``surfaces``, and
+    the parameters ``edges`` ``(u values, v values)`` if given."""
+    u = sample_parameters(*(s.u_space for s in surfaces), per_span=per_span)
+    v = sample_parameters(*(s.v_space for s in surfaces), per_span=per_span)
+    if edges is None:
+        return u, v
+    return np.union1d(u, edges[0]), np.union1d(v, edges[1])
+
+
+def _restriction(region, box):
+    """``(region, edges)`` of a ``region`` and a checked ``window`` box: the samples that
+    count (in the region and in the box) and the box's bounds as sample lines."""
+    if box is None:
+        return region, None
+    u0, u1, v0, v1 = box
+    inside = box_region(box)
+    counted = inside if region is None else (lambda u, v: region(u, v) & inside(u, v))
+    return counted, ((u0, u1), (v0, v1))
 
 
 def _step(source, target):

@@ -608,7 +608,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
         With ``tol``: measure the deviation only in this parameter box (a trimmed face's
         UV box), both ways; default the whole domain
         (:func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`; for
-        ``method="adaptive"`` the box is the ``region`` of
+        ``method="adaptive"`` the ``window`` of
         :func:`~cq_fairing.core.adaptive.fair_surface_adaptive`).  Refused with ``n`` and
         with ``method="energy"``.
 
@@ -636,8 +636,7 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 
         return fair_surface_adaptive(surface, tol,
                                      target_degree=split_pair(target_degree, "target_degree"),
-                                     objective=objective, borders=borders,
-                                     region=_window_region(window, surface))
+                                     objective=objective, borders=borders, window=window)
     if (n is None) == (tol is None):
         raise InvalidInputError(
             "give exactly one of n ((n_u, n_v) target scales) and tol (tolerance); "
@@ -657,15 +656,6 @@ def fair_surface(poles, n=None, *, tol=None, u_knots=None, v_knots=None, degree=
 
 
 METHODS = ("wavelet", "adaptive", "energy")
-
-
-def _window_region(window, surface):
-    """The adaptive search's ``region`` for a checked ``window``, or ``None``."""
-    from .accuracy import check_window
-    from .measures import box_region
-
-    box = check_window(window, surface)
-    return None if box is None else box_region(box)
 
 
 def _tolerance_method(method, objective, n, tol, borders="auto", window=None):

@@ -44,6 +44,7 @@ from ..core.geometry import BSplineSurface
 from ..core.spaces import SplineSpace
 from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
                       ToleranceNotMetError, UnsupportedGeometryError)
+from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, face_uv_grid, reference_samples
 from .search import max_scales, search_scales
@@ -358,10 +359,11 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
     measured, refusals = [], []
     check = None
     region = face_region(face) if info.trimmed else None
+    window = _uv_window(face, source) if info.trimmed else None
     for criterion, goal in criteria:
         try:
             target, faired, result = _choose(source, goal, n, degree, sampler, finish,
-                                             criterion, region)
+                                             criterion, region, window)
         except ToleranceNotMetError as exc:
             measured.append(exc.best_deviation)
             refusals.append((goal, str(exc)))
@@ -436,13 +438,15 @@ def _target_degree(surface, target_degree):
     return int(pair[0]), int(pair[1])
 
 
-def _choose(source, tol, n, degree, sampler, finish, criterion, region=None):
+def _choose(source, tol, n, degree, sampler, finish, criterion, region=None, window=None):
     """Target scales, the faired (finished) surface and the core result if computed.
 
     For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
     pair of non-uniform spaces the core chose, measured only on the face (``region``,
-    :func:`~cq_fairing.occ.trims.face_region` of a trimmed face); energy fairing
-    (``criterion`` ``"energy"``) keeps the source's spaces and has no target (``None``).
+    :func:`~cq_fairing.occ.trims.face_region` of a trimmed face, and its UV box
+    ``window``, whose bounds are sample lines); the core's uniform search (``"core"``)
+    measures in ``window``; energy fairing (``criterion`` ``"energy"``) keeps the
+    source's spaces and has no target (``None``).
     """
     if criterion == "energy":
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
@@ -453,14 +457,15 @@ def _choose(source, tol, n, degree, sampler, finish, criterion, region=None):
     if isinstance(criterion, AdaptiveTarget):
         result = fair_surface_adaptive(source, tol, target_degree=degree,
                                        objective=criterion.objective,
-                                       borders=criterion.borders, region=region)
+                                       borders=criterion.borders, region=region,
+                                       window=window)
         spaces = (result.surface.u_space, result.surface.v_space)
         return spaces, finish(result.surface), result
     if criterion == "core":
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,
                               degree=(source.u_degree, source.v_degree),
-                              weights=source.weights, target_degree=degree)
+                              weights=source.weights, target_degree=degree, window=window)
         return result.n, finish(result.surface), result
     if n is not None:
         pair = (n, n) if np.ndim(n) == 0 else tuple(n)
@@ -471,6 +476,17 @@ def _choose(source, tol, n, degree, sampler, finish, criterion, region=None):
     measure = sampler.normal if criterion == "normal" else sampler.parametric
     target, faired, _, _ = search_scales(source, tol, degree, measure, finish)
     return target, faired, None
+
+
+def _uv_window(face, surface):
+    """The face's UV box inside the surface's domain as ``(u0, u1, v0, v1)``; ``None`` where
+    that is the whole domain or empty."""
+    (u0, u1), (v0, v1) = face_uv_box(face)
+    (a, b), (c, d) = surface.domain
+    box = (max(u0, a), min(u1, b), max(v0, c), min(v1, d))
+    if box[0] >= box[1] or box[2] >= box[3] or box == (a, b, c, d):
+        return None
+    return box
 
 
 def _core_fair(source, target, degree):
