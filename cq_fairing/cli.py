@@ -405,7 +405,8 @@ def _build_report(args, result, tol, seconds, kept=None, parts=None):
             poles_before=face.poles_before, poles_after=face.poles_after,
             max_deviation=face.max_deviation, tolerance=face.tolerance,
             fairness_before=before, fairness_after=after, seconds=face.seconds,
-            deviation=stats, part=parts[index] if parts else None))
+            deviation=stats, part=parts[index] if parts else None,
+            rational=face.info.rational if face.info and face.info.is_bspline else None))
     return build_report(entries, input_path=args.input, output_path=args.output,
                         tolerance=tol, method=args.method,
                         objective=_objective(args) if args.method == "adaptive" else None,

@@ -223,7 +223,7 @@ def _clean(value):
 def face_entry(index, *, surface_type=None, status, message="", poles_before=None,
                poles_after=None, max_deviation=None, tolerance=None, fairness_before=None,
                fairness_after=None, seconds=None, deviation=None, degree_before=None,
-               degree_after=None, part=None):
+               degree_after=None, part=None, rational=None):
     """One face of a report (a dict; ``None`` for what does not apply).
 
     Parameters
@@ -237,13 +237,16 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
     poles_before, poles_after : (int, int)
         Control net sizes.
     max_deviation : float
-        Largest true distance (model units) from the original to the faired face.
+        Largest true distance (model units) between the original and the faired face,
+        both ways (OCCT's check).
     fairness_before, fairness_after : dict
         See :func:`cq_fairing.viz.fairness_measures`.
     deviation : dict, optional
         ``max``, ``mean``, ``rms`` of the dense deviation sample.
     part : str, optional
         In an assembly, the placement the face is on (``"rotor/blade_1"``).
+    rational : bool, optional
+        Whether the face's surface (B-spline faces) has weights.
     """
     within = None
     if max_deviation is not None and tolerance is not None:
@@ -255,6 +258,7 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
         "max_deviation": max_deviation, "tolerance": tolerance, "within_tolerance": within,
         "deviation": deviation, "fairness_before": fairness_before,
         "fairness_after": fairness_after, "seconds": seconds, "part": part,
+        "rational": rational,
     })
 
 

@@ -245,3 +245,21 @@ def test_help_documents_exit_codes():
     assert proc.returncode == 0
     for code in ("0 ", "1 ", "2 ", "3 ", "4 ", "5 ", "130"):
         assert code in proc.stdout
+
+
+def test_adaptive_fairs_the_rational_faces_of_linkrods(tmp_path):
+    """--method adaptive used to skip every rational face ('skipped-rational'); linkrods'
+    B-spline faces are rational but two. All 18 are now faired within tol (OCCT's
+    two-sided check), the report says which are rational, and the poles drop."""
+    proc = run("fair", REAL_DATA / "linkrods.step", "-o", "out.step", "--tol", "0.01",
+               "--method", "adaptive", "--report", "r.json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads((tmp_path / "r.json").read_text())
+    bspline = [f for f in report["faces"] if f["surface_type"] == "BSpline"]
+    assert len(bspline) == 18 and sum(bool(f["rational"]) for f in bspline) == 16
+    assert all(f["status"] in ("ok", "unchanged") for f in bspline)
+    assert all(f["max_deviation"] <= 0.01 for f in bspline if f["status"] == "ok")
+    faired_rational = [f for f in bspline if f["rational"] and f["status"] == "ok"]
+    assert len(faired_rational) >= 14
+    assert all(f["rational"] is None for f in report["faces"] if f["surface_type"] != "BSpline")
+    assert report["summary"]["poles_after"] < report["summary"]["poles_before"] / 10
