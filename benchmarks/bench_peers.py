@@ -8,8 +8,9 @@ Cases (same inputs and tolerance for every method):
   noise-free truth (``cq_fairing.core.examples.seed_curve``).
 * ``blade 50x80`` / ``blade 400x400``: noisy blade-like surface on a 50 mm span
   (``blade_surface(span=50, chord=15, noise=0.01)``), tol 0.02 and 0.05 mm, truth kept.
-* real faces from ``../shared/data/real`` (IEA 15 MW blade, terrain, impeller blades,
-  testtoler strips) with ``tol = rel * bounding-box diagonal``: the point fitters get the
+* real faces from ``../shared/data/real`` (IEA 15 MW blade, terrain, an impeller blade
+  and a rational impeller fillet, testtoler strips) with ``tol = rel * bounding-box
+  diagonal``: the point fitters get the
   face sampled on a grid, our methods fair the face's net (``face_to_surface``).
 
 Per method: control points, max two-sided closest-point deviation from the input geometry
@@ -84,6 +85,7 @@ def cases(quick, big):
     iea = iea if iea.exists() else DATA / "IEA_15MW_CFD.stp"
     out += [face_case("IEA blade main face", iea, *_longest(iea), 1e-4),
             face_case("impeller blade face", DATA / "impeller.igs", *_impeller_blade(), 1e-4),
+            face_case("impeller fillet", DATA / "impeller.igs", *_impeller_fillet(), 1e-4),
             face_case("testtoler strip", DATA / "testtoler.brep", *_longest(DATA / "testtoler.brep"), 1e-4)]
     if big:
         out += [blade_case((400, 400), 0.05),
@@ -104,6 +106,22 @@ def _impeller_blade():
         if s.poles.shape[:2] == (17, 13) and not s.is_rational:
             return (i,)
     raise LookupError("no 17x13 blade face in impeller.igs")
+
+
+def _impeller_fillet():
+    """First 50 x 3 rational impeller face of degree 3 x 2: a fillet whose section is a
+    circular arc (one rational quadratic span), its u knots strongly graded."""
+    from cq_fairing.occ import face_to_surface, read_shape
+    from cq_fairing.occ.convert import indexed_faces
+
+    for i, face in enumerate(indexed_faces(read_shape(DATA / "impeller.igs"))):
+        try:
+            s, _ = face_to_surface(face)
+        except Exception:  # noqa: BLE001 - non-B-spline faces are skipped by design
+            continue
+        if s.poles.shape[:2] == (50, 3) and s.is_rational:
+            return (i,)
+    raise LookupError("no 50x3 rational fillet in impeller.igs")
 
 
 def _longest(path):

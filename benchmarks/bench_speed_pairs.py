@@ -33,6 +33,7 @@ PAIRS = [
     ("blade 50x80", 0.05, "OCCT PointsToBSpline p3", ("ours wavelet faithful p7",)),
     ("IEA blade", None, "OCCT PointsToBSpline", ("ours wavelet adaptive",)),
     ("impeller blade", None, "OCCT PointsToBSpline p3", ("ours wavelet adaptive",)),
+    ("impeller fillet", None, "OCCT PointsToBSpline p3", ("ours wavelet adaptive",)),
     ("testtoler strip", None, "OCCT PointsToBSpline p3", ("ours wavelet adaptive",)),
     ("blade 400x400", None, "OCCT PointsToBSpline p3", ("ours wavelet faithful p5",)),
     ("terrain", None, "OCCT PointsToBSpline p3", ("ours wavelet faithful p5",)),
