@@ -148,14 +148,25 @@ def document_step_bytes(document):
     FileFormatError
         The transfer or the writing failed.
     """
-    import io
-
     writer = STEPCAFControl_Writer()
     for set_mode in (writer.SetNameMode, writer.SetColorMode, writer.SetLayerMode):
         set_mode(True)
     writer.SetPropsMode(False)
     if not writer.Transfer(document, STEPControl_AsIs):
         raise FileFormatError("STEP transfer of the model's document failed.")
+    return written_step(writer)
+
+
+def written_step(writer):
+    """What an OCCT STEP ``writer`` holding its transfer writes, as bytes.
+
+    Raises
+    ------
+    FileFormatError
+        The writing failed.
+    """
+    import io
+
     stream = io.BytesIO()
     status = writer.WriteStream(stream)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:

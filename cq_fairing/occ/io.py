@@ -39,7 +39,7 @@ from OCP.TopoDS import TopoDS_Shape
 from ..errors import FileFormatError, OutputPathError
 from ..report import atomic_output, folder_error
 from .convert import as_shape, indexed_faces
-from .document import Model, document_step_bytes, read_step_model
+from .document import Model, document_step_bytes, read_step_model, written_step
 
 __all__ = ["read_shape", "read_model", "write_shape", "write_model", "step_length_unit",
            "quiet_occt", "READ_SUFFIXES", "WRITE_SUFFIXES"]
@@ -357,11 +357,7 @@ def _step_bytes(shape):
     status = writer.Transfer(shape, STEPControl_AsIs)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(f"STEP transfer of the shape failed (status {status.name}).")
-    stream = io.BytesIO()
-    status = writer.WriteStream(stream)
-    if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(f"writing the STEP data failed (status {status.name}).")
-    return stream.getvalue()
+    return written_step(writer)
 
 
 def _brep_bytes(shape):
