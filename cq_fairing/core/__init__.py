@@ -13,6 +13,7 @@ taylor         spline pieces in Taylor form: fast evaluation at scattered parame
 fairing        fair_curve / fair_surface and their results
 interpolation  data points to control points
 measures       deviation (true closest-point distance) and fairness measures
+regions        where a trimmed face lies on a parameter grid (trim polygon, exact near it)
 accuracy       accuracy control: the fewest poles within a tolerance
 adaptive       adaptive (non-uniform) targets, energy polish and constrained stages
 weighted       span-weighted L2 projections
