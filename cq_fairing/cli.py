@@ -4,7 +4,7 @@ Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
 [--method wavelet|adaptive|energy] [--objective compact|faithful|fair]
-[--borders auto|free|pinned] [--jobs N]
+[--borders auto|free|pinned] [--target-degree P [Q]] [--jobs N]
 [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
@@ -41,6 +41,7 @@ then renamed into place; the input file is never modified.
 
 import argparse
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -77,6 +78,7 @@ def _integer_at_least(minimum, what):
 
 
 _jobs = _integer_at_least(1, "a number of worker processes")
+_degree = _integer_at_least(1, "a degree")
 _point_count = _integer_at_least(2, "a number of points")
 
 
@@ -157,6 +159,9 @@ def build_parser():
                       help="with --method adaptive: the target's border rows; auto = "
                            "pinned (corners kept) where that gives fewer poles (default), "
                            "free = plain projection (often faster), pinned = always")
+    fair.add_argument("--target-degree", type=_degree, nargs="+", metavar="P",
+                      help="degree of the faired surfaces, one for both directions or "
+                           "P_U P_V (default: each face's own, at most 3)")
     fair.add_argument("--boundary", choices=("free", "fixed"), default="free",
                       help="keep the face borders fixed or let them move within --tol")
     fair.add_argument("--convert", action="store_true",
@@ -232,6 +237,7 @@ def command_fair(args):
     outputs = [p for p in (args.output, args.report, args.deviation_map, args.curvature_map) if p]
     _check_suffixes(args)
     _check_method(args)
+    target_degree = _target_degree(args.target_degree)
     for path in outputs:
         check_output_path(path, force=args.force, inputs=(args.input,))
     if args.tol is not None and args.target is not None:
@@ -245,14 +251,16 @@ def command_fair(args):
     if args.faces and max(args.faces) >= len(infos):
         raise InvalidInputError(
             f"--faces names face {max(args.faces) + 1}, but {args.input} has {len(infos)} faces.")
-    n = _target_scales(args.target, [infos[i] for i in args.faces or range(len(infos))])
+    n = _target_scales(args.target, [infos[i] for i in args.faces or range(len(infos))],
+                       target_degree)
     tol = None if args.target else (args.tol or default_tolerance(shape))
     progress = _Progress(args.progress or sys.stderr.isatty())
     result = fair_shape(shape, tol=tol, n=n, faces=args.faces,
                         method=args.method, objective=_objective(args),
                         borders=_borders(args),
                         progress=progress,
-                        boundary=args.boundary, details=False, jobs=args.jobs,
+                        boundary=args.boundary, target_degree=target_degree,
+                        details=False, jobs=args.jobs,
                         face_timeout=args.face_timeout, in_place=True)
     write_model(model, args.output, force=args.force, input_path=args.input)
     kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
@@ -308,19 +316,31 @@ def _borders(args):
     return args.borders or "auto"
 
 
-def _target_scales(target, infos):
+def _target_degree(values):
+    """--target-degree P or P_U P_V as ``fair_shape``'s ``target_degree`` (``None``: each
+    face's own, at most 3)."""
+    if values is None:
+        return None
+    if len(values) > 2:
+        raise InvalidInputError(
+            f"--target-degree takes one degree or two (u and v), got {len(values)}: "
+            f"{' '.join(map(str, values))}.")
+    return (values[0], values[-1])
+
+
+def _target_scales(target, infos, target_degree=None):
     """--target NU NV (poles per direction) as the core's scales ``n = poles - degree``.
 
-    The target degree is the face's own, at most 3, per direction (as ``fair_face``
-    chooses it).  Each selected face with poles (B-spline or Bezier) must allow the
-    poles asked for: from its target degree + 1 up to its own count; and since one
-    scale goes to every face, their target degrees must agree.
+    The target degree is ``target_degree``, or else the face's own, at most 3, per
+    direction (as ``fair_face`` chooses it).  Each selected face with poles (B-spline or
+    Bezier) must allow the poles asked for: from its target degree + 1 up to its own
+    count; and since one scale goes to every face, their target degrees must agree.
     """
     if target is None:
         return None
     degrees = {}
     for info in (i for i in infos if i.n_poles_u):
-        own = (min(3, info.u_degree), min(3, info.v_degree))
+        own = target_degree or (min(3, info.u_degree), min(3, info.v_degree))
         _check_target_poles(target, info, own)
         degrees.setdefault(own, []).append(info.index + 1)
     if len(degrees) > 1:
@@ -329,7 +349,7 @@ def _target_scales(target, infos):
         raise InvalidInputError(
             f"--target gives poles per direction, but the selected faces' targets have "
             f"different degrees ({kinds}), so the same poles are different targets; "
-            "select faces of one degree with --faces, or use --tol.")
+            "select faces of one degree with --faces, give --target-degree, or use --tol.")
     du, dv = next(iter(degrees), (3, 3))
     return target[0] - du, target[1] - dv
 
@@ -406,6 +426,8 @@ def _build_report(args, result, tol, seconds, kept=None, parts=None):
             max_deviation=face.max_deviation, tolerance=face.tolerance,
             fairness_before=before, fairness_after=after, seconds=face.seconds,
             deviation=stats, part=parts[index] if parts else None,
+            degree_before=_degrees(face.info),
+            degree_after=_degrees(face.info if face.status == "unchanged" else face.surface),
             rational=face.info.rational if face.info and face.info.is_bspline else None))
     return build_report(entries, input_path=args.input, output_path=args.output,
                         tolerance=tol, method=args.method,
@@ -416,9 +438,20 @@ def _build_report(args, result, tol, seconds, kept=None, parts=None):
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
 
 
+def _degrees(geometry):
+    """``(u_degree, v_degree)`` of a surface or of a B-spline face's info, else ``None``."""
+    if geometry is None or not getattr(geometry, "u_degree", None):
+        return None
+    return geometry.u_degree, geometry.v_degree
+
+
 def _in_options(message):
-    """A face message in the command's terms (the API's ``convert=True`` is ``--convert``)."""
-    return message and message.replace("pass convert=True", "pass --convert")
+    """A face message in the command's terms (the API's ``convert=True`` is ``--convert``,
+    ``target_degree=(p, q)`` is ``--target-degree p q``)."""
+    if not message:
+        return message
+    message = message.replace("pass convert=True", "pass --convert")
+    return re.sub(r"target_degree=\((\d+), (\d+)\)", r"--target-degree \1 \2", message)
 
 
 def _note_nothing_faired(args, result):

@@ -127,7 +127,7 @@ WEIGHT_POWER = 4     # ... by (deviation / (WEIGHT_AIM tol))^WEIGHT_POWER
 MIN_GAIN = 0.8       # a stage must bring the energy below this fraction of the last
 SCREEN_STRIDE = 4    # a verdict-only trial looks at every 4th search sample first ...
 SCREEN_SAMPLES = 16  # ... and the true distance at its 16 largest bounds
-TOP_GROWTH = 2       # a failing top below the source's degree doubles its spans this often
+TOP_GROWTH = 2       # a failing top at another degree than the source's doubles its spans
 
 
 # -- knot families ----------------------------------------------------------------------------
@@ -1437,19 +1437,20 @@ def _compact_net(fit, family, dens, tops, tol):
 def _top(fit, family, tops):
     """The top of the knot family, ``family(1.0)``, and its trial.
 
-    At the source's degree the top is the source's own breakpoints.  A lower target
-    degree may need more spans than the source has (impeller faces of degree 5 on 8 x 7
-    spans: 0.0101 at degree 3 on those breakpoints, tol 0.01); where the top fails, each
-    direction whose target degree is below the source's gets twice its spans, up to
+    At the source's degree the top is the source's own breakpoints.  Another target
+    degree may need more spans than the source has: a lower one holds less on a span
+    (impeller faces of degree 5 on 8 x 7 spans: 0.0101 at degree 3 on those breakpoints,
+    tol 0.01), a higher one is smoother across the source's joins.  Where the top fails,
+    each direction whose target degree is not the source's gets twice its spans, up to
     ``TOP_GROWTH`` doublings.  ``tops`` is changed in place, and ``family`` reads it."""
     source = (fit.surface.u_degree, fit.surface.v_degree)
-    lower = [axis for axis in (0, 1) if fit.degrees[axis] < source[axis]]
+    other = [axis for axis in (0, 1) if fit.degrees[axis] != source[axis]]
     full = family(1.0)
     result = fit.trial(*full)
-    for _ in range(TOP_GROWTH if lower else 0):
+    for _ in range(TOP_GROWTH if other else 0):
         if result[2] <= fit.tol:
             break
-        for axis in lower:
+        for axis in other:
             tops[axis] *= 2
         full = family(1.0)
         result = fit.trial(*full)

@@ -169,7 +169,8 @@ def test_output_in_a_missing_folder(tmp_path):
 
 
 @pytest.mark.parametrize("args", [["--tol", "-1"], ["--tol", "nan"], ["--faces", "0"],
-                                  ["--target", "2", "9"]])
+                                  ["--target", "2", "9"], ["--target-degree", "0"],
+                                  ["--target-degree", "3", "3", "3"]])
 def test_usage_errors_exit_2(tmp_path, args):
     proc = run("fair", BLADE, "-o", "out.step", *args, cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
@@ -263,3 +264,19 @@ def test_adaptive_fairs_the_rational_faces_of_linkrods(tmp_path):
     assert len(faired_rational) >= 14
     assert all(f["rational"] is None for f in report["faces"] if f["surface_type"] != "BSpline")
     assert report["summary"]["poles_after"] < report["summary"]["poles_before"] / 10
+
+
+def test_target_degree_reaches_every_face_and_refusals_speak_in_options(tmp_path):
+    """--target-degree 5: the blade's two large faces are faired at degree 5 within tol
+    (more spans than the source's, the core's grown top). The root face at degree 2 and
+    tol 1e-4 is refused, and the refusal names the option, not the API's argument."""
+    proc = run("fair", BLADE, "-o", "out.step", "--tol", "0.001", "--method", "adaptive",
+               "--faces", "3", "--target-degree", "5", "--report", "r.json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    face = json.loads((tmp_path / "r.json").read_text())["faces"][2]
+    assert face["status"] == "ok" and face["degree_after"] == [5, 5]
+    assert face["max_deviation"] <= 0.001
+    proc = run("fair", BLADE, "-o", "root.step", "--tol", "0.0001", "--method", "adaptive",
+               "--faces", "1", "--target-degree", "2", "--report", "root.json", cwd=tmp_path)
+    message = json.loads((tmp_path / "root.json").read_text())["faces"][0]["message"]
+    assert "--target-degree 3 3" in message and "target_degree=" not in message

@@ -817,6 +817,22 @@ def test_a_curve_refused_by_the_denser_check_grows_until_it_passes():
     assert counts[2] < cf.fair_curve(poles, tol=0.05, target_degree=1).curve.n_poles
 
 
+def test_a_higher_target_degree_may_use_more_spans_than_the_source():
+    """A random bicubic net on 4 x 4 spans faired at degree 5 within 0.003: simple
+    quintic knots on its breakpoints are smoother than its C2 joins and deviate by more,
+    so the top doubles its spans (before: refused); within tol by the independent
+    measure."""
+    u = np.linspace(0.0, 1.0, 7)
+    grid = np.stack(np.meshgrid(u, u, indexing="ij"), axis=-1)
+    height = 0.3 * np.random.default_rng(7).normal(size=(7, 7))
+    cubic = cf.make_surface(np.dstack([10 * grid, height[..., None]]))
+    result = fair_surface_adaptive(cubic, 0.003, target_degree=5)
+    faired = result.surface
+    assert (faired.u_degree, faired.v_degree) == (5, 5)
+    assert max(faired.u_space.n_spans, faired.v_space.n_spans) > 4
+    assert _independent_two_sided(cubic, faired) <= 0.003
+
+
 def test_a_lower_target_degree_may_use_more_spans_than_the_source():
     """A quintic Bezier patch (one span each way) faired at the default cubic degree:
     one cubic span cannot hold it within 0.01, so the family's top doubles its spans
