@@ -80,8 +80,10 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     three poles while the sweep direction is reduced (impeller fillets: 50 x 3 -> 9 x 3
     poles, where a polynomial approximation needs 4 to 6 poles across).  A candidate
     with a weight :math:`\le 0` fails.  The energy polish and the objective ``"fair"`` act on
-    polynomial geometry and are not applied (the energy of the homogeneous net is not
-    that of the surface).
+    polynomial geometry and are not applied: the energy of the homogeneous net is not
+    that of the surface, and on the impeller fillet of the peer benchmark a polish of it
+    lowered the iso-lines' :math:`\int (d\kappa/ds)^2` from 1.81e3 to 1.70e3 but bent
+    the circular sections that the projection keeps exact (radius varying by 0.4 %).
 """
 
 from functools import cache, cached_property
