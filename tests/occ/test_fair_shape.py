@@ -205,3 +205,18 @@ def test_faired_shell_survives_a_brep_text_round_trip(real, tmp_path):
     back = read_shape(path)
     assert BRepCheck_Analyzer(back).IsValid()
     assert len(indexed_faces(back)) == 56
+
+
+def test_a_gap_that_halving_the_tolerance_does_not_shrink_is_closed_at_once(real):
+    """Two neighbouring testtoler strips (126 x 4 poles, degree 5 x 3) faired adaptively
+    at 0.01 open a 0.28 gap along their shared edge (their own knots slide the edges along
+    the surface); at half the tolerance it grows to 0.57.  Both are kept at once, after
+    the first halving (the message names tol 0.005), not fitted twice more down to tol/8,
+    and the shell stays closed between them."""
+    shape = real("testtoler.brep")
+    result = fair_shape(shape, tol=0.01, method="adaptive", faces=[35, 36])
+    for index in (35, 36):
+        report = result.faces[index]
+        assert report.status == "unchanged"
+        assert report.message.endswith("along a shared edge even at tol=0.005")
+    assert result.max_gap <= 0.01
