@@ -311,10 +311,11 @@ def wavelet_adaptive(case, degree=None, objective="compact", borders=None):
 def energy(case):
     s = case.source
     if case.kind == "curve":
-        r = cf.fair_curve(s.poles, tol=case.tol, knots=s.knots, degree=s.degree, method="energy")
+        r = cf.fair_curve(s.poles, tol=case.tol, knots=s.knots, degree=s.degree,
+                          weights=s.weights, method="energy")
         return r.curve, f"steps={r.evaluations}"
     r = cf.fair_surface(s.poles, tol=case.tol, u_knots=s.u_knots, v_knots=s.v_knots,
-                        degree=(s.u_degree, s.v_degree), method="energy")
+                        degree=(s.u_degree, s.v_degree), weights=s.weights, method="energy")
     return r.surface, f"sweeps={r.evaluations}"
 
 

@@ -135,7 +135,7 @@ def fair_curve_energy(curve, tol, *, l=3, rtol=1e-6, max_steps=None, fixed=1):
     if curve.is_rational:
         raise UnsupportedGeometryError(
             "energy fairing needs a polynomial (non-rational) curve; use method='wavelet' "
-            "for rational curves."
+            "or 'adaptive' for rational curves."
         )
     _check_l(l, curve.degree)
     g = energy_matrix(curve.space, l).tocsc()
@@ -229,7 +229,8 @@ def fair_surface_energy(surface, tol, *, rtol=1e-6, max_sweeps=200):
     tol = check_tolerance(tol)
     if surface.is_rational:
         raise UnsupportedGeometryError(
-            "energy fairing needs a polynomial (non-rational) surface; use method='wavelet'."
+            "energy fairing needs a polynomial (non-rational) surface; use method='wavelet' "
+            "or 'adaptive', which fair rational surfaces in homogeneous coordinates."
         )
     if min(surface.u_degree, surface.v_degree) < 2:
         raise UnsupportedGeometryError(
