@@ -74,7 +74,8 @@ class FaceFairReport:
         The faired face, or the original one when it was not faired.
     status : str
         ``'faired'``, ``'unchanged'`` (nothing to reduce), ``'skipped-not-bspline'``,
-        ``'skipped-rational'`` (``method="energy"``), ``'skipped-not-selected'``, ``'tolerance-not-met'`` or ``'failed'``.
+        ``'skipped-rational'`` (``method="energy"``), ``'skipped-not-selected'``,
+        ``'tolerance-not-met'`` or ``'failed'``.
     message : str
         One line for the user (empty when there is nothing to say).
     result : SurfaceFairResult or None
