@@ -328,9 +328,12 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
                      "edges lie inside the surface, so they may still move")
     sampler = _Sampler(face_uv_grid(face, density, classify=info.trimmed), surface)
     finish = _finisher(surface, info.unperiodized, boundary)
-    if max_scales(surface, degree) == (None, None) and n is None:
+    scales = max_scales(surface, degree)
+    if scales == (None, None) and n is None:
         return _unchanged(face, info, surface, "the net is already at its coarsest "
                           "(degree + 1 poles per direction); nothing to fair", tol)
+    if None in scales:  # the core's uniform search coarsens both directions or none
+        criteria = [c for c in criteria if c[0] != "core"]
     try:
         return _fair_verified(face, info, surface, surface, tol, n, degree, sampler, finish,
                               details, criteria, notes)

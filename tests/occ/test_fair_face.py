@@ -6,7 +6,8 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 
 import cq_fairing as cf
-from cq_fairing.errors import InvalidInputError, InvalidTargetError, InvalidToleranceError
+from cq_fairing.errors import (InvalidInputError, InvalidTargetError, InvalidToleranceError,
+                               ToleranceNotMetError)
 from cq_fairing.occ import face_to_surface, fair_face, list_faces, sample_face_deviation
 from tests.occ.helpers import area, faces_of, global_distance, occ_points, uv_box_grid
 
@@ -283,3 +284,14 @@ def test_energy_method_leaves_a_ruled_face_unchanged_and_says_why():
     assert report.status == "unchanged"
     assert "degree >= 2" in report.message and "3 x 1" in report.message
     assert "method='wavelet'" in report.message
+
+
+def test_a_target_degree_one_direction_cannot_take_is_a_tolerance_refusal(real):
+    """The blade's 4 x 17 root face at target degree 5: u (4 poles) cannot take it and
+    stays, v is searched. The core's uniform search, which coarsens both directions or
+    none, is left out of the attempts; it used to end the face with 'too few poles for
+    the target degrees' (InvalidInputError, a failed face in fair_shape), where no
+    target within tol is a ToleranceNotMetError."""
+    face = faces_of(real("IEA_15MW_CFD.stp"))[0]
+    with pytest.raises(ToleranceNotMetError, match="no target keeps this face"):
+        fair_face(face, tol=0.01, target_degree=5, details=False)
