@@ -40,6 +40,34 @@ def pump(seconds=0.3):
         time.sleep(0.02)
 
 
+def wait_until(condition, seconds=15.0):
+    """Process events until ``condition()`` holds or ``seconds`` pass; its last value.
+
+    A slow machine (CI on 2 busy cores) may close or open a task dialog after a fixed
+    ``pump`` has returned; waiting on the state itself keeps the steps in order.
+    """
+    end = time.time() + seconds
+    while not condition() and time.time() < end:
+        QtWidgets.QApplication.processEvents()
+        time.sleep(0.02)
+    return condition()
+
+
+def dialog_open():
+    return Gui.Control.activeDialog() is not False
+
+
+def open_panel(command):
+    """Run a panel ``command`` and wait until its task dialog shows; raise, saying why,
+    if it does not."""
+    was_open, active = wait_until(lambda: not dialog_open()) is False, is_active(command)
+    Gui.runCommand(command)
+    if not wait_until(dialog_open):
+        raise RuntimeError(f"{command} opened no task dialog (a dialog was already open: "
+                           f"{was_open}; command active: {active})")
+    pump()
+
+
 def find(name, kind=QtWidgets.QWidget):
     return Gui.getMainWindow().findChild(kind, name)
 
@@ -48,23 +76,25 @@ def is_active(command):
     return Gui.Command.get(command).isActive()
 
 
-def press_task_button(kind):
+def press_task_button(kind, closes):
     """Click the visible ``kind`` button (``QDialogButtonBox.Ok``, ``.Cancel``) of the task
-    dialog; False if there is none."""
+    dialog; False if there is none. With ``closes``, wait until the dialog has gone."""
     for box in Gui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
         button = box.button(kind)
         if button is not None and button.isVisible():
             button.click()
+            if closes:
+                wait_until(lambda: not dialog_open())
             return True
     return False
 
 
-def press_task_ok():
-    return press_task_button(QtWidgets.QDialogButtonBox.Ok)
+def press_task_ok(closes=True):
+    return press_task_button(QtWidgets.QDialogButtonBox.Ok, closes)
 
 
 def press_task_cancel():
-    return press_task_button(QtWidgets.QDialogButtonBox.Cancel)
+    return press_task_button(QtWidgets.QDialogButtonBox.Cancel, closes=True)
 
 
 def timed_preview(repeat=3):
@@ -108,8 +138,7 @@ def check_adaptive_panel(doc, source):
     borders (free: the faster search on this sliding face)."""
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Face1")
-    Gui.runCommand("Fairing_FairSurface")
-    pump()
+    open_panel("Fairing_FairSurface")
     find("fairing_tolerance").setProperty("rawValue", 0.05)
     check("objective and borders disabled for wavelet",
           not find("fairing_objective").isEnabled() and not find("fairing_borders").isEnabled())
@@ -162,8 +191,7 @@ def check_real_models(doc):
         check(f"{command} disabled for Linkrods.{sub} (not B-spline)", not is_active(command))
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(impeller, "Face84")
-    Gui.runCommand("Fairing_Levels")
-    pump()
+    open_panel("Fairing_Levels")
     check("levels panel opens on a trimmed IGES face",
           find("fairing_level", QtWidgets.QSlider) is not None
           and find("FairingLevelsPanel").findChild(QtWidgets.QLabel, "fairing_error").text() == "")
@@ -176,14 +204,13 @@ def check_real_models(doc):
                       find("fairing_target_v").setValue(100)), "-> 12 x 100")
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(rods, "Face21")
-    Gui.runCommand("Fairing_FairSurface")
-    pump()
+    open_panel("Fairing_FairSurface")
     find("fairing_boundary").setCurrentText("edges")
     find("fairing_preview").click()
     pump()
     error = find("fairing_error").text()
     made = len(doc.Objects)
-    press_task_ok()
+    press_task_ok(closes=False)
     pump()
     check("panel error on a rational face with boundary edges; OK keeps the panel",
           "choose boundary 'corners'" in error and len(doc.Objects) == made
@@ -200,8 +227,7 @@ def panel_ok(source, subs, what, settings, expected):
     Gui.Selection.clearSelection()
     for sub in subs:
         Gui.Selection.addSelection(source, sub)
-    Gui.runCommand("Fairing_FairSurface")
-    pump()
+    open_panel("Fairing_FairSurface")
     settings()
     find("fairing_preview").click()
     pump()
@@ -252,8 +278,7 @@ def run():
 
     Gui.activeDocument().activeView().viewIsometric()
     Gui.SendMsgToActiveView("ViewFit")
-    Gui.runCommand("Fairing_FairSurface")
-    pump()
+    open_panel("Fairing_FairSurface")
     panel = find("FairingTaskPanel")
     check("task panel opens", panel is not None and panel.isVisible())
     names = ("fairing_faces", "fairing_mode", "fairing_tolerance", "fairing_target_u",
@@ -304,6 +329,7 @@ def run():
 
     # Edit the feature again (double-click path): change the tolerance, OK.
     Gui.ActiveDocument.setEdit(fairing.Name)
+    wait_until(dialog_open)
     pump()
     check("edit panel shows the feature's values",
           abs(find("fairing_tolerance").property("rawValue") - 0.05) < 1e-12)
@@ -355,8 +381,7 @@ def run():
 
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Face1")
-    Gui.runCommand("Fairing_Levels")
-    pump()
+    open_panel("Fairing_Levels")
     slider = find("fairing_level", QtWidgets.QSlider)
     check("levels panel opens", slider is not None)
     labels = []
@@ -375,8 +400,7 @@ def run():
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Edge1")
     check("FairCurve enabled with an edge", is_active("Fairing_FairCurve"))
-    Gui.runCommand("Fairing_FairCurve")
-    pump()
+    open_panel("Fairing_FairCurve")
     curve_panel = find("FairingTaskPanel")
     check("curve panel opens", curve_panel is not None and curve_panel.windowTitle() == "Fair curve"
           and not find("fairing_target_v").isVisible())
@@ -455,7 +479,8 @@ def main():
     try:
         run()
     except Exception:  # the harness must report and exit, never hang FreeCAD
-        check("gui script ran to the end", False, traceback.format_exc())
+        trace = traceback.format_exc()  # the exception first: CI shows 400 characters
+        check("gui script ran to the end", False, trace.strip().splitlines()[-1] + "\n" + trace)
     os.makedirs(ARTIFACTS, exist_ok=True)
     with open(os.path.join(ARTIFACTS, "gui_results.json"), "w") as handle:
         json.dump(RESULTS, handle, indent=1)
