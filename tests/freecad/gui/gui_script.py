@@ -433,8 +433,11 @@ def run():
           and made.Shape.Faces[0].Surface.NbUPoles == 12, getattr(made, "Label2", None))
 
     # Preferences dialog opens and saves.
-    def close_preferences():
+    def close_preferences(tries=100):
         dialog = QtWidgets.QApplication.activeModalWidget()
+        if dialog is None and tries:  # not shown yet: a busy machine builds it slowly
+            QtCore.QTimer.singleShot(100, lambda: close_preferences(tries - 1))
+            return
         found.append(dialog is not None and dialog.objectName() == "FairingPreferences")
         if dialog is not None:
             dialog.findChild(QtWidgets.QSpinBox, "fairing_sample_density").setValue(48)
@@ -443,7 +446,7 @@ def run():
     found = []
     QtCore.QTimer.singleShot(400, close_preferences)
     Gui.runCommand("Fairing_Preferences")
-    pump(0.8)
+    wait_until(lambda: found)
     from fairing_wb import preferences
 
     check("preferences dialog saves", found == [True] and preferences.sample_density() == 48,
