@@ -31,6 +31,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from OCP.gp import gp_Pnt
 
+from .pcurves import projected_pcurve
 from ..core.geometry import BSplineSurface, make_surface
 from ..errors import InvalidInputError, UnsupportedGeometryError
 
@@ -342,13 +343,18 @@ def _edge_pcurves(face):
     return out
 
 
-def replace_surface(face, geom_surface):
+def replace_surface(face, geom_surface, reproject=None):
     """Put ``geom_surface`` under ``face`` in place, keeping every edge and its pcurves.
 
     The pcurves are UV curves, so on a surface with the same parameter domain they
     describe the same trim.  Old pcurve records (keyed by the old surface) are removed,
     the edges are marked not same-parameter so that :func:`finish_edges` recomputes
     their tolerances.
+
+    An edge for which ``reproject(edge)`` is true (one shared with another face) and
+    that is not a seam gets :func:`~cq_fairing.occ.pcurves.projected_pcurve` instead,
+    same-parameter with its 3-D curve, so it stays where the neighbour has it even
+    where the new surface's parametrization slid along the old one.
 
     Returns
     -------
@@ -363,12 +369,14 @@ def replace_surface(face, geom_surface):
     builder.UpdateFace(face, geom_surface, TopLoc_Location(), tol)
     remover = ShapeBuild_Edge()
     for edge, c1, c2, a, b in pcurves:
+        remover.RemovePCurve(edge, old_surface, loc)
+        if c2 is None and reproject is not None and reproject(edge):
+            c1 = projected_pcurve(edge, c1, a, b, geom_surface) or c1
         if c2 is None:
             builder.UpdateEdge(edge, c1, face, BRep_Tool.Tolerance_s(edge))
         else:
             builder.UpdateEdge(edge, c1, c2, face, BRep_Tool.Tolerance_s(edge))
         builder.Range(edge, face, a, b)
-        remover.RemovePCurve(edge, old_surface, loc)
         builder.SameParameter(edge, False)
     return [edge for edge, *_ in pcurves]
 

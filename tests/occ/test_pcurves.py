@@ -1,0 +1,66 @@
+"""Pcurves projected from an edge's 3-D curve (cq_fairing.occ.pcurves), checked by OCCT's
+own evaluation of the 3-D curve and the new surface."""
+
+import numpy as np
+import pytest
+from OCP.BRep import BRep_Tool
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+
+from cq_fairing.occ import fair_face
+from cq_fairing.occ.convert import indexed_faces, to_geom_surface
+from cq_fairing.occ.pcurves import projected_pcurve
+
+
+@pytest.fixture(scope="module")
+def strip(real):
+    """testtoler face 40 faired adaptively at 0.01 (76 x 5 poles from 126 x 4), and its
+    edge to face 35 (tolerance 1e-7: the 3-D curve lies on both faces)."""
+    shape = real("testtoler.brep")
+    faces = indexed_faces(shape)
+    emap = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    edge = next(TopoDS.Edge_s(emap.FindKey(i)) for i in range(1, emap.Extent() + 1)
+                if {next(k for k, f in enumerate(faces) if f.IsSame(g))
+                    for g in emap.FindFromIndex(i)} == {35, 40})
+    report = fair_face(faces[40], tol=0.01, method="adaptive")
+    assert report.status == "faired"
+    return TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD)), faces[40], report
+
+
+def _track_distances(edge, pcurve, surface, first, last, count=401):
+    """``|C(t) - S(c(t))|`` at ``count`` parameters, the 3-D curve by OCCT."""
+    curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    out = []
+    for t in np.linspace(first, last, count):
+        uv = pcurve.Value(float(t))
+        out.append(curve.Value(float(t)).Distance(surface.Value(uv.X(), uv.Y())))
+    return np.array(out)
+
+
+def test_projected_pcurve_follows_the_3d_curve_where_the_old_one_slid(strip):
+    edge, face, report = strip
+    surface = to_geom_surface(report.surface)
+    old = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge, face)
+    new = projected_pcurve(edge, old, first, last, surface)
+    kept = _track_distances(edge, old, surface, first, last)
+    projected = _track_distances(edge, new, surface, first, last)
+    # the old pcurve on the new surface slides along it, far beyond the face's tolerance
+    assert kept.max() > 5 * report.tolerance
+    # the projection stays within the face's two-sided deviation of the curve, at 401
+    # parameters between and on the 8-per-span samples it interpolates
+    assert projected.max() <= report.max_deviation
+    assert projected[0] < 1e-9 and projected[-1] < 1e-9
+
+
+def test_projected_pcurve_keeps_the_edge_range(strip):
+    edge, face, report = strip
+    surface = to_geom_surface(report.surface)
+    old = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge, face)
+    new = projected_pcurve(edge, old, first, last, surface)
+    assert (new.FirstParameter(), new.LastParameter()) == pytest.approx((first, last))
+    assert projected_pcurve(edge, old, first, 0.5 * (first + last), surface) is None
