@@ -282,7 +282,8 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
         for the adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
-        worst deviation, max gap between faces, validity, time), ``maps`` (name ->
+        worst deviation, largest gap fairing opened between faces (beyond the
+        source's own gap on each edge), validity, time), ``maps`` (name ->
         PNG/VTP path), ``skipped`` (index, reason) and ``kept`` (what the output keeps of
         the input besides geometry: counts of ``products``, ``instances``, ``colours``
         and ``layers``, or ``None`` when the output is geometry only).
@@ -449,7 +450,7 @@ def render_html(report):
                ("skipped", s["faces_skipped"]), ("failed", s["faces_failed"]),
                ("control points", f"{s['poles_before']} -> {s['poles_after']}"),
                ("worst deviation", f"{_fmt(s['worst_deviation'])} {report['units']}"),
-               ("largest gap between faces", f"{_fmt(s['max_gap'])} {report['units']}"),
+               ("largest gap fairing opened between faces", f"{_fmt(s['max_gap'])} {report['units']}"),
                ("valid shape", s["valid"]), ("time", f"{_fmt(s['seconds'], 3)} s")]
 
     def kv(rows):
