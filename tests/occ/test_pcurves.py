@@ -40,12 +40,19 @@ def _track_distances(edge, pcurve, surface, first, last, count=401):
     return np.array(out)
 
 
-def test_projected_pcurve_follows_the_3d_curve_where_the_old_one_slid(strip):
+@pytest.fixture(scope="module")
+def projection(strip):
+    """``(edge, old pcurve, new pcurve, new surface, first, last, face report)``."""
     edge, face, report = strip
     surface = to_geom_surface(report.surface)
     old = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     first, last = BRep_Tool.Range_s(edge, face)
     new = projected_pcurve(edge, old, first, last, surface)
+    return edge, old, new, surface, first, last, report
+
+
+def test_projected_pcurve_follows_the_3d_curve_where_the_old_one_slid(projection):
+    edge, old, new, surface, first, last, report = projection
     kept = _track_distances(edge, old, surface, first, last)
     projected = _track_distances(edge, new, surface, first, last)
     # the old pcurve on the new surface slides along it, far beyond the face's tolerance
@@ -56,11 +63,8 @@ def test_projected_pcurve_follows_the_3d_curve_where_the_old_one_slid(strip):
     assert projected[0] < 1e-9 and projected[-1] < 1e-9
 
 
-def test_projected_pcurve_keeps_the_edge_range(strip):
-    edge, face, report = strip
-    surface = to_geom_surface(report.surface)
-    old = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-    first, last = BRep_Tool.Range_s(edge, face)
-    new = projected_pcurve(edge, old, first, last, surface)
+def test_projected_pcurve_keeps_the_edge_range(projection):
+    edge, old, new, surface, first, last, _ = projection
     assert (new.FirstParameter(), new.LastParameter()) == pytest.approx((first, last))
+    # a range that is not the 3-D curve's: no projection, the caller keeps the old one
     assert projected_pcurve(edge, old, first, 0.5 * (first + last), surface) is None
