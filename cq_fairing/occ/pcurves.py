@@ -16,6 +16,7 @@ ran 0.081 from the 3-D curve where the closest points are 0.0062 away.
 
 import numpy as np
 
+from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Geom2dAPI import Geom2dAPI_Interpolate
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
@@ -51,10 +52,13 @@ def projected_pcurve(edge, pcurve, first, last, surface):
     Returns
     -------
     Geom2d_BSplineCurve or None
-        ``None`` where the 3-D curve's range is not ``[first, last]`` (an edge that is
-        not same-range) or the samples cannot be interpolated (coincident points); the
-        caller keeps the old pcurve.
+        ``None`` for an edge without a 3-D curve or degenerated, where the 3-D curve's
+        range is not ``[first, last]`` (an edge that is not same-range), or where the
+        samples cannot be interpolated (coincident points); the caller keeps the old
+        pcurve.
     """
+    if BRep_Tool.Degenerated_s(edge) or BRep_Tool.Curve_s(edge, 0.0, 0.0) is None:
+        return None
     curve = BRepAdaptor_Curve(edge)
     span = max(abs(last - first), 1e-300)
     if abs(curve.FirstParameter() - first) > 1e-9 * span or \

@@ -68,3 +68,15 @@ def test_projected_pcurve_keeps_the_edge_range(projection):
     assert (new.FirstParameter(), new.LastParameter()) == pytest.approx((first, last))
     # a range that is not the 3-D curve's: no projection, the caller keeps the old one
     assert projected_pcurve(edge, old, first, 0.5 * (first + last), surface) is None
+
+
+def test_an_edge_without_a_3d_curve_keeps_its_pcurve(projection):
+    """Nothing to project: ``None``, and ``replace_surface`` keeps the old pcurve."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+    from OCP.ShapeBuild import ShapeBuild_Edge
+
+    edge, old, _, surface, first, last, _ = projection
+    bare = TopoDS.Edge_s(BRepBuilderAPI_Copy(edge, True, False).Shape())
+    ShapeBuild_Edge().RemoveCurve3d(bare)
+    assert BRep_Tool.Curve_s(bare, 0.0, 0.0) is None
+    assert projected_pcurve(bare, old, first, last, surface) is None
