@@ -18,7 +18,8 @@ from scipy.spatial import cKDTree
 
 from cq_fairing.core.measures import closest_points_surface
 
-__all__ = ["sample_parameters", "parametric_deviation", "signed_deviation", "curvature"]
+__all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
+           "two_sided_deviation", "curvature"]
 
 
 def sample_parameters(uv_range, count):
@@ -104,6 +105,27 @@ def signed_deviation(source, faired, uv_range, count=40, oversample=2):
     # (there p - foot is not along the normal); the normal only gives the sign.
     d = np.copysign(np.linalg.norm(offset, axis=1), np.einsum("ij,ij->i", offset, normals))
     return points, d.reshape(count, count)
+
+
+def two_sided_deviation(source, faired, uv_range, count=40):
+    r"""Deviation both ways on a ``count x count`` parameter grid.
+
+    At each :math:`(u_i, v_j)` the larger in magnitude of :math:`d_{F \to S}`, the
+    faired sample's signed distance to the source (:func:`signed_deviation`), and
+    :math:`-d_{S \to F}`, the source sample's signed distance to the faired surface
+    with its sign turned to the same sense (faired minus source).  One way alone misses
+    a faired face that stops short of its source's border: every faired sample lies on
+    the source, while the source's border is far from the faired face.
+
+    Returns
+    -------
+    points : ndarray, shape (count, count, 3)
+        Faired sample points (where the values are drawn).
+    distance : ndarray, shape (count, count)
+    """
+    points, there = signed_deviation(source, faired, uv_range, count)
+    _, back = signed_deviation(faired, source, uv_range, count)
+    return points, np.where(np.abs(there) >= np.abs(back), there, -back)
 
 
 def curvature(surface, uv_range, count=40, kind="mean"):

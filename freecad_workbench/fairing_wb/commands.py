@@ -102,7 +102,8 @@ class _MapCommand(_Command):
 class DeviationMap(_MapCommand):
     name, icon = "Fairing_DeviationMap", "Fairing_DeviationMap"
     menu = "Deviation map"
-    tip = "Colour map of the distance faired -> source (green 0 to red max); toggles"
+    tip = ("Colour map of the distance between faired and source, both ways (green 0 to "
+           "red max); toggles")
     kind = "Deviation"
     call = "maps = [fairing_wb.deviation_map.make_map(fairing, 'Deviation')]"
 

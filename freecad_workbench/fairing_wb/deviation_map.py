@@ -81,7 +81,7 @@ def _face_samples(obj, source_face, faired_face, count):
     uv_range = conversion.uv_range(source_face, source)
     inside = conversion.inside_mask(source_face, *analysis.sample_parameters(uv_range, count))
     if obj.Kind == "Deviation":
-        return (*analysis.signed_deviation(source, faired, uv_range, count), inside)
+        return (*analysis.two_sided_deviation(source, faired, uv_range, count), inside)
     surface = faired if obj.Which == "Faired" else source
     kind = "gaussian" if obj.Kind == "GaussianCurvature" else "mean"
     return (*analysis.curvature(surface, uv_range, count, kind), inside)

@@ -49,8 +49,8 @@ class FairedShape:
         ``(k_u, k_v)`` for a face, ``(k,)`` for an edge.
     max_deviation : float
         Largest closest-point distance between faired and source surface, both ways, at
-        ``DEVIATION_SAMPLES`` squared samples of each on the face (model units, mm); the
-        deviation map shows the way faired -> source.
+        ``DEVIATION_SAMPLES`` squared samples of each on the face (model units, mm;
+        ``analysis.two_sided_deviation``, as the deviation map).
     seconds : float
         Wall time of conversion + fairing + rebuild.
     note : str
@@ -318,9 +318,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
                               borders, uv_range)
     faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
-    _, there = analysis.signed_deviation(source, faired, uv_range, DEVIATION_SAMPLES)
-    _, back = analysis.signed_deviation(faired, source, uv_range, DEVIATION_SAMPLES)
-    both = np.maximum(np.abs(there), np.abs(back))
+    both = np.abs(analysis.two_sided_deviation(source, faired, uv_range, DEVIATION_SAMPLES)[1])
     inside = conversion.inside_mask(
         face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
     # over the face's trim; a trim too thin to hold a sample falls back on its UV box

@@ -35,13 +35,40 @@ def test_deviation_map_values_match_occt_distance(doc, fairing):
     doc.recompute()
     assert dmap.isValid()
     assert dmap.Mesh.CountPoints == 400 == len(dmap.Values) == len(dmap.VertexColors)
-    source = fairing.Source[0].Shape.Faces[0]
+    source_face, faired_face = fairing.Source[0].Shape.Faces[0], fairing.Shape.Faces[0]
+    source = conversion.surface_from_face(source_face)
+    u, v = analysis.sample_parameters(conversion.uv_range(source_face, source), 20)
+    source_points = source.evaluate_grid(u, v).reshape(-1, 3)
     points = dmap.Mesh.Points
     for i in range(0, 400, 37):
-        occt = source.distToShape(Part.Vertex(points[i].Vector))[0]
-        assert dmap.Values[i] == pytest.approx(occt, abs=2e-3 * max(dmap.Maximum, 1e-9) + 1e-6)
+        there = source_face.distToShape(Part.Vertex(points[i].Vector))[0]
+        back = faired_face.distToShape(Part.Vertex(FreeCAD.Vector(*source_points[i])))[0]
+        assert dmap.Values[i] == pytest.approx(max(there, back),
+                                               abs=2e-3 * max(dmap.Maximum, 1e-9) + 1e-6)
     assert dmap.Maximum <= fairing.MaxDeviation.Value * 1.05
     assert dmap.Unit == "mm"
+
+
+def test_two_sided_deviation_sees_a_face_that_stops_short():
+    """A plane patch 10 x 10 and a 'faired' one on the same plane and parameter domain
+    that stops at x = 9: every faired sample lies on the source (one way: 0), the
+    source's border x = 10 is 1 from the faired face."""
+    from cq_fairing.core.geometry import make_surface
+
+    def patch(length):
+        corners = [[[0, 0, 0], [0, 10, 0]], [[length, 0, 0], [length, 10, 0]]]
+        return make_surface(np.array(corners, float), degree=1)
+
+    source, faired = patch(10.0), patch(9.0)
+    box = (0.0, 1.0, 0.0, 1.0)
+    _, one_way = analysis.signed_deviation(source, faired, box, 11)
+    _, both = analysis.two_sided_deviation(source, faired, box, 11)
+    assert np.abs(one_way).max() < 1e-12
+    assert np.abs(both).max() == pytest.approx(1.0, abs=1e-9)
+    # at parameter u the source point 10 u lies max(0, 10 u - 9) from the faired face
+    u = np.linspace(0, 1, 11)
+    np.testing.assert_allclose(np.abs(both), np.maximum(0, 10 * u - 9)[:, None] * np.ones(11),
+                               atol=1e-9)
 
 
 def test_deviation_at_the_border_matches_occt_on_the_iea_blade(doc):
