@@ -5,13 +5,8 @@ Each case expects a non-zero exit code, exactly one error line on stderr naming 
 (also for usage errors: no usage block, G7), no Python traceback, no output file, and the
 input's bytes unchanged (sha256).  The exit codes are the CLI's
 documented ones: 2 usage, 3 input, 4 output, 130 interrupted.
-
-While ``cq_fairing/cli.py`` is not on main (gap G1 in RELIABILITY.md) every test here is an
-expected failure; the mark lifts itself the moment the module exists, and the tests then
-run for real.
 """
 
-import importlib.util
 import os
 import signal
 import subprocess
@@ -23,10 +18,6 @@ import numpy as np
 import pytest
 
 from .conftest import REAL_DATA, REPO, interruptible, run_cli, sha256
-
-CLI_PRESENT = importlib.util.find_spec("cq_fairing.cli") is not None
-pytestmark = pytest.mark.xfail(not CLI_PRESENT, strict=True,
-                               reason="G1: cq_fairing/cli.py is not on main yet")
 
 BLADE = REAL_DATA / "IEA_15MW_CFD.stp"
 
