@@ -39,9 +39,8 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp
-from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
@@ -49,6 +48,7 @@ from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
 from .convert import (as_shape, face_info, finish_edges, indexed_faces, replace_surface,
                       settle_tolerances, surface_to_face, to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
+from .congruence import compose, congruence_classes, inverse
 from .parallel import FacePool
 
 __all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
@@ -247,7 +247,7 @@ class _Job:
         self.pool = pool
         self.reports = [None] * len(originals)
         self.tol = {}
-        self.part_face = _part_faces(originals)
+        self.part_face, self.motion = congruence_classes(originals)
         self.source_gaps = {}
 
     def fair_first(self, selected, tol, n, progress):
@@ -271,9 +271,10 @@ class _Job:
     def fair(self, indices, tol, n, report=None):
         """Fair the faces ``indices`` (serially, or in the pool's workers).
 
-        A face that is another placement of a face already in ``indices`` (one part
-        placed several times in an assembly: the same ``TShape`` at another location)
-        is not faired again: it gets that face's report moved rigidly to its place.
+        A face congruent to a face already in ``indices`` (one part placed several
+        times in an assembly, the same ``TShape`` at another location, or a mirror
+        image: :func:`~cq_fairing.occ.congruence.congruence_classes`) is not faired
+        again: it gets that face's report moved to its place.
         """
         report = report or self.reports.__setitem__
         for index in indices:
@@ -295,17 +296,24 @@ class _Job:
                 report(index, self._placed(self.reports[leader], index))
 
     def _placed(self, leader_report, index):
-        """``leader_report`` for the face ``index``, the same face at another location."""
-        original = self.originals[index]
-        motion = original.Location().Multiplied(leader_report.original.Location().Inverted())
-        matrix = _affine(motion.Transformation())
-        note = f"another placement of face {leader_report.index + 1}'s part (its result, computed once)"
+        """``leader_report`` for the face ``index``, congruent to the leader's face."""
+        original, leader = self.originals[index], leader_report.index
+        matrix = compose(self.motion[index], inverse(self.motion[leader]))
+        if _same_part(self.originals[leader], original):
+            note = f"another placement of face {leader + 1}'s part"
+        elif np.linalg.det(matrix[:, :3]) < 0:
+            note = f"the mirror image of face {leader + 1}"
+        else:
+            note = f"face {leader + 1} moved"
+        side = _side(leader_report.original, original, matrix)
         return replace(
             leader_report, face=original, original=original, index=index, result=None,
-            seconds=0.0, message="; ".join(filter(None, (leader_report.message, note))),
+            seconds=0.0, message="; ".join(filter(None, (
+                leader_report.message, note + " (its result, computed once)"))),
             surface=leader_report.surface and replace(
                 leader_report.surface, poles=_moved(leader_report.surface.poles, matrix)),
-            deviation=leader_report.deviation and _moved_samples(leader_report.deviation, matrix))
+            deviation=leader_report.deviation and _moved_samples(leader_report.deviation,
+                                                                 matrix, side))
 
     def _from_worker(self, index, outcome):
         """A :class:`FaceFairReport` from a worker's outcome (the face built here)."""
@@ -421,11 +429,14 @@ class _Job:
             culprits = self._culprits(copy, gaps, max_gap)
             if not culprits:
                 return copy, gaps
+            again = {}
             for index, gap in culprits.items():
                 if gap > GAP_SHRINK * last.get(index, np.inf):
                     self._restore(index, max_gap)
                 else:
-                    self.fair([index], 0.5 * self.tol[index], None)
+                    again.setdefault(0.5 * self.tol[index], []).append(index)
+            for tol, indices in again.items():  # together: a congruent face is reused
+                self.fair(indices, tol, None)
             last = culprits
             copy, gaps = self.build()
         culprits = self._culprits(copy, gaps, max_gap)
@@ -458,16 +469,9 @@ class _Job:
             f"tol={self.tol[index]:g}", index, self.tol[index], self.reports[index].seconds)
 
 
-def _part_faces(faces):
-    """For each face, the index of its ``TShape`` among the faces' (a part placed several
-    times shares its faces' ``TShape`` between the placements)."""
-    unplaced = TopTools_IndexedMapOfShape()
-    return [unplaced.Add(face.Located(TopLoc_Location())) for face in faces]
-
-
-def _affine(trsf):
-    """The 3 x 4 matrix ``[A | t]`` of a ``gp_Trsf`` (x -> A x + t)."""
-    return np.array([[trsf.Value(row, col) for col in range(1, 5)] for row in range(1, 4)])
+def _same_part(face, other):
+    """True when ``face`` and ``other`` are placements of one part (one ``TShape``)."""
+    return face.TShape() == other.TShape()
 
 
 def _moved(points, matrix):
@@ -475,12 +479,21 @@ def _moved(points, matrix):
     return points @ matrix[:, :3].T + matrix[:, 3]
 
 
-def _moved_samples(deviation, matrix):
-    """Deviation samples of a face moved to another placement: points and normals move,
-    distances stay."""
+def _side(face, other, matrix):
+    """+1 or -1: how a normal of ``face`` moved by ``matrix`` relates to ``other``'s
+    normal there (a reflection turns it, and so does each reversed orientation)."""
+    turns = [np.linalg.det(matrix[:, :3]) < 0] + [
+        f.Orientation() == TopAbs_REVERSED for f in (face, other)]
+    return -1.0 if sum(turns) % 2 else 1.0
+
+
+def _moved_samples(deviation, matrix, side):
+    """Deviation samples of a face moved to a congruent face: points and normals move
+    (normals turned by ``side``), signed distances take ``side``, distances stay."""
     moved = dict(deviation, points=_moved(deviation["points"], matrix),
-                 faired_points=_moved(deviation["faired_points"], matrix))
-    moved["normals"] = deviation["normals"] @ matrix[:, :3].T
+                 faired_points=_moved(deviation["faired_points"], matrix),
+                 signed=side * deviation["signed"])
+    moved["normals"] = side * deviation["normals"] @ matrix[:, :3].T
     return moved
 
 

@@ -8,7 +8,7 @@ from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
 from OCP.TopExp import TopExp_Explorer
 
 from cq_fairing.errors import InvalidInputError
-from cq_fairing.occ import fair_shape, list_faces, read_shape, write_shape
+from cq_fairing.occ import fair_face, fair_shape, list_faces, read_shape, write_shape
 from cq_fairing.occ.convert import indexed_faces
 from tests.occ.helpers import area, faces_of, volume
 
@@ -207,14 +207,20 @@ def test_faired_shell_survives_a_brep_text_round_trip(real, tmp_path):
     assert len(indexed_faces(back)) == 56
 
 
-def test_adaptive_strips_keep_their_shared_edge(real):
-    """Two neighbouring testtoler strips (126 x 4 poles, degree 5 x 3) faired adaptively
-    at 0.01: their own knots slide the surfaces along the original, and with their old
-    pcurves the shared edge opened 0.28 (0.57 at half the tolerance), so both were
-    restored.  Their shared edges now get pcurves projected from the 3-D curve: both
-    stay faired with fewer poles, the edge within tol, the shell valid."""
-    shape = real("testtoler.brep")
-    result = fair_shape(shape, tol=0.01, method="adaptive", faces=[35, 36])
+@pytest.fixture(scope="module")
+def mirrored_strips(real):
+    """testtoler faces 35 and 36 (126 x 4 poles, degree 5 x 3, mirror images of each
+    other) faired adaptively at 0.01 as a shell."""
+    return fair_shape(real("testtoler.brep"), tol=0.01, method="adaptive", faces=[35, 36])
+
+
+def test_adaptive_strips_keep_their_shared_edge(mirrored_strips):
+    """Two neighbouring testtoler strips faired adaptively at 0.01: their own knots
+    slide the surfaces along the original, and with their old pcurves the shared edge
+    opened 0.28 (0.57 at half the tolerance), so both were restored.  Their shared edges
+    now get pcurves projected from the 3-D curve: both stay faired with fewer poles, the
+    edge within tol, the shell valid."""
+    result = mirrored_strips
     for index in (35, 36):
         report = result.faces[index]
         assert report.status == "faired", report.message
@@ -222,6 +228,26 @@ def test_adaptive_strips_keep_their_shared_edge(real):
         assert report.max_deviation <= report.tolerance
     assert result.max_gap <= 0.01
     assert result.valid
+
+
+def test_a_mirror_image_gets_the_mirrored_result_of_fairing_it(real, mirrored_strips):
+    """Face 36 is face 35 mirrored (same knots, poles under a reflection, same trim):
+    it is not faired again but gets face 35's result mirrored, which is what fairing it
+    alone gives: the same net to 1e-9 of its size, the same samples' distances, and
+    normals and signed distances on its own side."""
+    report = mirrored_strips.faces[36]
+    assert report.message == "the mirror image of face 36 (its result, computed once)"
+    assert report.seconds == 0.0
+    alone = fair_face(indexed_faces(real("testtoler.brep"))[36], tol=report.tolerance,
+                      method="adaptive")
+    size = np.ptp(alone.surface.poles.reshape(-1, 3), axis=0).max()
+    np.testing.assert_allclose(report.surface.poles, alone.surface.poles, atol=1e-9 * size)
+    assert report.max_deviation == pytest.approx(alone.max_deviation, rel=1e-9)
+    for key in ("points", "normals"):
+        np.testing.assert_allclose(report.deviation[key], alone.deviation[key],
+                                   atol=1e-9 * size)
+    np.testing.assert_allclose(report.deviation["signed"], alone.deviation["signed"],
+                               atol=1e-9 * size)
 
 
 def test_a_source_gap_is_not_charged_to_fairing(real):
