@@ -23,8 +23,8 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
-from ..errors import UnsupportedGeometryError
-from .convert import face_to_surface
+from ..errors import FairingError
+from .convert import face_to_surface, is_occt_error
 
 RELATIVE_MATCH = 1e-9  # of the net's (or UV box's) size: poles and trims that coincide
 TRIM_SAMPLES = 9  # per pcurve, to compare two faces' trims in UV
@@ -85,8 +85,10 @@ def _signature(face):
     """``(hashable key, poles (N, 3), UV trim samples)`` of a B-spline face, else None."""
     try:
         surface, _ = face_to_surface(face)
-    except UnsupportedGeometryError:
-        return None
+    except Exception as exc:  # not a readable B-spline face: its own class, faired alone
+        if isinstance(exc, FairingError) or is_occt_error(exc):
+            return None
+        raise
     weights = None if surface.weights is None else surface.weights.tobytes()
     key = (surface.poles.shape, surface.u_degree, surface.v_degree,
            surface.u_knots.tobytes(), surface.v_knots.tobytes(), weights)

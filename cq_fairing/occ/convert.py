@@ -36,7 +36,7 @@ from ..core.geometry import BSplineSurface, make_surface
 from ..errors import InvalidInputError, UnsupportedGeometryError
 
 __all__ = ["FaceInfo", "list_faces", "face_info", "face_to_surface", "surface_to_face",
-           "to_geom_surface", "indexed_faces", "as_face", "as_shape"]
+           "to_geom_surface", "indexed_faces", "as_face", "as_shape", "is_occt_error"]
 
 _TYPE_NAMES = {
     GeomAbs_SurfaceType.GeomAbs_Plane: "Plane",
@@ -253,6 +253,16 @@ def clamped_bspline(face):
         u0, u1, v0, v1 = surf.Bounds()
         surf.Segment(u0, u1, v0, v1)
     return surf, tuple(done)
+
+
+def is_occt_error(exc):
+    """True for an exception raised by OCCT.
+
+    OCP binds ``Standard_Failure`` and each of its kinds (``Standard_DomainError``,
+    ``StdFail_NotDone``, ...) as separate Python classes that do not inherit from one
+    another, so they are recognised by their module (``OCP.*``).
+    """
+    return type(exc).__module__.split(".")[0] == "OCP"
 
 
 def face_to_surface(face):

@@ -45,8 +45,8 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
-from .convert import (as_shape, face_info, finish_edges, indexed_faces, replace_surface,
-                      settle_tolerances, surface_to_face, to_geom_surface)
+from .convert import (as_shape, face_info, finish_edges, indexed_faces, is_occt_error,
+                      replace_surface, settle_tolerances, surface_to_face, to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
 from .congruence import compose, congruence_classes, inverse
 from .parallel import FacePool
@@ -541,16 +541,6 @@ def _info_if_readable(face):
         if not is_occt_error(exc):
             raise
         return None
-
-
-def is_occt_error(exc):
-    """True for an exception raised by OCCT.
-
-    OCP binds ``Standard_Failure`` and each of its kinds (``Standard_DomainError``,
-    ``StdFail_NotDone``, ...) as separate Python classes that do not inherit from one
-    another, so they are recognised by their module (``OCP.*``).
-    """
-    return type(exc).__module__.split(".")[0] == "OCP"
 
 
 def _one_line(exc):
