@@ -83,9 +83,12 @@ class FairSurfacePanel:
         self.faces.setMaximumHeight(70)
         self.mode = _row(layout, "Mode:", QtWidgets.QComboBox(), "fairing_mode")
         self.mode.addItems(["Tolerance", "Target control points"])
-        ui = FreeCADGui.UiLoader()
-        self.tolerance = _row(layout, "Tolerance:", ui.createWidget("Gui::QuantitySpinBox"),
-                              "fairing_tolerance")
+        # parented to the form at once: an unparented widget of a temporary UiLoader can
+        # be deleted under Python before it reaches the layout ("Internal C++ object
+        # already deleted"; the panel then failed to open, now and then, in CI)
+        loader = FreeCADGui.UiLoader()
+        spin = loader.createWidget("Gui::QuantitySpinBox", form)
+        self.tolerance = _row(layout, "Tolerance:", spin, "fairing_tolerance")
         self.tolerance.setProperty("unit", "mm")
         self.tolerance.setProperty("minimum", 1e-6)
         self.tolerance.setProperty("decimals", 4)
