@@ -247,7 +247,7 @@ class _Job:
         self.pool = pool
         self.reports = [None] * len(originals)
         self.tol = {}
-        self.part_face, self.motion = congruence_classes(originals)
+        self.face_class, self.motion = congruence_classes(originals)
         self.source_gaps = {}
 
     def fair_first(self, selected, tol, n, progress):
@@ -281,8 +281,8 @@ class _Job:
             self.tol[index] = tol
         first = {}
         for index in indices:
-            first.setdefault(self.part_face[index], index)
-        leaders = [index for index in indices if first[self.part_face[index]] == index]
+            first.setdefault(self.face_class[index], index)
+        leaders = [index for index in indices if first[self.face_class[index]] == index]
         options = dict(self.options, tol=tol, n=n)
         if self.pool is None:
             for index in leaders:
@@ -291,7 +291,7 @@ class _Job:
             self.pool.run([(index, self.originals[index], options) for index in leaders],
                           lambda index, outcome: report(index, self._from_worker(index, outcome)))
         for index in indices:
-            leader = first[self.part_face[index]]
+            leader = first[self.face_class[index]]
             if leader != index:
                 report(index, self._placed(self.reports[leader], index))
 
@@ -299,7 +299,7 @@ class _Job:
         """``leader_report`` for the face ``index``, congruent to the leader's face."""
         original, leader = self.originals[index], leader_report.index
         matrix = compose(self.motion[index], inverse(self.motion[leader]))
-        if _same_part(self.originals[leader], original):
+        if original.IsPartner(self.originals[leader]):  # one TShape: a part placed again
             note = f"another placement of face {leader + 1}'s part"
         elif np.linalg.det(matrix[:, :3]) < 0:
             note = f"the mirror image of face {leader + 1}"
@@ -467,11 +467,6 @@ class _Job:
             self.originals[index], "unchanged", f"kept the original surface: fairing opened "
             f"a gap larger than max_gap={max_gap:g} along a shared edge even at "
             f"tol={self.tol[index]:g}", index, self.tol[index], self.reports[index].seconds)
-
-
-def _same_part(face, other):
-    """True when ``face`` and ``other`` are placements of one part (one ``TShape``)."""
-    return face.TShape() == other.TShape()
 
 
 def _moved(points, matrix):
