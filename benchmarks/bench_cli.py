@@ -15,7 +15,9 @@ import tempfile
 import time
 from pathlib import Path
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
+BLADE = REPO / "examples" / "data" / "IEA_15MW_CFD.stp"
 
 
 def run_case(name, model, tol, extra=()):
@@ -46,7 +48,7 @@ def main():
     parser.add_argument("--tol-blade", type=float, default=0.001)
     parser.add_argument("--tol-terrain", type=float, default=1.0)
     args = parser.parse_args()
-    run_case("IEA 15 MW blade (3 faces)", DATA / "IEA_15MW_CFD.stp", args.tol_blade)
+    run_case("IEA 15 MW blade (3 faces)", BLADE, args.tol_blade)
     run_case("terrain 312x323 (1 face)", DATA / "terrain.brep", args.tol_terrain)
 
 

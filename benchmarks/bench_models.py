@@ -17,16 +17,18 @@ import tempfile
 import time
 from pathlib import Path
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
-MODELS = {"impeller": "impeller.igs", "linkrods": "linkrods.step",
-          "testtoler": "testtoler.brep", "IEA": "IEA_15MW_CFD.stp"}
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
+MODELS = {"impeller": DATA / "impeller.igs", "linkrods": DATA / "linkrods.step",
+          "testtoler": DATA / "testtoler.brep",
+          "IEA": REPO / "examples" / "data" / "IEA_15MW_CFD.stp"}
 
 
 def run(model, method, tol):
     """``(exit code, wall seconds, report dict or None)`` of one command-line run."""
     with tempfile.TemporaryDirectory() as work:
         out, report = Path(work) / "out.step", Path(work) / "report.json"
-        command = [sys.executable, "-m", "cq_fairing.cli", "fair", str(DATA / MODELS[model]),
+        command = [sys.executable, "-m", "cq_fairing.cli", "fair", str(MODELS[model]),
                    "-o", str(out), "--tol", str(tol), "--method", method, "--report",
                    str(report)]
         start = time.perf_counter()

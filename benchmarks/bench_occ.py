@@ -16,8 +16,9 @@ from cq_fairing.occ import face_to_surface, fair_face, read_shape, sample_face_d
 from cq_fairing.occ import search
 from cq_fairing.occ.convert import indexed_faces
 
-DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "real"
-LOCAL = Path(__file__).resolve().parent.parent / "examples" / "data"
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
+LOCAL = REPO / "examples" / "data"
 
 
 def best(func, repeat):

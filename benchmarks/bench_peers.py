@@ -8,9 +8,9 @@ Cases (same inputs and tolerance for every method):
   noise-free truth (``cq_fairing.core.examples.seed_curve``).
 * ``blade 50x80`` / ``blade 400x400``: noisy blade-like surface on a 50 mm span
   (``blade_surface(span=50, chord=15, noise=0.01)``), tol 0.02 and 0.05 mm, truth kept.
-* real faces from ``../shared/data/real`` (IEA 15 MW blade, terrain, an impeller blade
-  and a rational impeller fillet, testtoler strips) with ``tol = rel * bounding-box
-  diagonal``: the point fitters get the
+* real faces from ``tests/data`` and ``examples/data`` (IEA 15 MW blade, terrain, an
+  impeller blade and a rational impeller fillet, testtoler strips) with ``tol = rel *
+  bounding-box diagonal``: the point fitters get the
   face sampled on a grid, our methods fair the face's net (``face_to_surface``).
 
 Per method: control points, max two-sided closest-point deviation from the input geometry
@@ -38,7 +38,8 @@ from peers.measure import curve_fairness, surface_fairness, to_truth, two_sided 
 
 from cq_fairing.core import examples  # noqa: E402
 
-DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "real"
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
 
 # point fitters that are too slow for big inputs are skipped above these point counts
 LIMITS = {"geomdl approximate": 2000, "OCCT variational": 6000, "ours energy (EH)": 6000}
@@ -81,8 +82,7 @@ def cases(quick, big):
     out = [seed_case(), blade_case((50, 80), 0.02), blade_case((50, 80), 0.05)]
     if quick:
         return out
-    iea = Path(__file__).resolve().parent.parent / "examples" / "data" / "IEA_15MW_CFD.stp"
-    iea = iea if iea.exists() else DATA / "IEA_15MW_CFD.stp"
+    iea = REPO / "examples" / "data" / "IEA_15MW_CFD.stp"
     out += [face_case("IEA blade main face", iea, *_longest(iea), 1e-4),
             face_case("impeller blade face", DATA / "impeller.igs", *_impeller_blade(), 1e-4),
             face_case("impeller fillet", DATA / "impeller.igs", *_impeller_fillet(), 1e-4),

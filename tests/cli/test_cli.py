@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.conftest import REAL_DATA, REPO
+from tests.conftest import REPO, data_path
 
 BLADE = REPO / "examples" / "data" / "IEA_15MW_CFD.stp"
 
@@ -97,7 +97,7 @@ def test_maps_are_non_trivial_images(blade_run):
 
 
 def test_inspect_lists_every_face_of_linkrods(tmp_path):
-    proc = run("inspect", REAL_DATA / "linkrods.step", cwd=tmp_path)
+    proc = run("inspect", data_path("linkrods.step"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     lines = [line for line in proc.stdout.splitlines()
              if line.strip()[:1].isdigit() and "faces:" not in line]
@@ -113,7 +113,7 @@ def test_a_reader_that_leaves_early_ends_the_command_quietly(tmp_path):
     meets a reader that has gone."""
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-m", "cq_fairing.cli", "inspect",
-                             str(REAL_DATA / "impeller.igs")], stdout=subprocess.PIPE,
+                             str(data_path("impeller.igs"))], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, cwd=tmp_path, env=env)
     proc.stdout.close()
     assert proc.wait(timeout=600) == 141
@@ -226,7 +226,7 @@ def test_a_scattered_scan_is_refused_then_resampled(tmp_path):
     """Every 20th point of the real face scan (01_points.asc): neither a run nor a grid,
     so the command refuses it in one line naming --resample (it used to thread one curve
     through all the points in file order); with --resample a surface is written."""
-    np.savetxt(tmp_path / "scan.xyz", np.loadtxt(REAL_DATA / "01_points.asc")[::20])
+    np.savetxt(tmp_path / "scan.xyz", np.loadtxt(data_path("01_points.asc"))[::20])
     proc = run("points", "scan.xyz", "-o", "scan.step", cwd=tmp_path)
     assert proc.returncode == 2 and "--resample" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and not (tmp_path / "scan.step").exists()
@@ -252,7 +252,7 @@ def test_adaptive_fairs_the_rational_faces_of_linkrods(tmp_path):
     """--method adaptive used to skip every rational face ('skipped-rational'); linkrods'
     B-spline faces are rational but two. All 18 are now faired within tol (OCCT's
     two-sided check), the report says which are rational, and the poles drop."""
-    proc = run("fair", REAL_DATA / "linkrods.step", "-o", "out.step", "--tol", "0.01",
+    proc = run("fair", data_path("linkrods.step"), "-o", "out.step", "--tol", "0.01",
                "--method", "adaptive", "--report", "r.json", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     report = json.loads((tmp_path / "r.json").read_text())

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tests.cli.test_cli import run
-from tests.conftest import REAL_DATA
+from tests.conftest import data_path
 
 
 def assert_one_line_error(proc, code, tmp_path, fragment=""):
@@ -23,7 +23,7 @@ def test_a_truncated_brep_prints_nothing_on_stdout(tmp_path, command):
     """OCCT's BREP reader writes "Not a Curve table" and the like to std::cout on a
     truncated file; the command's output is the one error line on stderr only."""
     cut = tmp_path / "cut.brep"
-    cut.write_bytes((REAL_DATA / "testtoler.brep").read_bytes()[:60000])
+    cut.write_bytes(data_path("testtoler.brep").read_bytes()[:60000])
     proc = run(command[0], cut, *command[1:], cwd=tmp_path)
     assert_one_line_error(proc, 3, tmp_path, "not a readable BREP file")
     assert proc.stdout == ""

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import cq_fairing as cf
-from tests.conftest import REAL_DATA
+from tests.conftest import data_path
 
 
 def test_a_run_a_grid_of_scan_lines_and_a_scan_are_told_apart():
@@ -17,7 +17,7 @@ def test_a_run_a_grid_of_scan_lines_and_a_scan_are_told_apart():
     u, v = np.meshgrid(np.linspace(0, 5, 6), np.linspace(0, 8, 9), indexing="ij")
     grid = np.stack([u, v, np.sin(u) * np.cos(v / 3)], axis=-1)
     assert cf.classify_points(grid.reshape(-1, 3)) == ("grid", (6, 9))
-    scan = np.loadtxt(REAL_DATA / "01_points.asc")
+    scan = np.loadtxt(data_path("01_points.asc"))
     assert cf.classify_points(scan)[0] == cf.classify_points(scan[::20])[0] == "scattered"
 
 

@@ -3,7 +3,6 @@
 Imported by the headless pytest tests and by the GUI script, both inside FreeCAD.
 """
 
-import os
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -13,8 +12,8 @@ import FreeCAD
 import Part
 
 REPO = Path(__file__).resolve().parents[2]
-REAL = Path(os.environ.get("FAIRING_REAL_DATA", REPO.parent / "shared" / "data" / "real"))
-BLADE = REAL / "IEA_15MW_CFD.stp"
+REAL = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
+BLADE = REPO / "examples" / "data" / "IEA_15MW_CFD.stp"
 TERRAIN = REAL / "terrain.brep"
 
 

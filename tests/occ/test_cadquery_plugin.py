@@ -5,13 +5,13 @@ import pytest
 
 from cq_fairing.cadquery_plugin import fair_face, fair_shape, register
 from cq_fairing.errors import InvalidInputError
-from tests.conftest import REAL_DATA
+from tests.conftest import data_path
 from tests.occ.helpers import volume
 
 
 @pytest.fixture(scope="module")
 def linkrods():
-    return cq.importers.importStep(str(REAL_DATA / "linkrods.step"))
+    return cq.importers.importStep(str(data_path("linkrods.step")))
 
 
 def test_workplane_fair_on_selected_bspline_faces_rebuilds_the_solid(linkrods):
@@ -32,7 +32,7 @@ def test_workplane_fair_on_selected_bspline_faces_rebuilds_the_solid(linkrods):
 
 def test_workplane_fair_whole_solid_and_free_faces():
     register()
-    blade = cq.importers.importStep(str(REAL_DATA / "IEA_15MW_CFD.stp"))
+    blade = cq.importers.importStep(str(data_path("IEA_15MW_CFD.stp")))
     faces = blade.faces()
     out = faces.fair(tol=0.01)
     assert out.size() == 3

@@ -28,7 +28,7 @@ from cq_fairing.cli import main
 from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ import fair_shape, read_shape
 from cq_fairing.occ.io import read_model, write_model
-from tests.conftest import REAL_DATA
+from tests.conftest import data_path
 from tests.occ.helpers import area, faces_of
 
 RED, GREEN = (0.8, 0.1, 0.1), (0.1, 0.8, 0.1)
@@ -182,7 +182,7 @@ def _face_pole_counts(shape):
 
 @pytest.mark.parametrize("name", ["IEA_15MW_CFD.stp", "linkrods.step"])
 def test_read_model_gives_the_plain_readers_faces_in_its_order(name, rotor_step):
-    for path in (REAL_DATA / name, rotor_step):
+    for path in (data_path(name), rotor_step):
         plain = STEPControl_Reader()
         plain.ReadFile(str(path))
         plain.TransferRoots()
@@ -340,7 +340,7 @@ def test_face_parts_name_each_placement_of_a_nested_assembly(machine_step):
             expected.Multiply(_placement(shift, degrees))
         point = gp_Pnt(*blade_centre).Transformed(expected)
         assert np.allclose(_centre(mine), [point.X(), point.Y(), point.Z()], atol=1e-6)
-    assert read_model(REAL_DATA / "testtoler.brep").face_parts() == [None] * 56
+    assert read_model(data_path("testtoler.brep")).face_parts() == [None] * 56
 
 
 def test_the_terminal_table_names_the_placement_of_each_face(machine_step, tmp_path, capsys):

@@ -10,7 +10,7 @@ import pytest
 
 from cq_fairing.errors import FileFormatError, OutputPathError
 from cq_fairing.occ import list_faces, read_shape, write_shape
-from tests.conftest import REAL_DATA
+from tests.conftest import data_path
 from tests.occ.helpers import area, faces_of, volume
 
 
@@ -33,7 +33,7 @@ def test_missing_empty_corrupt_truncated_and_unknown_files(tmp_path):
     (tmp_path / "junk.brep").write_text("DBRep_DrawableShape\nnonsense\n")
     with pytest.raises(FileFormatError):
         read_shape(tmp_path / "junk.brep")
-    data = (REAL_DATA / "linkrods.step").read_bytes()
+    data = data_path("linkrods.step").read_bytes()
     (tmp_path / "half.step").write_bytes(data[: len(data) // 2])
     with pytest.raises(FileFormatError):
         read_shape(tmp_path / "half.step")
@@ -113,7 +113,7 @@ def test_step_unit_setting_is_restored(real, tmp_path):
 def test_step_unit_is_read_and_kept(real, tmp_path):
     from cq_fairing.occ.io import step_length_unit
 
-    assert step_length_unit(REAL_DATA / "linkrods.step") == "MM"
+    assert step_length_unit(data_path("linkrods.step")) == "MM"
     out = tmp_path / "ring_in_m.step"
     write_shape(real("ring_nurbs.brep"), out, unit="M")
     assert step_length_unit(out) == "M"
@@ -138,15 +138,15 @@ def test_reading_and_writing_print_nothing(tmp_path):
 
     from OCP.Message import Message
 
-    from tests.conftest import REAL_DATA, REPO
+    from tests.conftest import REPO, data_path
 
-    proc = subprocess.run([sys.executable, "-c", QUIET, str(REAL_DATA / "IEA_15MW_CFD.stp"),
+    proc = subprocess.run([sys.executable, "-c", QUIET, str(data_path("IEA_15MW_CFD.stp")),
                            str(tmp_path / "out.step")], capture_output=True, text=True,
                           env=dict(os.environ, PYTHONPATH=str(REPO)), timeout=120)
     assert proc.returncode == 0, proc.stderr[-800:]
     assert proc.stdout == ""
     before = Message.DefaultMessenger_s().Printers().Size()
-    read_shape(REAL_DATA / "IEA_15MW_CFD.stp")
+    read_shape(data_path("IEA_15MW_CFD.stp"))
     assert Message.DefaultMessenger_s().Printers().Size() == before >= 1
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, Phase, settings
 
 import cq_fairing.core
-from tests.conftest import REAL_DATA, REPO
+from tests.conftest import REPO, data_path
 
 # Import every core module once, outside the tests' ``simplefilter("error")`` blocks: the
 # lazily imported modules are then compiled here, and a compile-time warning in one of them
@@ -21,7 +21,7 @@ from tests.conftest import REAL_DATA, REPO
 for _module in pkgutil.iter_modules(cq_fairing.core.__path__):
     importlib.import_module(f"cq_fairing.core.{_module.name}")
 
-__all__ = ["fuzz", "sha256", "run_cli", "REAL_DATA", "REPO"]
+__all__ = ["fuzz", "sha256", "run_cli", "REPO", "data_path"]
 
 FUZZ_SCALE = float(os.environ.get("CQ_FAIRING_FUZZ_SCALE", "1"))
 

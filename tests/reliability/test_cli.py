@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .conftest import REAL_DATA, REPO, interruptible, run_cli, sha256
+from .conftest import REPO, data_path, interruptible, run_cli, sha256
 
-BLADE = REAL_DATA / "IEA_15MW_CFD.stp"
+BLADE = data_path("IEA_15MW_CFD.stp")
 
 
 @pytest.fixture(scope="module")
@@ -121,7 +121,7 @@ def test_output_same_as_input(blade):
 
 
 def test_sigint_leaves_no_partial_output(tmp_path, cli_help):
-    src, out = REAL_DATA / "terrain.brep", tmp_path / "terrain_faired.step"
+    src, out = data_path("terrain.brep"), tmp_path / "terrain_faired.step"
     before = sha256(src)
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-m", "cq_fairing.cli", "fair", str(src), "-o",
@@ -153,7 +153,7 @@ def slow_and_quick(tmp_path_factory, cli_help):
 
     compound, builder = TopoDS_Compound(), BRep_Builder()
     builder.MakeCompound(compound)
-    terrain = indexed_faces(read_shape(REAL_DATA / "terrain.brep"))[0]
+    terrain = indexed_faces(read_shape(data_path("terrain.brep")))[0]
     for face in (face_of(bspline_surface(16, 14, wiggle=0.01, seed=0)), terrain,
                  face_of(bspline_surface(16, 14, wiggle=0.01, seed=1)),
                  face_of(bspline_surface(14, 12, wiggle=0.01, seed=2))):

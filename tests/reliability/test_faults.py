@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import REAL_DATA, REPO, interruptible, sha256
+from .conftest import REPO, data_path, interruptible, sha256
 
-TERRAIN = REAL_DATA / "terrain.brep"
+TERRAIN = data_path("terrain.brep")
 
 PIPELINE = """
 import sys
@@ -87,7 +87,7 @@ def test_the_next_write_removes_what_a_killed_writer_left(tmp_path):
     from cq_fairing.report import STALE_SECONDS
 
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    proc = subprocess.Popen([sys.executable, "-c", STOPPED_WRITER, str(REAL_DATA / "ring_nurbs.brep"),
+    proc = subprocess.Popen([sys.executable, "-c", STOPPED_WRITER, str(data_path("ring_nurbs.brep")),
                              str(tmp_path / "killed.brep")], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
     _wait_for(proc, "temporary")
@@ -98,7 +98,7 @@ def test_the_next_write_removes_what_a_killed_writer_left(tmp_path):
     os.utime(tmp_path / left, (stamp, stamp))
     from cq_fairing.occ import read_shape, write_shape
 
-    write_shape(read_shape(REAL_DATA / "ring_nurbs.brep"), tmp_path / "next.brep")
+    write_shape(read_shape(data_path("ring_nurbs.brep")), tmp_path / "next.brep")
     assert _leftovers(tmp_path) == []
     assert sorted(p.name for p in tmp_path.iterdir()) == ["next.brep"]
 
@@ -138,7 +138,7 @@ def test_write_that_runs_out_of_room_leaves_nothing(tmp_path):
     fails part-way, the error is typed and the temporary file is removed."""
     out = tmp_path / "out.step"
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    proc = subprocess.run([sys.executable, "-c", FSIZE, str(REAL_DATA / "linkrods.step"),
+    proc = subprocess.run([sys.executable, "-c", FSIZE, str(data_path("linkrods.step")),
                            str(out)],
                           capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 3, proc.stderr[-800:]

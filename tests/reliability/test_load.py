@@ -6,7 +6,7 @@ import os
 import subprocess
 import sys
 
-from .conftest import REAL_DATA, REPO
+from .conftest import REPO, data_path
 
 IMPELLER = """
 import collections, json, resource, sys, time
@@ -36,7 +36,7 @@ def test_impeller_faces_finish_isolated_with_bounded_memory():
     """Every 16th face of the impeller (18 faces: 14 rational, 2 polynomial, 2 surfaces of
     revolution; all trimmed): each face gets a status, the shape stays valid, peak RSS
     < 1.2 GB.  The full 277-face run (RELIABILITY.md) took 66 s and 455 MB."""
-    stats = _run(IMPELLER, REAL_DATA / "impeller.igs", 16)
+    stats = _run(IMPELLER, data_path("impeller.igs"), 16)
     statuses = stats["statuses"]
     assert sum(statuses.values()) == 277
     assert statuses["skipped-not-selected"] == 277 - 18

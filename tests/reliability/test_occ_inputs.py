@@ -22,7 +22,7 @@ from cq_fairing.errors import (FairingError, FileFormatError, OutputPathError,
 from cq_fairing.occ import face_to_surface, fair_face, fair_shape, read_shape, write_shape
 from cq_fairing.occ.convert import indexed_faces
 
-from .conftest import REAL_DATA, sha256
+from .conftest import data_path, sha256
 
 
 # -- faces built with OCP -------------------------------------------------------------------
@@ -289,7 +289,7 @@ def _huge_garbage(path, megabytes=64):
 
 def _hostile(tmp_path, kind):
     path = tmp_path / f"{kind}.step"
-    data = (REAL_DATA / "linkrods.step").read_bytes()
+    data = data_path("linkrods.step").read_bytes()
     if kind == "empty":
         path.write_bytes(b"")
     elif kind == "random-bytes":
@@ -365,7 +365,7 @@ def test_unwritable_outputs_raise_output_path_error(tmp_path, small_shape, where
 
 def test_writing_over_the_input_is_refused(tmp_path, small_shape):
     src = tmp_path / "in.step"
-    shutil.copy(REAL_DATA / "linkrods.step", src)
+    shutil.copy(data_path("linkrods.step"), src)
     before = sha256(src)
     with pytest.raises(OutputPathError, match="input"):
         write_shape(small_shape, src, input_path=src, force=True)
