@@ -226,7 +226,8 @@ def _net(surf):
 
 
 def clamped_bspline(face):
-    """A clamped, non-periodic ``Geom_BSplineSurface`` copy of the face's surface.
+    """A clamped, non-periodic ``Geom_BSplineSurface`` copy of the face's surface
+    (periodic and unclamped knot vectors converted exactly).
 
     Returns
     -------
@@ -249,10 +250,22 @@ def clamped_bspline(face):
     if surf.IsVPeriodic():
         surf.SetVNotPeriodic()
         done.append("v")
-    if done:
+    if done or not _is_clamped(surf):
         u0, u1, v0, v1 = surf.Bounds()
         surf.Segment(u0, u1, v0, v1)
     return surf, tuple(done)
+
+
+def _is_clamped(surf):
+    """True when both knot vectors of a non-periodic ``Geom_BSplineSurface`` start and end
+    with multiplicity degree + 1.
+
+    OCCT also keeps unclamped ("uniform") knot vectors, whose domain starts at the flat knot
+    of index degree + 1 and whose border is not on the outer poles; ``Segment`` to the
+    domain inserts the end knots to full multiplicity, an exact change of basis."""
+    ends = ((surf.UMultiplicity(1), surf.UMultiplicity(surf.NbUKnots()), surf.UDegree()),
+            (surf.VMultiplicity(1), surf.VMultiplicity(surf.NbVKnots()), surf.VDegree()))
+    return all(first == last == degree + 1 for first, last, degree in ends)
 
 
 def is_occt_error(exc):
