@@ -4,7 +4,8 @@ Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
 [--method wavelet|adaptive|energy] [--objective compact|faithful|fair]
-[--borders auto|free|pinned] [--target-degree P [Q]] [--jobs N]
+[--borders auto|free|pinned] [--joins smooth|closed|free] [--angle-tol DEG]
+[--target-degree P [Q]] [--jobs N]
 [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``
     Fair the B-spline faces of a model and write the rebuilt model (STEP or BREP).
@@ -159,6 +160,13 @@ def build_parser():
                       help="with --method adaptive: the target's border rows; auto = "
                            "pinned (corners kept) where that gives fewer poles (default), "
                            "free = plain projection (often faster), pinned = always")
+    fair.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
+                      help="smooth = faces that meet along whole borders are faired together, "
+                           "joins closed and tangent where the source was (default); closed = "
+                           "closed only; free = each face alone")
+    fair.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
+                      help="a join whose source normals differ by less is smooth, else a "
+                           "crease (default 1 degree)")
     fair.add_argument("--target-degree", type=_degree, nargs="+", metavar="P",
                       help="degree of the faired surfaces, one for both directions or "
                            "P_U P_V (default: each face's own, at most 3)")
@@ -261,7 +269,8 @@ def command_fair(args):
                         progress=progress,
                         boundary=args.boundary, target_degree=target_degree,
                         details=False, jobs=args.jobs,
-                        face_timeout=args.face_timeout, in_place=True)
+                        face_timeout=args.face_timeout, in_place=True,
+                        joins=args.joins, angle_tol=args.angle_tol)
     write_model(model, args.output, force=args.force, input_path=args.input)
     kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
     report = _build_report(args, result, tol, time.perf_counter() - started, kept or None,
@@ -433,9 +442,14 @@ def _build_report(args, result, tol, seconds, kept=None, parts=None):
                         tolerance=tol, method=args.method,
                         objective=_objective(args) if args.method == "adaptive" else None,
                         borders=_borders(args) if args.method == "adaptive" else None,
-                        max_gap=result.max_gap,
+                        max_gap=result.max_gap, joins=_joins_entry(result.joins),
                         valid=result.valid, seconds=seconds, kept=kept,
                         command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
+
+
+def _joins_entry(joins):
+    """The report's ``joins``: one line, the summary and a row per join."""
+    return dict(line=joins.line(), summary=joins.summary(), rows=joins.rows())
 
 
 def _degrees(geometry):

@@ -264,7 +264,7 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
 
 def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
                  method=None, objective=None, borders=None, max_gap=None, valid=None,
-                 maps=None, seconds=None, command=None, units="mm", kept=None):
+                 maps=None, seconds=None, command=None, units="mm", kept=None, joins=None):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
     The summary counts ``faces_total``, ``faces_ok`` (``ok`` and ``unchanged``),
@@ -286,7 +286,10 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         source's own gap on each edge), validity, time), ``maps`` (name ->
         PNG/VTP path), ``skipped`` (index, reason) and ``kept`` (what the output keeps of
         the input besides geometry: counts of ``products``, ``instances``, ``colours``
-        and ``layers``, or ``None`` when the output is geometry only).
+        and ``layers``, or ``None`` when the output is geometry only), ``joins``
+        (``line``: the joins' summary in one line, ``summary`` and ``rows``: per join
+        the faces, kind, held, source and faired gap and angle; see
+        :class:`~cq_fairing.occ.joint.JoinReport`; ``None`` without a model).
     """
     from . import __version__
 
@@ -311,7 +314,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command, "input": _str(input_path), "output": _str(output_path),
         "tolerance": tolerance, "units": units, "method": method, "objective": objective,
-        "borders": borders, "kept": kept,
+        "borders": borders, "kept": kept, "joins": joins,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
                     for f in faces if f["status"] in NOT_HANDLED],
@@ -389,6 +392,8 @@ def summary_table(report):
         f"{s['poles_before']} -> {s['poles_after']}; worst deviation "
         f"{_fmt(s['worst_deviation'])} {report['units']} (tolerance {_fmt(report['tolerance'])})"
     )
+    if report.get("joins"):
+        lines.append(report["joins"]["line"])
     return "\n".join(lines)
 
 
@@ -452,6 +457,8 @@ def render_html(report):
                ("worst deviation", f"{_fmt(s['worst_deviation'])} {report['units']}"),
                ("largest gap fairing opened between faces", f"{_fmt(s['max_gap'])} {report['units']}"),
                ("valid shape", s["valid"]), ("time", f"{_fmt(s['seconds'], 3)} s")]
+    if report.get("joins"):
+        summary.append(("joins", report["joins"]["line"]))
 
     def kv(rows):
         return "<table>" + "".join(f"<tr><th>{esc(str(k))}</th><td class='l'>{esc(_fmt(v))}</td></tr>"

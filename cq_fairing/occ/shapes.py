@@ -40,7 +40,7 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
-from OCP.TopExp import TopExp
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
@@ -50,6 +50,8 @@ from .convert import (as_shape, face_info, finish_edges, indexed_faces, is_occt_
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
 from .congruence import compose, congruence_classes, inverse
 from .parallel import FacePool
+from .adjacency import find_joins, measure_joins
+from .joint import JOINS, JoinReport, fair_joined
 
 __all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
 
@@ -80,6 +82,9 @@ class ShapeFairResult:
     gaps : dict
         ``{edge index: gap opened}`` along every edge of a faired face (the index in
         ``TopExp::MapShapesAndAncestors`` order of ``shape``).
+    joins : JoinReport
+        Every join of the model, source and faired: gap, normal angle, smooth or crease,
+        held closed or not (:meth:`JoinReport.line` sums it up).
     """
 
     shape: object
@@ -91,6 +96,7 @@ class ShapeFairResult:
     free_edges_after: int = 0
     seconds: float = 0.0
     gaps: dict = field(default=None, repr=False)
+    joins: JoinReport = field(default=None, repr=False)
 
     @property
     def n_faired(self):
@@ -123,7 +129,7 @@ def _selection(faces, count):
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
                convert=False, progress=None, boundary="free", target_degree=None,
                density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
-               borders="auto", in_place=False):
+               borders="auto", in_place=False, joins="smooth", angle_tol=1.0):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -164,6 +170,21 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         ``jobs=1``); a face over the limit is reported ``'failed'`` ("time limit S s
         exceeded; kept the original"), keeps its original surface, and its worker is
         killed.  Default: no limit.
+    joins : {"smooth", "closed", "free"}, optional
+        How faces that meet stay together (default ``"smooth"``).  ``"smooth"`` and
+        ``"closed"`` fair the faces that meet along whole borders of their parameter
+        rectangles together (:mod:`cq_fairing.occ.joint`): each shared border is faired
+        once and both faces take it exactly (closed to round-off), and with
+        ``"smooth"`` the faces keep one tangent plane across the joins that were smooth
+        in the source (normal angle below ``angle_tol``); a crease stays a crease.
+        ``"free"`` fairs each face alone (its joins may open by up to about ``2 tol``,
+        held to ``max_gap`` by re-fairing).  Joins elsewhere (a trimmed face's inner
+        edge, part of a side, a rational or analytic neighbour) are faired as with
+        ``"free"``, and so are all faces with explicit ``n``.
+        :attr:`ShapeFairResult.joins` measures every join either way.
+    angle_tol : float, optional
+        Degrees: a join whose source normals differ by less along its whole length is
+        smooth, else a crease (default 1).
     in_place : bool, optional
         Fair on a copy as usual, then put the final surfaces into ``shape``'s own faces
         and return ``shape`` itself: whatever shares those faces sees the faired
@@ -187,6 +208,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     start = time.perf_counter()
     shape = as_shape(shape)
     check_options(tol, n, method, boundary, objective, borders)
+    _check_joins(joins, angle_tol)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
     if in_place and convert:
@@ -210,6 +232,9 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     try:
         job = _Job(source, originals, options, pool)
         job.fair_first(selected, tol, n, progress)
+        adjacency = find_joins(source, angle_tol=angle_tol)
+        if joins != "free" and tol is not None:
+            job.closed_edges = fair_joined(job, adjacency, joins)
         copy, gaps = job.build()
         if tol is not None:
             copy, gaps = job.close_gaps(copy, gaps, max_gap)
@@ -220,7 +245,21 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         copy = job.install_in_source()
     return ShapeFairResult(
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
-        tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps)
+        tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps,
+        JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges))
+
+
+def _check_joins(joins, angle_tol):
+    if joins not in JOINS:
+        raise InvalidInputError(
+            f"joins must be one of {JOINS}, got {joins!r}; 'smooth' (default) keeps joins "
+            "closed and smooth, 'closed' closed, 'free' fairs each face alone.")
+    if (isinstance(angle_tol, bool) or not isinstance(angle_tol, (int, float, np.integer,
+                                                                  np.floating))
+            or not np.isfinite(angle_tol) or not 0 < angle_tol < 90):
+        raise InvalidInputError(
+            f"angle_tol must be an angle in degrees between 0 and 90, got {angle_tol!r}; "
+            "e.g. angle_tol=1.0.")
 
 
 def _check_workers(jobs, face_timeout):
@@ -249,6 +288,7 @@ class _Job:
         self.tol = {}
         self.face_class, self.motion = congruence_classes(originals)
         self.source_gaps = {}
+        self.closed_edges = set()   # edges whose faces were faired together, held closed
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
@@ -294,6 +334,12 @@ class _Job:
             leader = first[self.face_class[index]]
             if leader != index:
                 report(index, self._placed(self.reports[leader], index))
+
+    def kept(self, index, status, message):
+        """The report of face ``index`` kept as it was, with ``status`` and ``message``."""
+        report = self.reports[index]
+        return kept_face_report(self.originals[index], status, message, index,
+                                self.tol.get(index), report.seconds if report else 0.0)
 
     def _placed(self, leader_report, index):
         """``leader_report`` for the face ``index``, congruent to the leader's face."""
@@ -392,8 +438,9 @@ class _Job:
                 report.face = target
         # an edge of one face only (a free border, or a seam whose rows fairing tied)
         # lies on that face alone: its 3-D curve is rebuilt on the new surface
-        free = [e for e in touched if not shared_edge(e)]
-        shared = [e for e in touched if shared_edge(e)]
+        # an edge whose faces were faired together lies on both: rebuilt like a free one
+        free = [e for e in touched if not shared_edge(e) or emap.FindIndex(e) in self.closed_edges]
+        shared = [e for e in touched if shared_edge(e) and emap.FindIndex(e) not in self.closed_edges]
         finish_edges(free, rebuild_3d=True)
         finish_edges(shared)
         settle_tolerances(shape, touched)
@@ -458,9 +505,24 @@ class _Job:
             if gap > max_gap:
                 for face in emap.FindFromIndex(edge_index):
                     index = fmap.FindIndex(face) - 1
-                    if self.reports[index].faired:
+                    if self.reports[index].faired and not self._joined(index):
                         out[index] = max(gap, out.get(index, 0.0))
         return dict(sorted(out.items()))
+
+    def _joined(self, index):
+        """True for a face faired together with its neighbours (its closed joins would
+        open if it were faired again alone)."""
+        return any(e in self.closed_edges for e in self._edges_of(index))
+
+    def _edges_of(self, index):
+        emap = TopTools_IndexedDataMapOfShapeListOfShape()
+        TopExp.MapShapesAndAncestors_s(self.source, TopAbs_EDGE, TopAbs_FACE, emap)
+        explorer = TopExp_Explorer(self.originals[index], TopAbs_EDGE)
+        out = set()
+        while explorer.More():
+            out.add(emap.FindIndex(explorer.Current()))
+            explorer.Next()
+        return out
 
     def _restore(self, index, max_gap):
         self.reports[index] = kept_face_report(

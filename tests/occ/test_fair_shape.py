@@ -210,8 +210,10 @@ def test_faired_shell_survives_a_brep_text_round_trip(real, tmp_path):
 @pytest.fixture(scope="module")
 def mirrored_strips(real):
     """testtoler faces 35 and 36 (126 x 4 poles, degree 5 x 3, mirror images of each
-    other) faired adaptively at 0.01 as a shell."""
-    return fair_shape(real("testtoler.brep"), tol=0.01, method="adaptive", faces=[35, 36])
+    other) faired adaptively at 0.01 as a shell, each face alone (``joins="free"``: the
+    pcurve projection and the congruence reuse below belong to face-by-face fairing)."""
+    return fair_shape(real("testtoler.brep"), tol=0.01, method="adaptive", faces=[35, 36],
+                      joins="free")
 
 
 def test_adaptive_strips_keep_their_shared_edge(mirrored_strips):
@@ -254,7 +256,8 @@ def test_a_source_gap_is_not_charged_to_fairing(real):
     """testtoler faces 44 and 48 meet along an edge of tolerance 11.7 whose pcurves lie
     16.8 apart at the same parameter in the source itself.  A rule on the whole gap
     restored both; only what fairing opens beyond the source's gap counts."""
-    result = fair_shape(real("testtoler.brep"), tol=0.01, method="adaptive", faces=[44, 48])
+    result = fair_shape(real("testtoler.brep"), tol=0.01, method="adaptive", faces=[44, 48],
+                        joins="free")
     assert [result.faces[i].status for i in (44, 48)] == ["faired", "faired"]
     assert result.max_gap <= 0.01
     assert max(result.gaps.values()) <= 0.01
@@ -307,7 +310,7 @@ def test_a_gap_that_halving_the_tolerance_does_not_shrink_is_closed_at_once(real
     message names tol 0.005), not fitted twice more down to tol/8."""
     shape = _with_loose_edge(real("testtoler.brep"), (35, 40), -0.05)
     assert BRepCheck_Analyzer(shape).IsValid()
-    result = fair_shape(shape, tol=0.01, method="adaptive", faces=[40])
+    result = fair_shape(shape, tol=0.01, method="adaptive", faces=[40], joins="free")
     report = result.faces[40]
     assert report.status == "unchanged"
     assert report.message.endswith("along a shared edge even at tol=0.005")

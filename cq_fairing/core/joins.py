@@ -1,0 +1,705 @@
+r"""Joint projection of patches that meet along whole borders: joins closed (G0) and
+smooth (G1) by construction.
+
+Patches are tensor-product B-spline surfaces.  A *border join* ties side :math:`s_a` of
+patch :math:`a` to side :math:`s_b` of patch :math:`b` (sides ``"u0"``, ``"u1"``,
+``"v0"``, ``"v1"``: the iso-lines :math:`u = u_{min}`, :math:`u = u_{max}`, ...), their
+along-parameters running the same way or reversed.  :func:`fair_patches` projects every
+patch onto its target space (the exact L2 projection of the wavelet method) under the
+constraints that make the joins hold:
+
+1. **Chords.**  A join ties the along-directions of its two patches; the tied
+   ``(patch, axis)`` pairs form classes.  Each class gets one knot vector on
+   :math:`[0, 1]`: the union of its members' target knots (normalised, reversed where a
+   member runs the other way; knots closer than :data:`SNAP` of the finest member's span
+   merged) at the largest member degree :math:`P`.  A kept patch adds its own knots with
+   multiplicity :math:`m + P - p`, so that its degree-:math:`p` border lies in the class
+   space exactly.
+2. **Vertices.**  The corners tied by the joins form vertices, each at the mean of its
+   corners (a kept patch's corner where there is one).
+3. **Edges**, faired once.  A join's border curve is the L2 projection onto the class
+   space of the first patch's source border (normalised parameter) with its ends held
+   at the vertices, :math:`G_{II} x_I = (E c)_I - G_{IE} x_E`,
+   :math:`E = \langle\Phi|\Phi_{S}\rangle`; next to a kept patch it is that patch's
+   border itself (the projection of an element of the space is the element).  One
+   side's border, not a mean of both: two faces may run along one curve with different
+   parametrizations, and a mean at equal parameters would cut across it.
+4. **Patches.**  The border rows of joined sides are the edges' poles; the other poles
+   are the L2 projection of the source with those rows held,
+   :math:`(G_u\otimes G_v)_{FF}\, x_F = r_F - (G_u\otimes G_v)_{FH}\, x_H`.
+   Two patches then share each joined border pole for pole: G0 to round-off.
+5. **G1 at smooth joins.**  With :math:`n_k` the mean unit normal of the two patches at
+   the Greville points :math:`t_k` of the edge space (from the previous solve; a kept
+   patch's own normal), each patch's cross-boundary derivative is held in those planes,
+   :math:`n_k\cdot\partial_\perp S(t_k) = 0`: linear in the first inner row of poles, an
+   equality-constrained least-squares problem per patch (one sparse KKT system).  Both
+   tangent planes contain the shared border's tangent and are orthogonal to
+   :math:`n_k`.  :data:`G1_ROUNDS` rounds, each from the last one's normals.
+
+Patches are polynomial (non-rational).  This module imports numpy and scipy only.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import InvalidInputError
+from .banded import BandedSPD
+from .geometry import BSplineSurface
+from .gram import gram_matrix
+from .spaces import SplineSpace
+
+__all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "SIDES"]
+
+SIDES = ("u0", "u1", "v0", "v1")
+SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
+KKT_EPS = 1e-12    # regularisation of the joint system's constraint block (relative)
+
+
+@dataclass(frozen=True)
+class JointPatch:
+    """One patch of :func:`fair_patches`.
+
+    Attributes
+    ----------
+    source : BSplineSurface
+        Polynomial, clamped.
+    target : (SplineSpace, SplineSpace) or None
+        The patch's own target spaces (from its tolerance search, on the source's
+        domain); ``None`` keeps the patch as it is: its borders then constrain its
+        neighbours.
+    """
+
+    source: BSplineSurface
+    target: tuple = None
+
+    @property
+    def kept(self):
+        return self.target is None
+
+    def space(self, axis):
+        """Target space along ``axis`` (0: u, 1: v); the source's for a kept patch."""
+        spaces = (self.source.u_space, self.source.v_space) if self.kept else self.target
+        return spaces[axis]
+
+
+@dataclass(frozen=True)
+class BorderJoin:
+    """Side ``side_a`` of patch ``a`` is side ``side_b`` of patch ``b``.
+
+    Attributes
+    ----------
+    a, b : int
+        Patch indices.
+    side_a, side_b : str
+        One of :data:`SIDES`.
+    reversed : bool
+        The along-parameters run opposite ways.
+    smooth : bool
+        Hold the tangent planes together (G1); otherwise only the border (G0), as at a
+        crease.
+    """
+
+    a: int
+    side_a: str
+    b: int
+    side_b: str
+    reversed: bool = False
+    smooth: bool = True
+
+
+@dataclass(frozen=True)
+class JointResult:
+    """Outcome of :func:`fair_patches`.
+
+    Attributes
+    ----------
+    surfaces : list of BSplineSurface
+        One per patch; a kept patch's source itself.
+    joins : list of BorderJoin
+        The joins imposed (a join whose chord would tie a direction to its own reverse is
+        left out, and so is a join between two kept patches).
+    dropped : list of (BorderJoin, str)
+        Joins left out, with the reason.
+    g1_rows : int
+        Mirrored cross-row conditions imposed (one per pole along each smooth join,
+        each for the three coordinates).
+    """
+
+    surfaces: list
+    joins: list
+    dropped: list
+    g1_rows: int = 0
+
+
+def fair_patches(patches, joins, *, continuity="G1"):
+    """Project patches onto their targets with closed (and smooth) border joins.
+
+    Parameters
+    ----------
+    patches : sequence of JointPatch
+    joins : sequence of BorderJoin
+        Each side of a patch in at most one join.
+    continuity : {"G0", "G1"}
+        ``"G1"`` also holds the tangent planes together across the smooth joins.
+
+    Returns
+    -------
+    JointResult
+
+    Raises
+    ------
+    InvalidInputError
+        Unknown sides or patch indices, a side in two joins, rational patches, or an
+        unknown ``continuity``.
+    """
+    patches, joins = _checked(patches, joins, continuity)
+    chords, joins, dropped = _chords(patches, joins)
+    spaces = _spaces(patches, chords)
+    held = _held_rows(patches, joins, spaces, chords, _vertices(patches, joins))
+    work = _Patchwork(patches, spaces, held)
+    surfaces, rows = work.surfaces(_separate(work)), 0
+    if continuity == "G1" and any(j.smooth for j in joins):
+        c, d = _mirror_rows(work, joins, chords, surfaces)
+        surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
+    return JointResult(surfaces, joins, dropped, rows)
+
+
+# -- input ---------------------------------------------------------------------------------
+def _checked(patches, joins, continuity):
+    if continuity not in ("G0", "G1"):
+        raise InvalidInputError(
+            f"continuity must be 'G0' or 'G1', got {continuity!r}; 'G1' keeps smooth joins "
+            "smooth, 'G0' only closed.")
+    patches, joins = list(patches), list(joins)
+    for i, patch in enumerate(patches):
+        if not isinstance(patch, JointPatch):
+            raise InvalidInputError(f"patch {i} must be a JointPatch, got {type(patch).__name__}.")
+        if patch.source.is_rational:
+            raise InvalidInputError(
+                f"patch {i} is rational; joint fairing takes polynomial patches. Keep it "
+                "out of the joint solve (fair it alone).")
+    used = set()
+    for join in joins:
+        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+            if side not in SIDES:
+                raise InvalidInputError(f"a join side must be one of {SIDES}, got {side!r}.")
+            if not 0 <= index < len(patches):
+                raise InvalidInputError(
+                    f"join patch index {index} is out of range (0..{len(patches) - 1}).")
+            if (index, side) in used:
+                raise InvalidInputError(
+                    f"side {side} of patch {index} is in two joins; a side meets one "
+                    "neighbour (split a non-manifold join before fairing).")
+            used.add((index, side))
+    return patches, joins
+
+
+def _along(side):
+    """Axis along a side: ``"u0"``/``"u1"`` run along v (1), ``"v0"``/``"v1"`` along u (0)."""
+    return 1 if side[0] == "u" else 0
+
+
+def _end(side):
+    """0 for the low side (``"u0"``, ``"v0"``), -1 for the high one."""
+    return 0 if side[1] == "0" else -1
+
+
+# -- chords --------------------------------------------------------------------------------
+class _Chords:
+    """Union-find over ``(patch, axis)`` with each member's reversal against its root."""
+
+    def __init__(self):
+        self.parent, self.flip = {}, {}
+
+    def find(self, key):
+        self.parent.setdefault(key, key)
+        self.flip.setdefault(key, False)
+        if self.parent[key] == key:
+            return key, False
+        root, flip = self.find(self.parent[key])
+        self.parent[key], self.flip[key] = root, self.flip[key] ^ flip
+        return root, self.flip[key]
+
+    def tie(self, a, b, reversed_):
+        """Tie ``a`` to ``b``; False when they are already tied the other way."""
+        (ra, fa), (rb, fb) = self.find(a), self.find(b)
+        if ra == rb:
+            return (fa ^ fb) == reversed_
+        self.parent[rb], self.flip[rb] = ra, fa ^ fb ^ reversed_
+        return True
+
+    def members(self):
+        groups = {}
+        for key in list(self.parent):
+            root, flip = self.find(key)
+            groups.setdefault(root, []).append((key, flip))
+        return groups
+
+
+def _chords(patches, joins):
+    """:class:`_Chords` of the joins, the joins kept and those dropped with a reason."""
+    chords, kept, dropped = _Chords(), [], []
+    for join in joins:
+        if patches[join.a].kept and patches[join.b].kept:
+            dropped.append((join, "both patches are kept"))
+            continue
+        a, b = (join.a, _along(join.side_a)), (join.b, _along(join.side_b))
+        if not chords.tie(a, b, join.reversed):
+            dropped.append((join, "its chord would tie a direction to its own reverse"))
+            continue
+        kept.append(join)
+    return chords, kept, dropped
+
+
+def _spaces(patches, chords):
+    """Target spaces ``[(space_u, space_v)]``: each joined direction carries its chord's
+    class space, mapped to the patch's domain."""
+    spaces = [[p.space(0), p.space(1)] for p in patches]
+    for members in chords.members().values():
+        if len(members) < 2:
+            continue
+        unit = _class_space([(patches[i].space(axis), flip, patches[i].kept)
+                             for (i, axis), flip in members])
+        for (i, axis), flip in members:
+            if not patches[i].kept:
+                spaces[i][axis] = _mapped(unit, patches[i].space(axis).domain, flip)
+    return [tuple(s) for s in spaces]
+
+
+def _normalised_knots(space, flip):
+    lo, hi = space.domain
+    t = (space.knots - lo) / (hi - lo)
+    return 1.0 - t[::-1] if flip else t
+
+
+def _class_space(members):
+    """One space on [0, 1] holding every member's space (kept members exactly)."""
+    degree = max(space.degree for space, _, _ in members)
+    finest = max(space.n_spans for space, _, _ in members)
+    entries = []   # (value, multiplicity, kept)
+    for space, flip, kept in members:
+        t = _normalised_knots(space, flip)
+        values, counts = np.unique(t[space.degree + 1: -space.degree - 1], return_counts=True)
+        raise_by = degree - space.degree if kept else 0
+        entries += [(v, c + raise_by, kept) for v, c in zip(values, counts)]
+    knots = _merged(sorted(entries), SNAP / finest, degree)
+    inner = np.repeat([v for v, _ in knots], [m for _, m in knots])
+    return SplineSpace(degree, np.concatenate([np.zeros(degree + 1), inner,
+                                               np.ones(degree + 1)]))
+
+
+def _merged(entries, snap, degree):
+    """Clusters of knots closer than ``snap`` as single knots: a kept member's knots stay
+    where they are (each distinct one), others merge to the cluster's mean and vanish next
+    to a kept knot or an end."""
+    out, cluster = [], []
+
+    def close():
+        kept = {}
+        for v, m, k in cluster:
+            if k:
+                key = round(v, 12)
+                kept[key] = max(kept.get(key, 0), m)
+        if kept:
+            out.extend((v, min(m, degree)) for v, m in sorted(kept.items()))
+            return
+        v = float(np.mean([v for v, _, _ in cluster]))
+        if snap <= v <= 1.0 - snap:
+            out.append((v, min(max(m for _, m, _ in cluster), degree)))
+
+    for entry in entries:
+        if cluster and entry[0] - cluster[0][0] > snap:
+            close()
+            cluster = []
+        cluster.append(entry)
+    if cluster:
+        close()
+    return out
+
+
+def _mapped(unit, domain, flip):
+    """``unit`` (a space on [0, 1]) on ``domain``, reversed when ``flip``."""
+    lo, hi = domain
+    t = 1.0 - unit.knots[::-1] if flip else unit.knots
+    return SplineSpace(unit.degree, lo + (hi - lo) * t)
+
+
+# -- vertices and edges --------------------------------------------------------------------
+def _side_ends(side):
+    """The two corners ``(i_end, j_end)`` of a side in along order."""
+    if side[0] == "u":
+        return [(_end(side), 0), (_end(side), -1)]
+    return [(0, _end(side)), (-1, _end(side))]
+
+
+def _vertices(patches, joins):
+    """``{(patch, corner): (point, normal)}`` of every corner tied by a join.
+
+    The point is the mean of the vertex's corners (a kept patch's corner where there is
+    one).  The normal is the mean unit normal of the corners' sources (signs aligned), or
+    ``None`` where a crease meets the vertex: the edges' end tangents are held in the
+    plane it defines, so that the patches around a smooth vertex share a tangent plane.
+    """
+    parent, creased = {}, set()
+
+    def find(key):
+        parent.setdefault(key, key)
+        while parent[key] != key:
+            parent[key] = parent[parent[key]]
+            key = parent[key]
+        return key
+
+    for join in joins:
+        ends_a = _side_ends(join.side_a)
+        ends_b = _side_ends(join.side_b)[::-1] if join.reversed else _side_ends(join.side_b)
+        for ca, cb in zip(ends_a, ends_b):
+            parent[find((join.a, ca))] = find((join.b, cb))
+            if not join.smooth:
+                creased.add((join.a, ca))
+    groups = {}
+    for key in list(parent):
+        groups.setdefault(find(key), []).append(key)
+    out = {}
+    for members in groups.values():
+        kept = [k for k in members if patches[k[0]].kept]
+        chosen = kept[:1] or members
+        point = np.mean([patches[i].source.poles[c] for i, c in chosen], axis=0)
+        smooth = not any(find(k) == find(members[0]) for k in creased)
+        normal = _vertex_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
+            if smooth else None
+        out.update({key: (point, normal) for key in members})
+    return out
+
+
+def _corner_normal(surface, corner):
+    """Unit normal ``S_u x S_v`` of a surface at a corner (``None`` where it vanishes)."""
+    (u0, u1), (v0, v1) = surface.domain
+    u = [u0 if corner[0] == 0 else u1]
+    v = [v0 if corner[1] == 0 else v1]
+    n = np.cross(surface.evaluate_grid(u, v, 1, 0)[0, 0], surface.evaluate_grid(u, v, 0, 1)[0, 0])
+    length = np.linalg.norm(n)
+    return n / length if length > 1e-12 * max(surface.size, 1e-300) else None
+
+
+def _vertex_normal(normals):
+    """Mean of unit normals with their signs aligned to the first (``None`` if none)."""
+    normals = [n for n in normals if n is not None]
+    if not normals:
+        return None
+    total = sum(n if n @ normals[0] >= 0 else -n for n in normals)
+    length = np.linalg.norm(total)
+    return total / length if length > 0 else None
+
+
+def _border(surface, side):
+    """The border curve of a side: (space along, poles)."""
+    if side[0] == "u":
+        return surface.v_space, surface.poles[_end(side)]
+    return surface.u_space, surface.poles[:, _end(side)]
+
+
+def _unit_curve(space, poles, flip):
+    """A border curve on [0, 1] (reversed when ``flip``)."""
+    knots = _normalised_knots(space, flip)
+    return SplineSpace(space.degree, knots), (poles[::-1] if flip else poles)
+
+
+def _held_rows(patches, joins, spaces, chords, vertices):
+    """``{patch: {side: border poles in the patch's own along order}}`` of every join."""
+    held = {}
+    for join in joins:
+        root_flip = {}
+        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+            root_flip[index, side] = chords.find((index, _along(side)))[1]
+        unit = _unit_space(spaces, _solved_side(patches, join), root_flip)
+        index, side = (join.b, join.side_b) if patches[join.b].kept else (join.a, join.side_a)
+        space, poles = _border(patches[index].source, side)
+        curves = [_unit_curve(space, poles, root_flip[index, side])]
+        ends = [vertices[join.a, c] for c in _side_ends(join.side_a)]
+        if root_flip[join.a, join.side_a]:
+            ends = ends[::-1]
+        edge = _edge_poles(unit, curves, np.array([p for p, _ in ends]), [n for _, n in ends])
+        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+            if not patches[index].kept:
+                held.setdefault(index, {})[side] = edge[::-1] if root_flip[index, side] else edge
+    return held
+
+
+def _solved_side(patches, join):
+    """``(patch, side)`` of a join whose patch is solved (not kept)."""
+    return (join.b, join.side_b) if patches[join.a].kept else (join.a, join.side_a)
+
+
+def _unit_space(spaces, solved, flips):
+    """The class space of a solved side's chord on [0, 1], in the chord's root order
+    (``flips[solved]``: the side's reversal against the root)."""
+    index, side = solved
+    space = spaces[index][_along(side)]
+    return SplineSpace(space.degree, _normalised_knots(space, flips[solved]))
+
+
+def _edge_poles(unit, curves, ends, normals):
+    r"""Poles on ``unit`` of the mean of ``curves`` (``ends`` ``None``: the plain
+    projection) with both ends held and each end
+    tangent in its vertex's plane (``normals``, ``None``: free):
+    minimise :math:`x^T G x - 2 x^T \bar m` over the interior poles under
+    :math:`n_0\cdot(x_1 - x_0) = 0` and :math:`n_1\cdot(x_{k-2} - x_{k-1}) = 0`."""
+    gram = gram_matrix(unit).toarray()
+    moments = np.mean([gram_matrix(unit, space) @ poles for space, poles in curves], axis=0)
+    if ends is None:
+        return sla.solve(gram, moments, assume_a="pos")
+    x = np.empty_like(moments)
+    x[0], x[-1] = ends
+    k = unit.dimension
+    if k <= 2:
+        return x
+    rhs = moments[1:-1] - gram[1:-1][:, [0, -1]] @ ends
+    rows, values = [], []
+    for normal, inner, end in ((normals[0], 0, ends[0]), (normals[1], k - 3, ends[1])):
+        if normal is not None:
+            row = np.zeros((k - 2, 3))
+            row[inner] = normal
+            rows.append(row.ravel())
+            values.append(normal @ end)
+    if not rows:
+        x[1:-1] = sla.solve(gram[1:-1, 1:-1], rhs, assume_a="pos")
+        return x
+    a = np.kron(gram[1:-1, 1:-1], np.eye(3))
+    c = np.array(rows)
+    kkt = np.block([[a, c.T], [c, np.zeros((len(rows), len(rows)))]])
+    solution = sla.lstsq(kkt, np.concatenate([rhs.ravel(), values]))[0]
+    x[1:-1] = solution[: 3 * (k - 2)].reshape(k - 2, 3)
+    return x
+
+
+# -- patch solves --------------------------------------------------------------------------
+class _Patchwork:
+    """The free poles of every solved patch, numbered together, and each patch's
+    held-row net: what the per-patch (G0) and joint (G1) solves share."""
+
+    def __init__(self, patches, spaces, held):
+        self.patches, self.spaces = patches, spaces
+        self.nets, self.position, self.blocks, self.rhs = {}, {}, [], []
+        offset = 0
+        for index, patch in enumerate(patches):
+            if patch.kept:
+                continue
+            net, mask = _held_net(tuple(s.dimension for s in spaces[index]),
+                                  held.get(index, {}))
+            block, rhs, rows, cols = _free_system(patch.source, spaces[index], net, mask)
+            position = -np.ones(mask.shape, dtype=int)
+            position[np.ix_(rows, cols)] = offset + np.arange(len(rows) * len(cols)).reshape(
+                len(rows), len(cols))
+            offset += len(rows) * len(cols)
+            self.nets[index], self.position[index] = net, position
+            self.blocks.append(block)
+            self.rhs.append(rhs.reshape(-1, 3))
+        self.count = offset
+
+    def surfaces(self, free):
+        """Every patch's surface with the free poles ``free`` (count, 3) filled in."""
+        out = []
+        for index, patch in enumerate(self.patches):
+            if patch.kept:
+                out.append(patch.source)
+                continue
+            net, position = self.nets[index].copy(), self.position[index]
+            inside = position >= 0
+            net[inside] = free[position[inside]]
+            tu, tv = self.spaces[index]
+            out.append(BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree))
+        return out
+
+    def pole(self, index, i, j):
+        """``(position, value)`` of pole (i, j) of a solved patch: a free pole's number
+        and ``None``, or ``-1`` and a held pole's value."""
+        k = self.position[index][i, j]
+        return (int(k), None) if k >= 0 else (-1, self.nets[index][i, j])
+
+
+def _held_net(shape, held):
+    """Net with the held rows set (NaN elsewhere) and the mask of held poles."""
+    ku, kv = shape
+    net = np.full((ku, kv, 3), np.nan)
+    for side, row in held.items():
+        if side[0] == "u":
+            net[_end(side)] = row
+        else:
+            net[:, _end(side)] = row
+    return net, ~np.isnan(net[..., 0])
+
+
+def _free_system(source, spaces, net, mask):
+    r"""The L2 projection's system on the free poles, with the held ones moved right:
+    :math:`(G_u\otimes G_v)_{FF}` as factors ``(A_u, A_v)`` of the free rows and columns,
+    and :math:`r_F = (E_u C_S E_v^T - G_u X_H G_v^T)_F`."""
+    tu, tv = spaces
+    gu, gv = gram_matrix(tu).toarray(), gram_matrix(tv).toarray()
+    moments = np.einsum("ia,abd,jb->ijd", gram_matrix(tu, source.u_space).toarray(),
+                        source.poles, gram_matrix(tv, source.v_space).toarray())
+    rows = np.flatnonzero(~mask.all(axis=1))
+    cols = np.flatnonzero(~mask.all(axis=0))
+    known = np.where(mask[..., None], net, 0.0)
+    rhs = (moments - np.einsum("ia,abd,jb->ijd", gu, known, gv))[np.ix_(rows, cols)]
+    return (gu[np.ix_(rows, rows)], gv[np.ix_(cols, cols)]), rhs, rows, cols
+
+
+def _separate(work):
+    """Free poles of every patch solved on its own (G0): banded solves per direction."""
+    free = np.empty((work.count, 3))
+    start = 0
+    for (a_u, a_v), rhs in zip(work.blocks, work.rhs):
+        size = rhs.shape[0]
+        if size:
+            shape = (a_u.shape[0], a_v.shape[0], 3)
+            free[start:start + size] = _tensor(a_u, a_v, rhs.reshape(shape)).reshape(-1, 3)
+        start += size
+    return free
+
+
+def _tensor(a_u, a_v, rhs):
+    r"""Solve :math:`(A_u\otimes A_v) x = r` per direction (banded Cholesky)."""
+    ku, kv = rhs.shape[:2]
+    x = BandedSPD(sp.csr_matrix(a_u)).solve(rhs.reshape(ku, -1)).reshape(ku, kv, -1)
+    y = BandedSPD(sp.csr_matrix(a_v)).solve(np.swapaxes(x, 0, 1).reshape(kv, -1))
+    return np.swapaxes(y.reshape(kv, ku, -1), 0, 1)
+
+
+# -- G1: mirrored cross-boundary rows -----------------------------------------------------
+def _cross_rows(work, join, chords):
+    """Per side of a join: ``(patch, pairs)`` with the (border, inner) pole indices of a
+    solved patch for each pole along the join (chord root order), or ``(patch, w)``
+    with a kept patch's cross row :math:`w = c_{inner} - c_{border}` on the join's class
+    space (its two rows projected there: exact, the class space holds them)."""
+    solved = _solved_side(work.patches, join)
+    flips = {(i, s): chords.find((i, _along(s)))[1]
+             for i, s in ((join.a, join.side_a), (join.b, join.side_b))}
+    unit = _unit_space(work.spaces, solved, flips)
+    out = []
+    for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+        flip = flips[index, side]
+        if work.patches[index].kept:
+            out.append((index, _kept_cross_row(work.patches[index].source, side, unit, flip)))
+            continue
+        along = np.arange(unit.dimension)[::-1] if flip else np.arange(unit.dimension)
+        end, inner = (0, 1) if side[1] == "0" else (-1, -2)
+        out.append((index, [((end, i), (inner, i)) if side[0] == "u" else ((i, end), (i, inner))
+                            for i in along]))
+    return out
+
+
+def _kept_cross_row(surface, side, unit, flip):
+    """A kept patch's cross row on ``unit`` (root order), from its border and first inner
+    rows projected onto ``unit``."""
+    space = surface.v_space if side[0] == "u" else surface.u_space
+    net = surface.poles if side[0] == "u" else np.swapaxes(surface.poles, 0, 1)
+    end, inner = (0, 1) if side[1] == "0" else (-1, -2)
+    rows = []
+    for row in (net[end], net[inner]):
+        curve_space, poles = _unit_curve(space, row, flip)
+        rows.append(_edge_poles(unit, [(curve_space, poles)], None, None))
+    return rows[1] - rows[0]
+
+
+def _cross_vectors(work, surfaces, side_rows):
+    """The cross row ``w`` of one side from ``surfaces`` (the separate solve)."""
+    index, rows = side_rows
+    if isinstance(rows, np.ndarray):
+        return rows
+    return np.array([surfaces[index].poles[q] - surfaces[index].poles[b] for b, q in rows])
+
+
+def _ratios(wa, wb):
+    r"""Per pole along a join, :math:`\mu_i = |w_{a,i}| / |w_{b,i}|`, smoothed to its
+    least-squares line along the join."""
+    mu = np.linalg.norm(wa, axis=1) / np.maximum(np.linalg.norm(wb, axis=1), 1e-300)
+    x = np.linspace(0.0, 1.0, mu.size)
+    line = np.polyval(np.polyfit(x, mu, 1), x) if mu.size > 2 else np.full(mu.size, mu.mean())
+    return np.maximum(line, 1e-3 * mu.mean())
+
+
+class _Forest:
+    r"""Union-find over free poles plus a ground node: a mirrored row links its (one or
+    two) free inner poles, and a row that would close a cycle is refused.
+
+    Around an inner vertex the rows next to it form a cycle
+    :math:`x_a = k_1 - \mu_1 x_b,\ \dots,\ x_d = k_4 - \mu_4 x_a`, singular where
+    :math:`\prod\mu = 1` (the vertex enclosure condition of G1 patch complexes);
+    without the closing row the chain is solvable and the projection picks its free
+    pole.  The vertex itself keeps one tangent plane through its edges
+    (:func:`_edge_poles`)."""
+
+    GROUND = -1
+
+    def __init__(self):
+        self.parent = {}
+
+    def _find(self, key):
+        self.parent.setdefault(key, key)
+        while self.parent[key] != key:
+            self.parent[key] = self.parent[self.parent[key]]
+            key = self.parent[key]
+        return key
+
+    def add(self, poles):
+        """Link ``poles`` (one: to the ground); False when they are linked already."""
+        a, b = (poles + [self.GROUND])[:2]
+        ra, rb = self._find(a), self._find(b)
+        if ra == rb:
+            return False
+        self.parent[ra] = rb
+        return True
+
+
+def _mirror_rows(work, joins, chords, surfaces):
+    r"""Rows :math:`w_{a,i} + \mu_i w_{b,i} = 0` (per coordinate) of every smooth join:
+    the cross rows of both patches mirror each other across the shared border, so the
+    cross derivatives are parallel and the tangent planes agree.  Rows that would close
+    a cycle are left out (:class:`_Forest`).  Returns the sparse matrix over the free
+    poles and the right-hand sides (rows, 3) from held poles."""
+    rows_, cols, vals, rhs = [], [], [], []
+    forest = _Forest()
+    for join in (j for j in joins if j.smooth):
+        sides = _cross_rows(work, join, chords)
+        wa, wb = (_cross_vectors(work, surfaces, side) for side in sides)
+        mu = _ratios(wa, wb)
+        for k in range(len(mu)):
+            entries, known = [], np.zeros(3)
+            for (index, rows), weight, w in zip(sides, (1.0, mu[k]), (wa, wb)):
+                if isinstance(rows, np.ndarray):    # a kept patch: its cross row is known
+                    known -= weight * w[k]
+                    continue
+                for pole, sign in zip(rows[k], (-1.0, 1.0)):
+                    position, value = work.pole(index, *pole)
+                    if position >= 0:
+                        entries.append((position, sign * weight))
+                    else:
+                        known -= sign * weight * value
+            if entries and forest.add([e[0] for e in entries]):
+                row = len(rhs)
+                rows_ += [row] * len(entries)
+                cols += [e[0] for e in entries]
+                vals += [e[1] for e in entries]
+                rhs.append(known)
+    matrix = sp.csr_matrix((vals, (rows_, cols)), shape=(len(rhs), work.count))
+    return matrix, np.array(rhs).reshape(-1, 3)
+
+
+def _joint(work, c, d):
+    r"""Free poles of the joint projection under :math:`C x = d`: the regularised KKT
+    system :math:`\begin{bmatrix}A & sC^T\\ sC & -\varepsilon I\end{bmatrix}`,
+    :math:`A` block-diagonal over the patches, one factorization for the three
+    coordinates; ``s`` scales the rows to :math:`A`'s diagonal and
+    :math:`\varepsilon = ` :data:`KKT_EPS` ``s`` lets dependent rows (where mirrored
+    rows meet at a vertex) through."""
+    a = sp.block_diag([sp.kron(sp.csr_matrix(a_u), sp.csr_matrix(a_v))
+                       for a_u, a_v in work.blocks], format="csc")
+    scale = float(a.diagonal().mean())
+    kkt = sp.bmat([[a, scale * c.T], [scale * c, -KKT_EPS * scale * sp.identity(c.shape[0])]],
+                  format="csc")
+    rhs = np.concatenate([np.concatenate(work.rhs), scale * d])
+    return spla.splu(kkt).solve(rhs)[: work.count]

@@ -1,0 +1,719 @@
+r"""Which faces of a model meet, along which borders, and how well: :func:`find_joins`.
+
+A *join* is a boundary along which two faces meet.  In a shell or a solid it is an edge
+shared by exactly two faces (the edge's ancestors in ``TopExp::MapShapesAndAncestors``).
+In a compound of loose faces (an IGES file with no shared edges) it is a pair of free
+edges, one per face, that coincide within a distance (see :func:`find_joins`); the
+source is not changed: no sewing, only reading.
+
+How well a join closes is measured on the geometry of the two faces.  At ``samples``
+parameters :math:`t_k`, uniform on the range of side 0's edge, the point
+
+.. math:: P_k = S_0(c_0(t_k))
+
+of face 0 (its surface :math:`S_0` at its pcurve :math:`c_0`) is projected onto face 1's
+surface, seeded with face 1's pcurve at the matching parameter and kept inside face 1's
+parameter box, giving :math:`Q_k = S_1(u_k, v_k)`; the gap is
+:math:`g_k = |P_k - Q_k|` and the angle :math:`\alpha_k` is the angle between the unit
+normals :math:`\pm (S_u \times S_v) / |S_u \times S_v|` of the two faces at :math:`P_k`
+and :math:`Q_k`, each taken with its face's orientation (``TopAbs_REVERSED`` turns it).
+The same is done with face 1's points projected onto face 0, and each sample keeps the
+larger of the two gaps and angles.  The faces of one shell are consistently oriented,
+so a tangent join has :math:`\alpha_k \approx 0`; two loose faces may disagree, and
+their angle is folded to :math:`\min(\alpha, 180^\circ - \alpha)`.
+
+A join is *smooth* when its largest source angle is below ``angle_tol`` degrees, else a
+*crease*.  :func:`measure_joins` measures the same joins on another shape with the same
+faces and edges (a faired copy), sample for sample, so that the faired angles and gaps
+can be compared with :attr:`Join.source_angles` point by point.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from OCP.Bnd import Bnd_Box
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepTools import BRepTools
+from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
+from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve
+from OCP.ShapeAnalysis import ShapeAnalysis_Surface
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_VERTEX
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+from OCP.gp import gp_Pnt, gp_Vec
+
+from ..errors import InvalidInputError
+from .convert import as_shape, indexed_faces
+
+__all__ = ["JoinSide", "Join", "JoinMeasure", "Adjacency", "find_joins", "measure_joins"]
+
+SIDES = ("u0", "u1", "v0", "v1")
+BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a pcurve sample on a border
+FULL_TOLERANCE = 1e-9     # relative to the border's span: an edge covering the whole side
+COINCIDENCE = 1e-4        # default coincidence, relative to the bounding-box diagonal
+EDGE_PROBES = 5           # samples per free edge when matching loose boundaries
+NEWTON_STEPS = 12         # Gauss-Newton iterations of a projection onto a surface
+NEWTON_STOP = 1e-12       # step (relative to the model size) that ends a projection
+HALVINGS = 8              # step halvings before a projection is taken as converged
+SINGULAR = 1e-4           # |S_u x S_v| / max(|S_u|, |S_v|)^2 below it: no reliable normal
+NUDGE = 1e-6              # parameter step (relative to the edge's range) off a pole
+
+
+# -- results -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class JoinSide:
+    """One face's side of a :class:`Join`.
+
+    Attributes
+    ----------
+    face : int
+        0-based face index in :func:`~cq_fairing.occ.convert.indexed_faces` order.
+    edge : int
+        1-based index, in ``TopExp::MapShapesAndAncestors(shape, EDGE, FACE)`` order, of
+        this face's edge on the join (for a shell: the shared edge, the same for both
+        sides; for loose faces: each face's own edge).
+    side : str or None
+        ``"u0"``, ``"u1"``, ``"v0"`` or ``"v1"`` when the edge's pcurve runs along that
+        border of the surface's parameter rectangle ``Bounds()`` (``"u0"`` is the
+        iso-line :math:`u = u_{min}`, along which :math:`v` varies); ``None`` when the
+        pcurve leaves the border (a trimmed face, an interior curve) or the surface is
+        neither a B-spline nor a Bezier surface.
+    along : tuple of float
+        The border parameter (:math:`v` for a u-side, :math:`u` for a v-side) at the
+        start and the end of the FORWARD edge; ``(nan, nan)`` when ``side`` is ``None``.
+    full : bool
+        The edge covers the whole side: ``along`` spans the border's whole parameter
+        range within :data:`FULL_TOLERANCE` of it.
+    """
+
+    face: int
+    edge: int
+    side: str = None
+    along: tuple = (float("nan"), float("nan"))
+    full: bool = False
+
+
+@dataclass(frozen=True)
+class Join:
+    """Two faces meeting along a boundary, as found in the source.
+
+    Attributes
+    ----------
+    sides : tuple of JoinSide
+        Side 0 and side 1; the measurement samples side 0's edge.
+    kind : str
+        ``"smooth"`` when ``source_angle < angle_tol``, else ``"crease"``.
+    source_gap : float
+        Largest distance between the two faces along the join, in the source.
+    source_angle : float
+        Largest angle (degrees) between the two faces' normals along the join.
+    source_angles : numpy.ndarray
+        The angle (degrees) at each sample, for a point-by-point comparison with
+        :attr:`JoinMeasure.angles` of a faired copy.
+    shared : bool
+        ``True``: one edge of the shape used by both faces; ``False``: two coincident
+        free edges of loose faces (their normals' angle is folded to at most 90 deg).
+    opposed : bool
+        The two sides' edges run in opposite directions (``False`` for a shared edge).
+    """
+
+    sides: tuple
+    kind: str
+    source_gap: float
+    source_angle: float
+    source_angles: np.ndarray = field(default=None, compare=False, repr=False)
+    shared: bool = True
+    opposed: bool = False
+
+    @property
+    def faces(self):
+        """``(face of side 0, face of side 1)``."""
+        return self.sides[0].face, self.sides[1].face
+
+
+@dataclass(frozen=True)
+class JoinMeasure:
+    """A join measured on some shape (:func:`measure_joins`).
+
+    Attributes
+    ----------
+    gap : float
+        Largest distance between the two faces along the join.
+    angle : float
+        Largest angle (degrees) between their normals along the join.
+    angles, gaps : numpy.ndarray
+        Per sample, in the order of :attr:`Join.source_angles`.
+    """
+
+    gap: float
+    angle: float
+    angles: np.ndarray = field(compare=False, repr=False)
+    gaps: np.ndarray = field(default=None, compare=False, repr=False)
+
+
+@dataclass
+class Adjacency:
+    """The joins of a shape and what does not join (:func:`find_joins`).
+
+    Attributes
+    ----------
+    joins : list of Join
+    non_manifold : list of int
+        Edge indices used by three or more faces (no join is made of them).
+    point_contacts : list of tuple of int
+        Face pairs ``(i, j)``, ``i < j``, that touch at a vertex only: they share a
+        vertex (or, for loose faces, have vertices within the coincidence distance) but
+        no edge and no join.
+    free_edges : int
+        Non-degenerate edges used by one face that are in no join (for a shell: the free
+        edges, as :func:`~cq_fairing.occ.shapes.free_edge_count` counts them).
+    angle_tol : float
+        The smooth/crease threshold used, degrees.
+    coincidence : float
+        The distance within which loose boundaries were matched.
+    """
+
+    joins: list
+    non_manifold: list = field(default_factory=list)
+    point_contacts: list = field(default_factory=list)
+    free_edges: int = 0
+    angle_tol: float = 1.0
+    coincidence: float = 0.0
+
+    def joins_of(self, face):
+        """The joins with ``face`` (0-based index) on either side.
+
+        Raises
+        ------
+        InvalidInputError
+            ``face`` is not an integer.
+        """
+        if isinstance(face, bool) or not isinstance(face, (int, np.integer)):
+            raise InvalidInputError(
+                f"face must be a 0-based face index (int), got {face!r}; e.g. joins_of(3).")
+        return [join for join in self.joins if face in join.faces]
+
+    def summary(self):
+        """Counts and extremes as a dict: ``joins``, ``smooth``, ``crease``,
+        ``max_gap``, ``max_angle``, ``max_smooth_angle``, ``non_manifold``,
+        ``point_contacts``, ``free_edges``."""
+        smooth = [j for j in self.joins if j.kind == "smooth"]
+        return dict(
+            joins=len(self.joins), smooth=len(smooth), crease=len(self.joins) - len(smooth),
+            max_gap=max((j.source_gap for j in self.joins), default=0.0),
+            max_angle=max((j.source_angle for j in self.joins), default=0.0),
+            max_smooth_angle=max((j.source_angle for j in smooth), default=0.0),
+            non_manifold=len(self.non_manifold), point_contacts=len(self.point_contacts),
+            free_edges=self.free_edges)
+
+
+# -- validation ------------------------------------------------------------------------------
+def _is_number(value):
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
+
+
+def _check_options(angle_tol, coincidence, samples):
+    if not _is_number(angle_tol) or not 0 < angle_tol < 180:
+        raise InvalidInputError(
+            f"angle_tol must be an angle in degrees between 0 and 180 (exclusive), got "
+            f"{angle_tol!r}; e.g. angle_tol=1.0 for 'smooth below one degree'.")
+    if coincidence is not None and (not _is_number(coincidence) or not np.isfinite(coincidence)
+                                    or coincidence <= 0):
+        raise InvalidInputError(
+            f"coincidence must be a positive finite distance in model units or None, got "
+            f"{coincidence!r}; leave it None for 1e-4 of the bounding-box diagonal.")
+    _check_samples(samples)
+
+
+def _check_samples(samples):
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
+        raise InvalidInputError(
+            f"samples must be an integer >= 2 (points measured per join), got {samples!r}; "
+            "e.g. samples=24.")
+
+
+# -- topology ---------------------------------------------------------------------------------
+def _edge_map(shape):
+    emap = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    return emap
+
+
+class _Model:
+    """Faces, edges and per-face geometry of one shape, indexed as the results are.
+
+    The faces using each edge are collected by exploring each face's edges (one entry per
+    use, so a seam lists its face twice, as ``MapShapesAndAncestors`` does): reading the
+    ancestor lists back from OCCT costs far more per list in Python.
+    """
+
+    def __init__(self, shape):
+        self.shape = shape
+        self.faces = indexed_faces(shape)
+        self.emap = _edge_map(shape)
+        self.size = _diagonal(shape)
+        self._surfaces = {}
+        self._uses = {}
+        self.vertices = TopTools_IndexedMapOfShape()
+        self.vertex_faces = {}
+        for index, face in enumerate(self.faces):
+            explorer = TopExp_Explorer(face, TopAbs_EDGE)
+            while explorer.More():
+                self._uses.setdefault(self.emap.FindIndex(explorer.Current()), []).append(index)
+                explorer.Next()
+            explorer = TopExp_Explorer(face, TopAbs_VERTEX)
+            while explorer.More():
+                vertex = self.vertices.Add(explorer.Current())
+                self.vertex_faces.setdefault(vertex, set()).add(index)
+                explorer.Next()
+
+    def edge(self, index):
+        """The FORWARD edge of 1-based index ``index``."""
+        return TopoDS.Edge_s(self.emap.FindKey(index).Oriented(TopAbs_FORWARD))
+
+    def owners(self, index):
+        """Distinct face indices using edge ``index`` and the number of uses."""
+        uses = self._uses.get(index, [])
+        return sorted(set(uses)), len(uses)
+
+    def surface(self, face_index):
+        """``(Geom_Surface, UV box (u0, u1, v0, v1), orientation sign)`` of a face."""
+        if face_index not in self._surfaces:
+            face = self.faces[face_index]
+            sign = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
+            self._surfaces[face_index] = (BRep_Tool.Surface_s(face),
+                                          BRepTools.UVBounds_s(face), sign)
+        return self._surfaces[face_index]
+
+
+def _diagonal(shape):
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box, True)
+    if box.IsVoid():
+        return 1.0
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0])) or 1.0
+
+
+def _pcurve(model, edge, face_index):
+    """``(Geom2d_Curve or None, first, last)`` of a FORWARD edge on a face."""
+    face = model.faces[face_index]
+    curve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge, face)
+    return curve, first, last
+
+
+def _uv(model, edge, face_index, params):
+    """UV points (n, 2) of the edge on the face at edge parameters ``params``.
+
+    From the pcurve; an edge without one (rare) gets its 3-D points projected
+    (``ShapeAnalysis_Surface::ValueOfUV``).
+    """
+    curve, _, _ = _pcurve(model, edge, face_index)
+    if curve is not None:
+        return np.array([curve.Value(float(t)).Coord() for t in params])
+    surface = model.surface(face_index)[0]
+    analysis, adaptor = ShapeAnalysis_Surface(surface), BRepAdaptor_Curve(edge)
+    tol = 1e-9 * model.size
+    return np.array([analysis.ValueOfUV(adaptor.Value(float(t)), tol).Coord() for t in params])
+
+
+def _join_side(model, face_index, edge_index):
+    """The :class:`JoinSide` of a face's edge: which border of the parameter rectangle."""
+    edge = model.edge(edge_index)
+    surface = model.surface(face_index)[0]
+    curve, first, last = _pcurve(model, edge, face_index)
+    if curve is None or not isinstance(surface, (Geom_BSplineSurface, Geom_BezierSurface)):
+        return JoinSide(face_index, edge_index)
+    uv = np.array([curve.Value(float(t)).Coord() for t in np.linspace(first, last, 7)])
+    u0, u1, v0, v1 = surface.Bounds()
+    bounds = {"u0": (0, u0, v0, v1), "u1": (0, u1, v0, v1),
+              "v0": (1, v0, u0, u1), "v1": (1, v1, u0, u1)}
+    for name, (axis, level, lo, hi) in bounds.items():
+        span = max(u1 - u0, v1 - v0)
+        if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
+            along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
+            eps = FULL_TOLERANCE * (hi - lo)
+            full = min(along) <= lo + eps and max(along) >= hi - eps
+            return JoinSide(face_index, edge_index, name, along, bool(full))
+    return JoinSide(face_index, edge_index)
+
+
+# -- measurement ---------------------------------------------------------------------------
+def _evaluate(surface, uv):
+    """Points, :math:`S_u`, :math:`S_v` (each (n, 3)) of ``surface`` at ``uv`` (n, 2)."""
+    out = np.empty((len(uv), 3, 3))
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    for k, (u, v) in enumerate(uv):
+        surface.D1(float(u), float(v), p, du, dv)
+        out[k] = (p.Coord(), du.Coord(), dv.Coord())
+    return out[:, 0], out[:, 1], out[:, 2]
+
+
+def _normals(surface, uv, su, sv, sign):
+    r"""Unit normals :math:`\pm S_u \times S_v / |S_u \times S_v|` and a mask of the
+    singular points (a degenerated edge's pole), where the normal is undefined:
+    :math:`|S_u \times S_v| \le 10^{-4} \max(|S_u|, |S_v|)^2` (one derivative vanishes
+    or both are parallel)."""
+    n = np.cross(su, sv)
+    length = np.linalg.norm(n, axis=1)
+    scale = np.maximum(np.einsum("ij,ij->i", su, su), np.einsum("ij,ij->i", sv, sv))
+    singular = length <= SINGULAR * np.maximum(scale, 1e-300)
+    length[singular] = 1.0
+    return sign * n / length[:, None], singular
+
+
+def _edge_normals(model, edge, face_index, params, inward):
+    r"""Unit normals of a face along an edge at ``params``, moved by ``inward`` (edge
+    parameter) where the surface is singular: at a pole the normal depends on the
+    direction of approach, and along the join is the one both faces share."""
+    surface, _, sign = model.surface(face_index)
+    uv = _uv(model, edge, face_index, params)
+    _, su, sv = _evaluate(surface, uv)
+    normals, singular = _normals(surface, uv, su, sv, sign)
+    for _ in range(4):
+        if not singular.any():
+            break
+        params = np.where(singular, params + inward, params)
+        inward = 10.0 * inward
+        uv = _uv(model, edge, face_index, params[singular])
+        _, su, sv = _evaluate(surface, uv)
+        normals[singular], singular[singular] = _normals(surface, uv, su, sv, sign)
+    return normals
+
+
+def _project(surface, box, targets, uv, points, su, sv, stop):
+    r"""Closest points of ``surface`` inside ``box`` to ``targets``, from seeds ``uv``.
+
+    Gauss-Newton on :math:`\min |S(u, v) - X|^2`: the step solves
+    :math:`J^T J \, \delta = J^T (X - S)` with :math:`J = [S_u \; S_v]`; a parameter
+    that would leave the box is held at the border and the other one solved alone, and
+    a step that would move away from :math:`X` is halved (up to :data:`HALVINGS` times;
+    near a singular corner the full step can jump far across the surface).
+    ``points``, ``su``, ``sv`` are the surface's values at the seeds.
+
+    Returns
+    -------
+    uv, points, su, sv : numpy.ndarray
+        At the projections.
+    """
+    uv, points, su, sv = uv.copy(), points.copy(), su.copy(), sv.copy()
+    lo, hi = np.array([box[0], box[2]]), np.array([box[1], box[3]])
+    uv = np.clip(uv, lo, hi)
+    active = np.ones(len(uv), bool)
+    for _ in range(NEWTON_STEPS):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        r = targets[idx] - points[idx]
+        a, b, c = (np.einsum("ij,ij->i", x, y) for x, y in
+                   ((su[idx], su[idx]), (su[idx], sv[idx]), (sv[idx], sv[idx])))
+        g1, g2 = np.einsum("ij,ij->i", su[idx], r), np.einsum("ij,ij->i", sv[idx], r)
+        det = a * c - b * b
+        ok = det > 1e-14 * np.maximum(a * c, 1e-300)
+        step = np.zeros((idx.size, 2))
+        step[ok, 0] = (c[ok] * g1[ok] - b[ok] * g2[ok]) / det[ok]
+        step[ok, 1] = (a[ok] * g2[ok] - b[ok] * g1[ok]) / det[ok]
+        alone = ~ok   # singular: each direction alone
+        step[alone, 0] = np.where(a[alone] > 0, g1[alone] / np.maximum(a[alone], 1e-300), 0.0)
+        step[alone, 1] = np.where(c[alone] > 0, g2[alone] / np.maximum(c[alone], 1e-300), 0.0)
+        trial = uv[idx] + step
+        out = (trial < lo) | (trial > hi)
+        only_u = out[:, 1] & ~out[:, 0]   # v held: u alone
+        only_v = out[:, 0] & ~out[:, 1]
+        step[only_u, 0] = np.where(a[only_u] > 0, g1[only_u] / np.maximum(a[only_u], 1e-300), 0)
+        step[only_v, 1] = np.where(c[only_v] > 0, g2[only_v] / np.maximum(c[only_v], 1e-300), 0)
+        pending, moved = np.arange(idx.size), np.zeros(idx.size)
+        for _ in range(HALVINGS):   # backtrack: a step must not move away from the target
+            sel = idx[pending]
+            new = np.clip(uv[sel] + step[pending], lo, hi)
+            p, du, dv = _evaluate(surface, new)
+            better = (np.linalg.norm(targets[sel] - p, axis=1)
+                      <= np.linalg.norm(targets[sel] - points[sel], axis=1))
+            moved[pending[better]] = np.linalg.norm(p[better] - points[sel[better]], axis=1)
+            good = sel[better]
+            uv[good], points[good] = new[better], p[better]
+            su[good], sv[good] = du[better], dv[better]
+            pending = pending[~better]
+            if pending.size == 0:
+                break
+            step[pending] *= 0.5
+        active[idx[moved <= stop]] = False   # converged, or no step helps (a border minimum)
+    return uv, points, su, sv
+
+
+def _angles(n0, n1, folded):
+    cos = np.clip(np.einsum("ij,ij->i", n0, n1), -1.0, 1.0)
+    angles = np.degrees(np.arccos(cos))
+    return np.minimum(angles, 180.0 - angles) if folded else angles
+
+
+def _measure(model, join, samples):
+    """Per-sample gaps and angles of ``join`` on ``model`` (see the module doc)."""
+    side0, side1 = join.sides
+    e0, e1 = model.edge(side0.edge), model.edge(side1.edge)
+    _, a0, b0 = _pcurve(model, e0, side0.face)
+    _, a1, b1 = _pcurve(model, e1, side1.face)
+    s = np.linspace(0.0, 1.0, samples)
+    t0 = a0 + s * (b0 - a0)
+    t1 = (b1 - s * (b1 - a1)) if join.opposed else (a1 + s * (b1 - a1))
+    inward0 = NUDGE * (b0 - a0) * np.where(s < 0.5, 1.0, -1.0)
+    inward1 = NUDGE * (b1 - a1) * np.where(s < 0.5, 1.0, -1.0) * (-1.0 if join.opposed else 1.0)
+    surf0, box0, sign0 = model.surface(side0.face)
+    surf1, box1, sign1 = model.surface(side1.face)
+    uv0, uv1 = _uv(model, e0, side0.face, t0), _uv(model, e1, side1.face, t1)
+    p0, su0, sv0 = _evaluate(surf0, uv0)
+    p1, su1, sv1 = _evaluate(surf1, uv1)
+    stop = NEWTON_STOP * model.size
+    quv1, q1, qu1, qv1 = _project(surf1, box1, p0, uv1, p1, su1, sv1, stop)
+    quv0, q0, qu0, qv0 = _project(surf0, box0, p1, uv0, p0, su0, sv0, stop)
+    n_p0 = _edge_normals(model, e0, side0.face, t0, inward0)
+    n_p1 = _edge_normals(model, e1, side1.face, t1, inward1)
+    n_q1, bad1 = _normals(surf1, quv1, qu1, qv1, sign1)
+    n_q0, bad0 = _normals(surf0, quv0, qu0, qv0, sign0)
+    n_q1[bad1], n_q0[bad0] = n_p1[bad1], n_p0[bad0]  # a projection onto a pole
+    folded = not join.shared
+    gaps = np.maximum(np.linalg.norm(p0 - q1, axis=1), np.linalg.norm(p1 - q0, axis=1))
+    angles = np.maximum(_angles(n_p0, n_q1, folded), _angles(n_p1, n_q0, folded))
+    return gaps, angles
+
+
+def measure_joins(shape, joins, *, samples=24):
+    """Measure ``joins`` on ``shape``: gaps and normal angles along each join.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape or cadquery.Shape
+        The source or a shape with the same faces and edges in the same order (a faired
+        copy made by :func:`~cq_fairing.occ.fair_shape`).
+    joins : iterable of Join
+        From :func:`find_joins` on the source.
+    samples : int, optional
+        Points per join; use the value given to :func:`find_joins` to compare the
+        angles sample by sample with :attr:`Join.source_angles`.
+
+    Returns
+    -------
+    list of JoinMeasure
+        One per join, in order.
+
+    Raises
+    ------
+    InvalidInputError
+        Bad ``samples``, something else than a :class:`Join`, or a join whose face or
+        edge indices do not fit ``shape`` (not the same faces and edges).
+    """
+    shape = as_shape(shape)
+    _check_samples(samples)
+    model = _Model(shape)
+    joins = list(joins)
+    for join in joins:
+        _check_fits(model, join)
+    out = []
+    for join in joins:
+        gaps, angles = _measure(model, join, samples)
+        out.append(JoinMeasure(float(gaps.max()), float(angles.max()), angles, gaps))
+    return out
+
+
+def _check_fits(model, join):
+    if not isinstance(join, Join):
+        raise InvalidInputError(
+            f"joins must hold Join objects from find_joins, got {type(join).__name__}.")
+    for side in join.sides:
+        fits = (0 <= side.face < len(model.faces) and 1 <= side.edge <= model.emap.Extent()
+                and side.face in model.owners(side.edge)[0])
+        if not fits:
+            raise InvalidInputError(
+                f"the join side (face {side.face}, edge {side.edge}) is not a face and one of "
+                f"its edges in this shape ({len(model.faces)} faces, {model.emap.Extent()} "
+                "edges); measure the source or a copy with the same faces and edges.")
+
+
+# -- finding joins ------------------------------------------------------------------------------
+def find_joins(shape, *, angle_tol=1.0, coincidence=None, samples=24):
+    """The joins of ``shape``: which faces meet, along which borders, and how well.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape or cadquery.Shape
+        A shell, a solid, or a compound (of loose faces, shells, solids).  Not changed.
+    angle_tol : float, optional
+        Degrees: a join whose largest source normal angle is below it is ``"smooth"``,
+        otherwise a ``"crease"``.
+    coincidence : float, optional
+        Distance within which two free edges of different faces are one boundary (loose
+        faces, e.g. an IGES compound).  Default 1e-4 of the bounding-box diagonal; for
+        each pair it is raised to the larger of the two edges' tolerances.
+    samples : int, optional
+        Points measured along each join (uniform in side 0's edge parameter).
+
+    Returns
+    -------
+    Adjacency
+
+    Notes
+    -----
+    *Shared edges.*  An edge used by exactly two faces is a join; one used by three or
+    more is non-manifold (listed, not a join); a seam (listed twice for one face) and a
+    degenerated edge are neither.
+
+    *Loose boundaries.*  Free edges (used by one face) are matched geometrically, as
+    sewing would pair them but without changing anything: two edges of different faces
+    whose start and end points coincide (in the same or in reverse order) within the
+    coincidence distance, and whose :data:`EDGE_PROBES` samples lie within it of each
+    other (at the same fractions of the parameter range, or else by projection onto the
+    other edge's 3-D curve), form a join with ``shared=False``.  Each edge is matched
+    once, the closest candidate first.  Partial overlaps (one long edge against two
+    short ones, a T-junction of loose faces) are not matched in this version: those
+    edges stay free, and the faces may then be listed in
+    :attr:`Adjacency.point_contacts`.  Two free edges of one face (an unsewn seam) are
+    not a join.
+
+    Raises
+    ------
+    InvalidInputError
+        Bad ``shape``, ``angle_tol``, ``coincidence`` or ``samples``.
+    """
+    shape = as_shape(shape)
+    _check_options(angle_tol, coincidence, samples)
+    model = _Model(shape)
+    if coincidence is None:
+        coincidence = COINCIDENCE * model.size
+    pairs, non_manifold, free = [], [], []
+    for index in range(1, model.emap.Extent() + 1):
+        if BRep_Tool.Degenerated_s(model.edge(index)):
+            continue
+        owners, uses = model.owners(index)
+        if len(owners) >= 3:
+            non_manifold.append(index)
+        elif len(owners) == 2:
+            pairs.append(((owners[0], index), (owners[1], index), True, False))
+        elif uses == 1:
+            free.append(index)
+    matched = _match_free_edges(model, free, coincidence)
+    pairs += [((fa, ea), (fb, eb), False, opposed) for (fa, ea), (fb, eb), opposed in matched]
+    joins = [_source_join(model, first, second, shared, opposed, angle_tol, samples)
+             for first, second, shared, opposed in pairs]
+    used = {edge for (_, ea), (_, eb), _ in matched for edge in (ea, eb)}
+    return Adjacency(joins, non_manifold, _point_contacts(model, joins, coincidence),
+                     len(free) - len(used), float(angle_tol), float(coincidence))
+
+
+def _source_join(model, first, second, shared, opposed, angle_tol, samples):
+    sides = (_join_side(model, *first), _join_side(model, *second))
+    draft = Join(sides, "smooth", 0.0, 0.0, None, shared, opposed)
+    gaps, angles = _measure(model, draft, samples)
+    angle = float(angles.max())
+    return Join(sides, "smooth" if angle < angle_tol else "crease", float(gaps.max()), angle,
+                angles, shared, opposed)
+
+
+class _FreeEdge:
+    """A free edge's probes: EDGE_PROBES points at uniform fractions of its range."""
+
+    def __init__(self, model, index):
+        self.index = index
+        self.edge = model.edge(index)
+        self.face = model.owners(index)[0][0]
+        adaptor = BRepAdaptor_Curve(self.edge)
+        first, last = adaptor.FirstParameter(), adaptor.LastParameter()
+        self.points = np.array([adaptor.Value(float(t)).Coord()
+                                for t in np.linspace(first, last, EDGE_PROBES)])
+        self.tolerance = BRep_Tool.Tolerance_s(self.edge)
+
+    def distance_along(self, other):
+        """Largest distance from this edge's probes to ``other``'s 3-D curve (inf when
+        ``other`` has no 3-D curve or a probe does not project)."""
+        curve = BRep_Tool.Curve_s(other.edge, 0.0, 0.0)
+        first, last = BRep_Tool.Range_s(other.edge)
+        if curve is None:
+            return np.inf
+        worst = 0.0
+        for p in self.points[1:-1]:
+            projector = GeomAPI_ProjectPointOnCurve(gp_Pnt(*p), curve, first, last)
+            if projector.NbPoints() == 0:
+                return np.inf
+            worst = max(worst, projector.LowerDistance())
+        return worst
+
+
+def _match_free_edges(model, free, coincidence):
+    """Pairs ``((face, edge), (face, edge), opposed)`` of coincident free edges."""
+    if len(free) < 2:
+        return []
+    edges = [_FreeEdge(model, index) for index in free]
+    ends = np.array([np.concatenate([e.points[0], e.points[-1]]) for e in edges])
+    swapped = np.concatenate([ends[:, 3:], ends[:, :3]], axis=1)
+    radius = max(coincidence, max(e.tolerance for e in edges))
+    tree = cKDTree(ends)
+    candidates = []
+    for opposed, queries in ((False, ends), (True, swapped)):
+        for i, near in enumerate(tree.query_ball_point(queries, np.sqrt(2.0) * radius)):
+            for j in near:
+                if i < j and edges[i].face != edges[j].face:
+                    distance = _coincident(edges[i], edges[j], opposed, coincidence)
+                    if distance is not None:
+                        candidates.append((distance, i, j, opposed))
+    taken, pairs = set(), []
+    for distance, i, j, opposed in sorted(set(candidates)):
+        if i in taken or j in taken:
+            continue
+        taken.update((i, j))
+        a, b = edges[i], edges[j]
+        pairs.append(((a.face, a.index), (b.face, b.index), opposed))
+    return pairs
+
+
+def _coincident(a, b, opposed, coincidence):
+    """Largest probe distance of two free edges when they coincide, else ``None``."""
+    limit = max(coincidence, a.tolerance, b.tolerance)
+    other = b.points[::-1] if opposed else b.points
+    ends = max(np.linalg.norm(a.points[0] - other[0]), np.linalg.norm(a.points[-1] - other[-1]))
+    if ends > limit:
+        return None
+    direct = float(np.linalg.norm(a.points - other, axis=1).max())
+    if direct <= limit:
+        return direct
+    projected = max(ends, a.distance_along(b), b.distance_along(a))
+    return projected if projected <= limit else None
+
+
+def _point_contacts(model, joins, coincidence):
+    """Face pairs that share a vertex (or have coincident vertices) and nothing else."""
+    count = model.vertices.Extent()
+    if count == 0:
+        return []
+    groups = list(range(count))
+
+    def root(i):
+        while groups[i] != i:
+            groups[i] = groups[groups[i]]
+            i = groups[i]
+        return i
+
+    vertices = [TopoDS.Vertex_s(model.vertices.FindKey(i)) for i in range(1, count + 1)]
+    points = np.array([BRep_Tool.Pnt_s(v).Coord() for v in vertices])
+    tolerances = np.array([BRep_Tool.Tolerance_s(v) for v in vertices])
+    radius = max(coincidence, float(tolerances.max()))
+    for i, j in cKDTree(points).query_pairs(radius):
+        if np.linalg.norm(points[i] - points[j]) <= max(coincidence, tolerances[i], tolerances[j]):
+            groups[root(i)] = root(j)
+    faces_at = {}
+    for i in range(count):
+        faces_at.setdefault(root(i), set()).update(model.vertex_faces[i + 1])
+    linked = {tuple(sorted(j.faces)) for j in joins}
+    for index in range(1, model.emap.Extent() + 1):
+        owners = model.owners(index)[0]
+        linked.update((a, b) for a in owners for b in owners if a < b)
+    contacts = set()
+    for faces in faces_at.values():
+        ordered = sorted(faces)
+        contacts.update((a, b) for n, a in enumerate(ordered) for b in ordered[n + 1:]
+                        if (a, b) not in linked)
+    return sorted(contacts)

@@ -1,0 +1,148 @@
+"""Joint projection of patches (cq_fairing.core.joins) on a grid with a known answer: four
+noisy patches fitted to one smooth surface, one of them parametrized backwards and one
+transposed.  Points and normals are evaluated with scipy's B-spline basis
+(tests/core/naive.py), not with the code under test."""
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from cq_fairing.core.geometry import BSplineSurface
+from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches
+from cq_fairing.core.spaces import SplineSpace
+from cq_fairing.errors import InvalidInputError
+
+from .naive import basis_matrix
+
+SOURCE_SPACE = SplineSpace.quasi_uniform(9, 3)
+SAMPLES = np.linspace(0.0, 1.0, 101)
+
+
+def _truth(x, y):
+    return np.stack([x, y, 0.3 * np.sin(2 * x) * np.cos(1.5 * y) + 0.1 * x * y], -1)
+
+
+def _patch(x0, y0, rng, noise, flip_u=False, swap=False):
+    """A 12 x 12 bicubic least-squares fit of the truth on a unit square, noise on the
+    interior poles."""
+    s = np.linspace(0, 1, 60)
+    fit = np.linalg.pinv(basis_matrix(SOURCE_SPACE.knots, 3, s))
+    u, v = np.meshgrid(s, s, indexing="ij")
+    u = 1 - u if flip_u else u
+    x, y = (x0 + v, y0 + u) if swap else (x0 + u, y0 + v)
+    net = np.einsum("ia,abd,jb->ijd", fit, _truth(x, y), fit)
+    net[1:-1, 1:-1] += noise * rng.standard_normal(net[1:-1, 1:-1].shape)
+    return BSplineSurface(net, SOURCE_SPACE.knots, SOURCE_SPACE.knots, 3, 3)
+
+
+def _grid(noise=0.003, seed=1):
+    rng = np.random.default_rng(seed)
+    patches = [_patch(0, 0, rng, noise), _patch(1, 0, rng, noise, flip_u=True),
+               _patch(0, 1, rng, noise), _patch(1, 1, rng, noise, swap=True)]
+    joins = [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "v1", 2, "v0"),
+             BorderJoin(2, "u1", 3, "v0"), BorderJoin(1, "v1", 3, "u0", reversed=True)]
+    return patches, joins
+
+
+def _derivatives(surface, u, v):
+    """Point, S_u and S_v at (u_k, v_k) by scipy's basis (naive)."""
+    out = []
+    for nu, nv in ((0, 0), (1, 0), (0, 1)):
+        bu = basis_matrix(surface.u_knots, surface.u_degree, u, nu)
+        bv = basis_matrix(surface.v_knots, surface.v_degree, v, nv)
+        out.append(np.einsum("ka,abd,kb->kd", bu, surface.poles, bv))
+    return out
+
+
+def _border(surface, side, t):
+    (u0, u1), (v0, v1) = surface.domain
+    fixed = np.full_like(t, {"u0": u0, "u1": u1, "v0": v0, "v1": v1}[side])
+    u, v = (fixed, v0 + (v1 - v0) * t) if side[0] == "u" else (u0 + (u1 - u0) * t, fixed)
+    point, su, sv = _derivatives(surface, u, v)
+    normal = np.cross(su, sv)
+    return point, normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
+def _joins_measured(surfaces, joins):
+    """Largest gap and normal angle (degrees) over all joins at 101 samples each."""
+    gap = angle = 0.0
+    for join in joins:
+        pa, na = _border(surfaces[join.a], join.side_a, SAMPLES)
+        pb, nb = _border(surfaces[join.b], join.side_b,
+                         1 - SAMPLES if join.reversed else SAMPLES)
+        gap = max(gap, np.linalg.norm(pa - pb, axis=1).max())
+        cos = np.clip(np.abs(np.sum(na * nb, axis=1)), -1, 1)
+        angle = max(angle, np.degrees(np.arccos(cos)).max())
+    return gap, angle
+
+
+def _deviation(surfaces, patches):
+    g = np.linspace(0, 1, 41)
+    u, v = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    return max(np.linalg.norm(_derivatives(s, u, v)[0] - _derivatives(p, u, v)[0], axis=1).max()
+               for s, p in zip(surfaces, patches))
+
+
+def _targets(patches, n=4):
+    target = SplineSpace.quasi_uniform(n, 3)
+    return [JointPatch(p, (target, target)) for p in patches]
+
+
+def test_closed_joins_share_their_borders_to_round_off():
+    patches, joins = _grid()
+    result = fair_patches(_targets(patches), joins, continuity="G0")
+    gap, _ = _joins_measured(result.surfaces, joins)
+    alone = [fair_patches([p], []).surfaces[0] for p in _targets(patches)]
+    assert gap <= 1e-9 * 2.0                        # model size about 2
+    assert _joins_measured(alone, joins)[0] > 1e-3  # faired alone, the joins open
+
+
+def test_smooth_joins_keep_one_tangent_plane_and_cost_little_accuracy():
+    patches, joins = _grid()
+    targets = _targets(patches)
+    alone = [fair_patches([p], []).surfaces[0] for p in targets]
+    closed = fair_patches(targets, joins, continuity="G0")
+    smooth = fair_patches(targets, joins, continuity="G1")
+    gap, angle = _joins_measured(smooth.surfaces, joins)
+    assert gap <= 1e-9 * 2.0
+    assert _joins_measured(alone, joins)[1] > 5.0
+    assert _joins_measured(closed.surfaces, joins)[1] > 4.0
+    assert angle < 0.15
+    assert smooth.g1_rows > 0
+    assert _deviation(smooth.surfaces, patches) < 1.5 * _deviation(alone, patches)
+
+
+def test_a_kept_patch_constrains_its_neighbours_exactly():
+    patches, joins = _grid()
+    targets = _targets(patches)
+    targets[0] = JointPatch(patches[0])
+    result = fair_patches(targets, joins)
+    assert result.surfaces[0] is patches[0]
+    gap, _ = _joins_measured(result.surfaces, joins[:2])
+    assert gap <= 1e-9 * 2.0
+
+
+@given(st.integers(3, 7), st.sampled_from(["G0", "G1"]))
+def test_any_target_size_closes_the_joins(n, continuity):
+    patches, joins = _grid(seed=n)
+    result = fair_patches(_targets(patches, n), joins, continuity=continuity)
+    assert _joins_measured(result.surfaces, joins)[0] <= 1e-9 * 2.0
+    assert all(s.shape == (n + 3, n + 3) for s in result.surfaces)
+
+
+def test_a_chord_tied_to_its_own_reverse_is_dropped_with_a_reason():
+    patches, _ = _grid()
+    twisted = [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "u0", 1, "u0", reversed=True)]
+    result = fair_patches(_targets(patches)[:2], twisted)
+    assert len(result.joins) == 1 and "reverse" in result.dropped[0][1]
+
+
+def test_bad_input_is_refused_with_what_to_do():
+    patches, joins = _grid()
+    targets = _targets(patches)
+    with pytest.raises(InvalidInputError, match="one of"):
+        fair_patches(targets, [BorderJoin(0, "w1", 1, "u1")])
+    with pytest.raises(InvalidInputError, match="two joins"):
+        fair_patches(targets, [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "u1", 2, "v0")])
+    with pytest.raises(InvalidInputError, match="continuity"):
+        fair_patches(targets, joins, continuity="G2")

@@ -1,0 +1,64 @@
+"""fair_shape fairs faces that meet along whole borders together: real models, measured by
+the joins' own projection (cq_fairing.occ.adjacency) and by OCCT's checks."""
+
+import numpy as np
+import pytest
+
+from cq_fairing.errors import InvalidInputError
+from cq_fairing.occ.shapes import fair_shape
+
+
+@pytest.fixture(scope="module")
+def fuselage(real):
+    return real("fuselage.brep")
+
+
+@pytest.fixture(scope="module")
+def fuselage_runs(fuselage):
+    return {joins: fair_shape(fuselage, tol=2.5, joins=joins) for joins in ("smooth", "free")}
+
+
+def test_fuselage_joins_stay_closed_creases_stay_creases(fuselage_runs):
+    result = fuselage_runs["smooth"]
+    rows = result.joins.rows()
+    assert result.valid and result.n_faired >= 4
+    held = [r for r in rows if r["held"]]
+    assert len(held) >= 10
+    assert max(r["gap"] for r in held) <= 1e-9 * 2500.0       # model size about 2500
+    creases = [r for r in rows if r["kind"] == "crease"]
+    assert len(creases) == 2
+    assert all(abs(r["angle"] - r["source_angle"]) < 1.0 for r in creases)
+    assert all(r.max_deviation <= 2.5 for r in result.faces if r.faired)
+
+
+def test_fuselage_smooth_joins_turn_less_than_faired_alone(fuselage_runs):
+    joint = fuselage_runs["smooth"].joins.summary()
+    alone = fuselage_runs["free"].joins.summary()
+    assert joint["max_gap_opened"] < 1e-6 < alone["max_gap_opened"]
+    assert joint["max_angle_excess"] < alone["max_angle_excess"]
+
+
+def test_free_joins_keep_faces_alone(fuselage_runs):
+    assert fuselage_runs["free"].joins.closed_edges == set()
+
+
+def test_testtoler_opens_no_more_than_faired_alone(real):
+    shell = real("testtoler.brep")
+    joint, alone = (fair_shape(shell, tol=0.01, joins=j) for j in ("smooth", "free"))
+    s, f = joint.joins.summary(), alone.joins.summary()
+    assert joint.valid and s["held"] > 0
+    held = [r for r in joint.joins.rows() if r["held"]]
+    assert max(r["gap"] - r["source_gap"] for r in held) <= 1e-7 * 6000.0
+    assert s["max_gap_opened"] <= f["max_gap_opened"]
+    assert s["max_angle_excess"] <= 0.05
+    assert all(r.max_deviation <= 0.01 for r in joint.faces if r.faired)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(joins="sealed"), "joins must be one of"),
+    (dict(angle_tol=0.0), "angle_tol"),
+    (dict(angle_tol=True), "angle_tol"),
+])
+def test_bad_join_options_are_refused(fuselage, kwargs, match):
+    with pytest.raises(InvalidInputError, match=match):
+        fair_shape(fuselage, tol=2.5, **kwargs)
