@@ -95,7 +95,7 @@ from scipy.linalg import solveh_banded
 
 from ..errors import InvalidInputError, ToleranceNotMetError
 from .accuracy import check_tolerance, check_window
-from .banded import BandedSPD
+from .banded import BandedSPD, kron_solve
 from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
 from .fidelity import (NOISE_FRACTION, CurveResidual, SurfaceResidual, noise_level,
@@ -747,7 +747,7 @@ class _SurfaceFit:
                 net[1:-1, 1:-1] = interior
             return net
         if lam <= 0.0 and weights is None:
-            return _tensor_solve(self._gram(tu)[1], self._gram(tv)[1], rhs)
+            return kron_solve(self._gram(tu)[1], self._gram(tv)[1], rhs)
         a = self._mass(tu, tv, weights) + lam * self._energy(tu, tv)
         shape = (tu.dimension, tv.dimension)
         return _net_solve(a, rhs.reshape(shape[0] * shape[1], -1), shape).reshape(rhs.shape)
@@ -809,7 +809,7 @@ class _SurfaceFit:
             along_u = (gu @ border.reshape(ku, -1)).reshape(ku, kv, d)
             held = np.swapaxes((gv @ np.swapaxes(along_u, 0, 1).reshape(kv, -1))
                                .reshape(kv, ku, d), 0, 1)
-            return _tensor_solve(self._inner(tu)[0], self._inner(tv)[0],
+            return kron_solve(self._inner(tu)[0], self._inner(tv)[0],
                                  (rhs - held)[1:-1, 1:-1])
         a = (self._mass(tu, tv, weights) + lam * self._energy(tu, tv)).tocsr()
         inside = np.zeros((ku, kv), dtype=bool)
@@ -954,15 +954,6 @@ def _net_solve(matrix, rhs, shape):
     except np.linalg.LinAlgError:
         x = spla.splu(sp.csc_matrix(matrix)).solve(rhs)
     return x
-
-
-def _tensor_solve(g_u, g_v, rhs):
-    r"""Solve :math:`(G_u \otimes G_v)\, x = r` for a net ``rhs`` (k_u, k_v, d) with the
-    factors of each direction's matrix (:class:`~cq_fairing.core.banded.BandedSPD`)."""
-    ku, kv = rhs.shape[:2]
-    x = g_u.solve(rhs.reshape(ku, -1)).reshape(ku, kv, -1)
-    y = g_v.solve(np.swapaxes(x, 0, 1).reshape(kv, -1))
-    return np.swapaxes(y.reshape(kv, ku, -1), 0, 1)
 
 
 def net_lengths(poles):

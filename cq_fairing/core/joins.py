@@ -16,7 +16,9 @@ constraints that make the joins hold:
    multiplicity :math:`m + P - p`, so that its degree-:math:`p` border lies in the class
    space exactly.
 2. **Vertices.**  The corners tied by the joins form vertices, each at the mean of its
-   corners (a kept patch's corner where there is one).
+   corners (a kept patch's corner where there is one).  Where no crease meets a vertex,
+   the end tangents of its edges are held in the plane of its mean source normal, so
+   the patches around it share a tangent plane there.
 3. **Edges**, faired once.  A join's border curve is the L2 projection onto the class
    space of the first patch's source border (normalised parameter) with its ends held
    at the vertices, :math:`G_{II} x_I = (E c)_I - G_{IE} x_E`,
@@ -28,13 +30,20 @@ constraints that make the joins hold:
    are the L2 projection of the source with those rows held,
    :math:`(G_u\otimes G_v)_{FF}\, x_F = r_F - (G_u\otimes G_v)_{FH}\, x_H`.
    Two patches then share each joined border pole for pole: G0 to round-off.
-5. **G1 at smooth joins.**  With :math:`n_k` the mean unit normal of the two patches at
-   the Greville points :math:`t_k` of the edge space (from the previous solve; a kept
-   patch's own normal), each patch's cross-boundary derivative is held in those planes,
-   :math:`n_k\cdot\partial_\perp S(t_k) = 0`: linear in the first inner row of poles, an
-   equality-constrained least-squares problem per patch (one sparse KKT system).  Both
-   tangent planes contain the shared border's tangent and are orthogonal to
-   :math:`n_k`.  :data:`G1_ROUNDS` rounds, each from the last one's normals.
+5. **G1 at smooth joins.**  The cross-boundary rows of the two patches mirror each other
+   across the shared border, :math:`w_{a,i} + \mu_i w_{b,i} = 0` with
+   :math:`w = c_{inner} - c_{border}` per pole along the join and :math:`\mu_i > 0` the
+   ratio of the rows' lengths in the G0 solve (smoothed to a line along the join).  The
+   cross derivatives are then parallel at every pole, and the tangent planes agree
+   exactly where :math:`\mu` is constant, to first order in its variation elsewhere.
+   The rows are linear and act on each coordinate alike: one joint, regularised KKT
+   system over all patches, one factorization for x, y and z.  Around an inner vertex
+   the rows next to it close a cycle that is singular where :math:`\prod\mu = 1` (the
+   vertex enclosure condition of G1 patch complexes); the row that would close it is
+   left out, the vertex keeping its tangent plane through its edges (step 2).
+   Normal-plane conditions :math:`n_k\cdot\partial_\perp S(t_k) = 0` at Greville
+   points, the obvious alternative, leave the tangent planes free between the points
+   (several degrees on a curved 2 x 2 grid), and more points collapse the cross rows.
 
 Patches are polynomial (non-rational).  This module imports numpy and scipy only.
 """
@@ -47,7 +56,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError
-from .banded import BandedSPD
+from .banded import BandedSPD, kron_solve
 from .geometry import BSplineSurface
 from .gram import gram_matrix
 from .spaces import SplineSpace
@@ -209,46 +218,51 @@ def _end(side):
 
 
 # -- chords --------------------------------------------------------------------------------
-class _Chords:
-    """Union-find over ``(patch, axis)`` with each member's reversal against its root."""
+class _UnionFind:
+    """Union-find whose members carry a parity against their root: a chord member's
+    reversal, ignored where only the sets matter."""
 
     def __init__(self):
-        self.parent, self.flip = {}, {}
+        self.parent, self.parity = {}, {}
 
     def find(self, key):
+        """``(root, parity of key against it)``."""
         self.parent.setdefault(key, key)
-        self.flip.setdefault(key, False)
+        self.parity.setdefault(key, False)
         if self.parent[key] == key:
             return key, False
-        root, flip = self.find(self.parent[key])
-        self.parent[key], self.flip[key] = root, self.flip[key] ^ flip
-        return root, self.flip[key]
+        root, parity = self.find(self.parent[key])
+        self.parent[key], self.parity[key] = root, self.parity[key] ^ parity
+        return root, self.parity[key]
 
-    def tie(self, a, b, reversed_):
-        """Tie ``a`` to ``b``; False when they are already tied the other way."""
-        (ra, fa), (rb, fb) = self.find(a), self.find(b)
+    def tie(self, a, b, parity=False):
+        """Put ``a`` and ``b`` in one set with ``parity`` between them; ``None`` when
+        they already were (``True``/``False``: whether with that parity)."""
+        (ra, pa), (rb, pb) = self.find(a), self.find(b)
         if ra == rb:
-            return (fa ^ fb) == reversed_
-        self.parent[rb], self.flip[rb] = ra, fa ^ fb ^ reversed_
-        return True
+            return (pa ^ pb) == parity
+        self.parent[rb], self.parity[rb] = ra, pa ^ pb ^ parity
+        return None
 
     def members(self):
+        """``{root: [(key, parity)]}``."""
         groups = {}
         for key in list(self.parent):
-            root, flip = self.find(key)
-            groups.setdefault(root, []).append((key, flip))
+            root, parity = self.find(key)
+            groups.setdefault(root, []).append((key, parity))
         return groups
 
 
 def _chords(patches, joins):
-    """:class:`_Chords` of the joins, the joins kept and those dropped with a reason."""
-    chords, kept, dropped = _Chords(), [], []
+    """The chords (:class:`_UnionFind` of ``(patch, axis)``, parity: reversed) of the
+    joins, the joins kept and those dropped with a reason."""
+    chords, kept, dropped = _UnionFind(), [], []
     for join in joins:
         if patches[join.a].kept and patches[join.b].kept:
             dropped.append((join, "both patches are kept"))
             continue
         a, b = (join.a, _along(join.side_a)), (join.b, _along(join.side_b))
-        if not chords.tie(a, b, join.reversed):
+        if chords.tie(a, b, join.reversed) is False:
             dropped.append((join, "its chord would tie a direction to its own reverse"))
             continue
         kept.append(join)
@@ -344,31 +358,22 @@ def _vertices(patches, joins):
     ``None`` where a crease meets the vertex: the edges' end tangents are held in the
     plane it defines, so that the patches around a smooth vertex share a tangent plane.
     """
-    parent, creased = {}, set()
-
-    def find(key):
-        parent.setdefault(key, key)
-        while parent[key] != key:
-            parent[key] = parent[parent[key]]
-            key = parent[key]
-        return key
-
+    corners, creased = _UnionFind(), set()
     for join in joins:
         ends_a = _side_ends(join.side_a)
         ends_b = _side_ends(join.side_b)[::-1] if join.reversed else _side_ends(join.side_b)
         for ca, cb in zip(ends_a, ends_b):
-            parent[find((join.a, ca))] = find((join.b, cb))
+            corners.tie((join.a, ca), (join.b, cb))
             if not join.smooth:
                 creased.add((join.a, ca))
-    groups = {}
-    for key in list(parent):
-        groups.setdefault(find(key), []).append(key)
+    creased_roots = {corners.find(key)[0] for key in creased}
     out = {}
-    for members in groups.values():
+    for root, group in corners.members().items():
+        members = [key for key, _ in group]
         kept = [k for k in members if patches[k[0]].kept]
         chosen = kept[:1] or members
         point = np.mean([patches[i].source.poles[c] for i, c in chosen], axis=0)
-        smooth = not any(find(k) == find(members[0]) for k in creased)
+        smooth = root not in creased_roots
         normal = _vertex_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
             if smooth else None
         out.update({key: (point, normal) for key in members})
@@ -418,11 +423,11 @@ def _held_rows(patches, joins, spaces, chords, vertices):
         unit = _unit_space(spaces, _solved_side(patches, join), root_flip)
         index, side = (join.b, join.side_b) if patches[join.b].kept else (join.a, join.side_a)
         space, poles = _border(patches[index].source, side)
-        curves = [_unit_curve(space, poles, root_flip[index, side])]
+        curve = _unit_curve(space, poles, root_flip[index, side])
         ends = [vertices[join.a, c] for c in _side_ends(join.side_a)]
         if root_flip[join.a, join.side_a]:
             ends = ends[::-1]
-        edge = _edge_poles(unit, curves, np.array([p for p, _ in ends]), [n for _, n in ends])
+        edge = _edge_poles(unit, curve, np.array([p for p, _ in ends]), [n for _, n in ends])
         for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
             if not patches[index].kept:
                 held.setdefault(index, {})[side] = edge[::-1] if root_flip[index, side] else edge
@@ -442,16 +447,15 @@ def _unit_space(spaces, solved, flips):
     return SplineSpace(space.degree, _normalised_knots(space, flips[solved]))
 
 
-def _edge_poles(unit, curves, ends, normals):
-    r"""Poles on ``unit`` of the mean of ``curves`` (``ends`` ``None``: the plain
-    projection) with both ends held and each end
-    tangent in its vertex's plane (``normals``, ``None``: free):
-    minimise :math:`x^T G x - 2 x^T \bar m` over the interior poles under
-    :math:`n_0\cdot(x_1 - x_0) = 0` and :math:`n_1\cdot(x_{k-2} - x_{k-1}) = 0`."""
+def _edge_poles(unit, curve, ends, normals):
+    r"""Poles on ``unit`` of the L2 projection of ``curve`` ``(space, poles)`` with both
+    ``ends`` held and each end tangent in its vertex's plane (``normals``, ``None``:
+    free): minimise :math:`x^T G x - 2 x^T m`, :math:`m = \langle\Phi|\Phi_S\rangle c`,
+    over the interior poles under :math:`n_0\cdot(x_1 - x_0) = 0` and
+    :math:`n_1\cdot(x_{k-2} - x_{k-1}) = 0`."""
     gram = gram_matrix(unit).toarray()
-    moments = np.mean([gram_matrix(unit, space) @ poles for space, poles in curves], axis=0)
-    if ends is None:
-        return sla.solve(gram, moments, assume_a="pos")
+    space, poles = curve
+    moments = gram_matrix(unit, space) @ poles
     x = np.empty_like(moments)
     x[0], x[-1] = ends
     k = unit.dimension
@@ -555,18 +559,11 @@ def _separate(work):
     for (a_u, a_v), rhs in zip(work.blocks, work.rhs):
         size = rhs.shape[0]
         if size:
-            shape = (a_u.shape[0], a_v.shape[0], 3)
-            free[start:start + size] = _tensor(a_u, a_v, rhs.reshape(shape)).reshape(-1, 3)
+            factors = (BandedSPD(sp.csr_matrix(a)) for a in (a_u, a_v))
+            net = rhs.reshape(a_u.shape[0], a_v.shape[0], 3)
+            free[start:start + size] = kron_solve(*factors, net).reshape(-1, 3)
         start += size
     return free
-
-
-def _tensor(a_u, a_v, rhs):
-    r"""Solve :math:`(A_u\otimes A_v) x = r` per direction (banded Cholesky)."""
-    ku, kv = rhs.shape[:2]
-    x = BandedSPD(sp.csr_matrix(a_u)).solve(rhs.reshape(ku, -1)).reshape(ku, kv, -1)
-    y = BandedSPD(sp.csr_matrix(a_v)).solve(np.swapaxes(x, 0, 1).reshape(kv, -1))
-    return np.swapaxes(y.reshape(kv, ku, -1), 0, 1)
 
 
 # -- G1: mirrored cross-boundary rows -----------------------------------------------------
@@ -593,16 +590,15 @@ def _cross_rows(work, join, chords):
 
 
 def _kept_cross_row(surface, side, unit, flip):
-    """A kept patch's cross row on ``unit`` (root order), from its border and first inner
-    rows projected onto ``unit``."""
+    """A kept patch's cross row on ``unit`` (root order): the difference of its first
+    inner and border rows, as a curve, projected onto ``unit`` (exact: the class space
+    holds the patch's along space)."""
     space = surface.v_space if side[0] == "u" else surface.u_space
     net = surface.poles if side[0] == "u" else np.swapaxes(surface.poles, 0, 1)
     end, inner = (0, 1) if side[1] == "0" else (-1, -2)
-    rows = []
-    for row in (net[end], net[inner]):
-        curve_space, poles = _unit_curve(space, row, flip)
-        rows.append(_edge_poles(unit, [(curve_space, poles)], None, None))
-    return rows[1] - rows[0]
+    row_space, row = _unit_curve(space, net[inner] - net[end], flip)
+    return sla.solve(gram_matrix(unit).toarray(), gram_matrix(unit, row_space) @ row,
+                     assume_a="pos")
 
 
 def _cross_vectors(work, surfaces, side_rows):
@@ -622,47 +618,15 @@ def _ratios(wa, wb):
     return np.maximum(line, 1e-3 * mu.mean())
 
 
-class _Forest:
-    r"""Union-find over free poles plus a ground node: a mirrored row links its (one or
-    two) free inner poles, and a row that would close a cycle is refused.
-
-    Around an inner vertex the rows next to it form a cycle
-    :math:`x_a = k_1 - \mu_1 x_b,\ \dots,\ x_d = k_4 - \mu_4 x_a`, singular where
-    :math:`\prod\mu = 1` (the vertex enclosure condition of G1 patch complexes);
-    without the closing row the chain is solvable and the projection picks its free
-    pole.  The vertex itself keeps one tangent plane through its edges
-    (:func:`_edge_poles`)."""
-
-    GROUND = -1
-
-    def __init__(self):
-        self.parent = {}
-
-    def _find(self, key):
-        self.parent.setdefault(key, key)
-        while self.parent[key] != key:
-            self.parent[key] = self.parent[self.parent[key]]
-            key = self.parent[key]
-        return key
-
-    def add(self, poles):
-        """Link ``poles`` (one: to the ground); False when they are linked already."""
-        a, b = (poles + [self.GROUND])[:2]
-        ra, rb = self._find(a), self._find(b)
-        if ra == rb:
-            return False
-        self.parent[ra] = rb
-        return True
-
-
 def _mirror_rows(work, joins, chords, surfaces):
     r"""Rows :math:`w_{a,i} + \mu_i w_{b,i} = 0` (per coordinate) of every smooth join:
     the cross rows of both patches mirror each other across the shared border, so the
-    cross derivatives are parallel and the tangent planes agree.  Rows that would close
-    a cycle are left out (:class:`_Forest`).  Returns the sparse matrix over the free
+    cross derivatives are parallel and the tangent planes agree.  A row that would close
+    a cycle of rows (around an inner vertex; module notes, step 5) is left out: each
+    row ties its one or two free inner poles, a row with one to the held poles.  Returns the sparse matrix over the free
     poles and the right-hand sides (rows, 3) from held poles."""
     rows_, cols, vals, rhs = [], [], [], []
-    forest = _Forest()
+    linked = _UnionFind()   # free inner poles (and -1, the held ones) tied by a row
     for join in (j for j in joins if j.smooth):
         sides = _cross_rows(work, join, chords)
         wa, wb = (_cross_vectors(work, surfaces, side) for side in sides)
@@ -679,7 +643,7 @@ def _mirror_rows(work, joins, chords, surfaces):
                         entries.append((position, sign * weight))
                     else:
                         known -= sign * weight * value
-            if entries and forest.add([e[0] for e in entries]):
+            if entries and linked.tie(*([e[0] for e in entries] + [-1])[:2]) is None:
                 row = len(rhs)
                 rows_ += [row] * len(entries)
                 cols += [e[0] for e in entries]

@@ -53,8 +53,8 @@ def fair_joined(job, adjacency, joins):
 
     Returns
     -------
-    set of int
-        Edge indices (``MapShapesAndAncestors`` order) of the joins held closed.
+    list of Join
+        The joins held closed (their faces were solved or kept together).
     """
     border = [j for j in adjacency.joins if _is_border_join(j) and
               j.source_gap <= SOURCE_GAP * _tolerance(job, j)]
@@ -64,7 +64,7 @@ def fair_joined(job, adjacency, joins):
     faces = sorted({s.face for j in border for s in j.sides})
     kept = {i for i in faces if not _fairable(job.reports[i], readable[i])}
     if not faces or len(kept) == len(faces):
-        return set()
+        return []
     refined = dict.fromkeys(faces, 0)
     while True:
         result, imposed = _solve(job, readable, faces, kept, refined, border, joins)
@@ -81,7 +81,7 @@ def fair_joined(job, adjacency, joins):
                 _keep(job, index, checked[index][2]["max"], adjacency.joins_of(index))
     for index, (face, surface, deviation) in checked.items():
         _install(job.reports[index], face, surface, deviation)
-    return {side.edge for join in imposed for side in join.sides}
+    return imposed
 
 
 def _tolerance(job, join):

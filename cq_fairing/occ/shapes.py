@@ -40,7 +40,7 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
@@ -234,7 +234,9 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         job.fair_first(selected, tol, n, progress)
         adjacency = find_joins(source, angle_tol=angle_tol)
         if joins != "free" and tol is not None:
-            job.closed_edges = fair_joined(job, adjacency, joins)
+            held = fair_joined(job, adjacency, joins)
+            job.closed_edges = {side.edge for join in held for side in join.sides}
+            job.joined_faces = {side.face for join in held for side in join.sides}
         copy, gaps = job.build()
         if tol is not None:
             copy, gaps = job.close_gaps(copy, gaps, max_gap)
@@ -289,6 +291,7 @@ class _Job:
         self.face_class, self.motion = congruence_classes(originals)
         self.source_gaps = {}
         self.closed_edges = set()   # edges whose faces were faired together, held closed
+        self.joined_faces = set()   # their faces: the gap loop leaves them as they are
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
@@ -426,23 +429,22 @@ class _Job:
         emap = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
 
-        def shared_edge(edge):
-            return not _single_face(emap.FindFromKey(edge))
+        def loose(edge):
+            """Shared by faces that were not faired together (their surfaces may part)."""
+            return (not _single_face(emap.FindFromKey(edge))
+                    and emap.FindIndex(edge) not in self.closed_edges)
 
-        # adaptive targets slide along the surface: project shared edges (see module doc)
-        reproject = shared_edge if self.options["method"] == "adaptive" else None
+        # adaptive targets slide along the surface: project loose edges (see module doc)
+        reproject = loose if self.options["method"] == "adaptive" else None
         touched = []
         for report, target in zip(self.reports, targets):
             if report.faired:
                 touched += replace_surface(target, to_geom_surface(report.surface), reproject)
                 report.face = target
-        # an edge of one face only (a free border, or a seam whose rows fairing tied)
-        # lies on that face alone: its 3-D curve is rebuilt on the new surface
-        # an edge whose faces were faired together lies on both: rebuilt like a free one
-        free = [e for e in touched if not shared_edge(e) or emap.FindIndex(e) in self.closed_edges]
-        shared = [e for e in touched if shared_edge(e) and emap.FindIndex(e) not in self.closed_edges]
-        finish_edges(free, rebuild_3d=True)
-        finish_edges(shared)
+        # an edge of one face only (a free border, or a seam whose rows fairing tied), or
+        # of faces faired together, lies on its new surfaces: its 3-D curve is rebuilt
+        finish_edges([e for e in touched if not loose(e)], rebuild_3d=True)
+        finish_edges([e for e in touched if loose(e)])
         settle_tolerances(shape, touched)
         return targets, touched
 
@@ -505,30 +507,14 @@ class _Job:
             if gap > max_gap:
                 for face in emap.FindFromIndex(edge_index):
                     index = fmap.FindIndex(face) - 1
-                    if self.reports[index].faired and not self._joined(index):
+                    if self.reports[index].faired and index not in self.joined_faces:
                         out[index] = max(gap, out.get(index, 0.0))
         return dict(sorted(out.items()))
 
-    def _joined(self, index):
-        """True for a face faired together with its neighbours (its closed joins would
-        open if it were faired again alone)."""
-        return any(e in self.closed_edges for e in self._edges_of(index))
-
-    def _edges_of(self, index):
-        emap = TopTools_IndexedDataMapOfShapeListOfShape()
-        TopExp.MapShapesAndAncestors_s(self.source, TopAbs_EDGE, TopAbs_FACE, emap)
-        explorer = TopExp_Explorer(self.originals[index], TopAbs_EDGE)
-        out = set()
-        while explorer.More():
-            out.add(emap.FindIndex(explorer.Current()))
-            explorer.Next()
-        return out
-
     def _restore(self, index, max_gap):
-        self.reports[index] = kept_face_report(
-            self.originals[index], "unchanged", f"kept the original surface: fairing opened "
-            f"a gap larger than max_gap={max_gap:g} along a shared edge even at "
-            f"tol={self.tol[index]:g}", index, self.tol[index], self.reports[index].seconds)
+        self.reports[index] = self.kept(index, "unchanged", (
+            f"kept the original surface: fairing opened a gap larger than max_gap="
+            f"{max_gap:g} along a shared edge even at tol={self.tol[index]:g}"))
 
 
 def _moved(points, matrix):
