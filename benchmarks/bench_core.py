@@ -5,7 +5,7 @@ run (a dense textbook implementation: dense Gram matrices from the same quadratu
 ``numpy.linalg.solve``), because this machine is shared and noisy: compare ratios.
 
 "cold" clears the operator cache first (Gram matrices, factorizations and wavelets are
-built inside the timing); "warm" reuses them, as repeated fairing in one session does.
+built inside the timing); "warm" reuses them, as repeated fairing in one process does.
 
 Run:  python benchmarks/bench_core.py [--quick] [--out benchmarks/results/core.md]
 """

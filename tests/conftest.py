@@ -1,5 +1,5 @@
 """Shared test settings: a deterministic hypothesis profile for CI, data paths, the real
-models read once per session."""
+models read once per test run."""
 
 import os
 from pathlib import Path

@@ -154,7 +154,8 @@ CASES = [
      InvalidInputError, "inf"),
     ("net 1xN names the direction", lambda: cf.fair_surface(NET[:1], (1, 3)),
      InvalidInputError, r"surface|\bu\b"),
-    # found by the fifteenth session's QA pass
+    # A2-A4, A7 (RELIABILITY.md): degree pairs, numeric and real knots/weights, the
+    # supported coordinate range, energy fairing of a degree-1 curve
     ("degree of three values", lambda: cf.fair_surface(NET, (3, 3), degree=(3, 3, 3)),
      InvalidInputError, "pair"),
     ("degree [3]", lambda: cf.fair_surface(NET, (3, 3), degree=[3]), InvalidInputError, "pair"),
