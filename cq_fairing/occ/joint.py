@@ -34,8 +34,7 @@ __all__ = ["fair_joined", "JoinReport", "JOINS", "REFINEMENTS"]
 
 JOINS = ("smooth", "closed", "free")
 REFINEMENTS = 2
-SOURCE_GAP = 0.5   # a join whose source gap exceeds this x tol is not closed: fairing
-#                    cannot move both faces that far within their tolerances
+SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 
 
 def fair_joined(job, adjacency, joins):
@@ -56,8 +55,7 @@ def fair_joined(job, adjacency, joins):
     list of Join
         The joins held closed (their faces were solved or kept together).
     """
-    border = [j for j in adjacency.joins if _is_border_join(j) and
-              j.source_gap <= SOURCE_GAP * _tolerance(job, j)]
+    border = [j for j in adjacency.joins if _is_border_join(j)]
     readable = _readable_faces(job, {s.face for j in border for s in j.sides})
     border = [j for j in border if all(s.face in readable for s in j.sides) and
               _parametric_gap(j, readable) <= SOURCE_GAP * _tolerance(job, j)]
@@ -93,8 +91,8 @@ def _tolerance(job, join):
 
 def _parametric_gap(join, readable, samples=33):
     """Largest distance between the two faces' borders at equal normalised parameters
-    (reversed where they run opposite ways): above the geometric gap where the faces
-    run along the join with different parametrizations."""
+    (reversed where they run opposite ways): at least the source's gap, and above it
+    where the faces run along the join with different parametrizations."""
     t = np.linspace(0.0, 1.0, samples)
     points = []
     for side, ts in zip(join.sides, (t, 1.0 - t if _reversed(join) else t)):

@@ -1,7 +1,7 @@
 """Independent OCCT measurements used by the OCP layer tests (no cq_fairing code)."""
 
 import numpy as np
-from OCP.BRep import BRep_Tool
+from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepTools import BRepTools
@@ -9,7 +9,7 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GProp import GProp_GProps
 from OCP.TopAbs import TopAbs_FACE
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS
+from OCP.TopoDS import TopoDS, TopoDS_Compound
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 
@@ -66,3 +66,12 @@ def area(shape):
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(shape, props)
     return props.Mass()
+
+
+def compound(*shapes):
+    """A ``TopoDS_Compound`` of ``shapes`` (loose faces, no shared edges)."""
+    out, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(out)
+    for shape in shapes:
+        builder.Add(out, shape)
+    return out

@@ -5,14 +5,14 @@ import math
 
 import numpy as np
 import pytest
-from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import (BRepBuilderAPI_Copy, BRepBuilderAPI_MakeEdge,
                                 BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeVertex,
                                 BRepBuilderAPI_MakeWire)
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Compound
+from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from OCP.gp import gp_Pnt, gp_Vec
 
@@ -20,7 +20,7 @@ from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ.adjacency import Join, find_joins, measure_joins
 from cq_fairing.occ.convert import indexed_faces, replace_surface
 from cq_fairing.occ.shapes import free_edge_count
-from tests.occ.helpers import faces_of, global_distance
+from tests.occ.helpers import compound, faces_of, global_distance
 
 
 def edge_map(shape):
@@ -219,14 +219,6 @@ def square(x0, y0, x1, y1):
     for p, q in zip(corners, corners[1:] + corners[:1]):
         wire.Add(BRepBuilderAPI_MakeEdge(p, q).Edge())
     return BRepBuilderAPI_MakeFace(wire.Wire(), True).Face()
-
-
-def compound(*shapes):
-    out, builder = TopoDS_Compound(), BRep_Builder()
-    builder.MakeCompound(out)
-    for shape in shapes:
-        builder.Add(out, shape)
-    return out
 
 
 def test_two_loose_squares_join_along_their_common_side():

@@ -10,7 +10,7 @@ from OCP.TopExp import TopExp_Explorer
 from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ import fair_face, fair_shape, list_faces, read_shape, write_shape
 from cq_fairing.occ.convert import indexed_faces
-from tests.occ.helpers import area, faces_of, volume
+from tests.occ.helpers import area, compound, faces_of, volume
 
 
 def count(shape, kind):
@@ -109,7 +109,7 @@ def test_face_selection_and_errors(real):
         fair_shape("not a shape")
 
 
-def test_impeller_subset_keeps_a_valid_compound(real):
+def test_impeller_subset_keeps_a_validcompound(real):
     """Every ninth impeller face (31 faces; the full 277-face run takes ~3 min)."""
     source = real("impeller.igs")
     chosen = list(range(0, 277, 9))
@@ -123,17 +123,6 @@ def test_impeller_subset_keeps_a_valid_compound(real):
 
 
 # -- worker processes: jobs and a per-face time limit (G2) ---------------------------------
-def _compound(*faces):
-    from OCP.BRep import BRep_Builder
-    from OCP.TopoDS import TopoDS_Compound
-
-    compound, builder = TopoDS_Compound(), BRep_Builder()
-    builder.MakeCompound(compound)
-    for face in faces:
-        builder.Add(compound, face)
-    return compound
-
-
 def _wiggly(seed, nu=16, nv=14):
     from tests.reliability.test_occ_inputs import bspline_surface, face_of
 
@@ -146,7 +135,7 @@ def test_two_jobs_give_the_same_result_as_one(real):
     from cq_fairing.occ.convert import indexed_faces
 
     rational = indexed_faces(real("linkrods.step"))[9]
-    shape = _compound(_wiggly(0), rational, _wiggly(1), _wiggly(2))
+    shape = compound(_wiggly(0), rational, _wiggly(1), _wiggly(2))
     serial = fair_shape(shape, tol=5e-3)
     calls = []
     parallel = fair_shape(shape, tol=5e-3, jobs=2,
@@ -172,7 +161,7 @@ def test_a_face_over_the_time_limit_is_kept_and_its_worker_killed(real):
     from cq_fairing.occ.convert import indexed_faces
 
     terrain = indexed_faces(real("terrain.brep"))[0]
-    shape = _compound(_wiggly(0), terrain, _wiggly(1))
+    shape = compound(_wiggly(0), terrain, _wiggly(1))
     start = time.perf_counter()
     result = fair_shape(shape, tol=2.0, jobs=2, face_timeout=3.0)
     assert time.perf_counter() - start < 60
