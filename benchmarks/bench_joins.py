@@ -1,13 +1,24 @@
-"""Whole models faired with joins held (``joins="smooth"``, the default) against each face
-alone (``joins="free"``), in the same run: time, faces faired, poles, and every join's gap
-and normal angle measured by projection both ways (``ShapeFairResult.joins``).
+"""Joins held against faces faired alone, in the same run.
 
-    python benchmarks/bench_joins.py            # fuselage at 2.5, testtoler at 0.01
+1. The synthetic 2 x 2 grid of ``cq_fairing.core.examples.patch_grid`` (noisy patches of
+   one surface) faired onto quasi-uniform bicubic targets by ``fair_patches``: alone,
+   G0 and G1; gap and normal angle at 101 samples per join, deviation as the largest
+   distance to the source at equal parameters (41 x 41 per patch).
+2. Whole models faired with joins held (``joins="smooth"``, the default) against each
+   face alone (``joins="free"``): time, faces faired, poles, and every join's gap and
+   normal angle measured by projection both ways (``ShapeFairResult.joins``).
+
+    python benchmarks/bench_joins.py            # grid; fuselage at 2.5, testtoler at 0.01
 """
 
 import time
 from pathlib import Path
 
+import numpy as np
+
+from cq_fairing.core.examples import patch_grid
+from cq_fairing.core.joins import JointPatch, fair_patches
+from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.occ import read_shape
 from cq_fairing.occ.shapes import fair_shape
 
@@ -28,7 +39,52 @@ def run(name, tol, joins):
             f"{s['max_angle_excess']:.3f} | {worst / tol:.2f} | {result.valid} |")
 
 
+def _border(surface, side, t):
+    """Points and unit normals along a side at normalised parameters ``t``."""
+    (u0, u1), (v0, v1) = surface.domain
+    if side[0] == "u":
+        u, v = [u0 if side[1] == "0" else u1], v0 + (v1 - v0) * t
+    else:
+        u, v = u0 + (u1 - u0) * t, [v0 if side[1] == "0" else v1]
+    point, du, dv = (surface.evaluate_grid(u, v, nu, nv).reshape(len(t), 3)
+                     for nu, nv in ((0, 0), (1, 0), (0, 1)))
+    normal = np.cross(du, dv)
+    return point, normal / np.linalg.norm(normal, axis=1)[:, None]
+
+
+def grid_row(label, surfaces, grid):
+    t = np.linspace(0.0, 1.0, 101)
+    gap = angle = 0.0
+    for join in grid.joins:
+        pa, na = _border(surfaces[join.a], join.side_a, t)
+        pb, nb = _border(surfaces[join.b], join.side_b, 1 - t if join.reversed else t)
+        gap = max(gap, np.linalg.norm(pa - pb, axis=1).max())
+        cos = np.clip(np.abs(np.sum(na * nb, axis=1)), 0.0, 1.0)
+        angle = max(angle, np.degrees(np.arccos(cos)).max())
+    g = np.linspace(0.0, 1.0, 41)
+    deviation = max(np.linalg.norm(s.evaluate_grid(g, g) - p.evaluate_grid(g, g), axis=2).max()
+                    for s, p in zip(surfaces, grid.patches))
+    return f"| {label} | {gap:.2g} | {angle:.3f} | {deviation:.4f} |"
+
+
+def synthetic():
+    grid = patch_grid()
+    print("| grid, targets | max gap | max normal angle (deg) | deviation |")
+    print("|---|---|---|---|")
+    print(grid_row("source (12 x 12 each)", grid.patches, grid))
+    for n in (4, 6):
+        target = SplineSpace.quasi_uniform(n, 3)
+        patches = [JointPatch(p, (target, target)) for p in grid.patches]
+        alone = [fair_patches([p], []).surfaces[0] for p in patches]
+        print(grid_row(f"{n + 3} x {n + 3}, alone", alone, grid))
+        for continuity in ("G0", "G1"):
+            result = fair_patches(patches, grid.joins, continuity=continuity)
+            print(grid_row(f"{n + 3} x {n + 3}, {continuity}", result.surfaces, grid))
+
+
 def main():
+    synthetic()
+    print()
     print("| model | tol | joins | s | faces faired | poles | joins held | largest gap "
           "opened | largest smooth-join angle excess (deg) | worst deviation / tol | valid |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")

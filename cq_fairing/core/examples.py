@@ -15,6 +15,8 @@ r"""Synthetic test geometry with known noise-free truth.
   in 0.091-0.098 /mm, inside the seed's 0.080-0.108 /mm.
 * :func:`blade_surface`: a noisy blade-like (twisted, cambered) bicubic net with its
   noise-free truth.
+* :func:`patch_grid`: four noisy bicubic patches of one smooth surface in a 2 x 2 grid,
+  one parametrized backwards and one transposed, with their border joins.
 """
 
 from typing import NamedTuple
@@ -23,8 +25,11 @@ import numpy as np
 
 from .geometry import BSplineCurve, BSplineSurface
 from .interpolation import interpolate_grid, interpolate_points
+from .joins import BorderJoin
+from .spaces import SplineSpace
 
-__all__ = ["SeedCurve", "seed_curve", "seed_curve_points", "BladeSurface", "blade_surface"]
+__all__ = ["SeedCurve", "seed_curve", "seed_curve_points", "BladeSurface", "blade_surface",
+           "PatchGrid", "patch_grid"]
 
 
 class SeedCurve(NamedTuple):
@@ -105,3 +110,43 @@ def blade_surface(shape=(50, 80), noise=0.02, seed=7, span=100.0, chord=30.0):
     clean = np.stack([x, y, z], axis=2)
     noisy = clean + np.random.default_rng(seed).normal(0.0, noise, clean.shape)
     return BladeSurface(interpolate_grid(noisy), interpolate_grid(clean), noisy, clean)
+
+
+class PatchGrid(NamedTuple):
+    """Patches of one surface and the joins between them (:func:`patch_grid`)."""
+
+    patches: list
+    joins: list
+
+
+def _grid_truth(x, y):
+    return np.stack([x, y, 0.3 * np.sin(2 * x) * np.cos(1.5 * y) + 0.1 * x * y], -1)
+
+
+def patch_grid(noise=0.003, seed=1, poles=12):
+    r"""Four patches of :math:`z = 0.3 \sin 2x \cos 1.5y + 0.1 xy` on
+    :math:`[0, 2]^2`, a 2 x 2 grid of unit squares, each a bicubic least-squares fit of
+    ``poles`` x ``poles`` on 60 x 60 samples with Gaussian ``noise`` on its interior poles
+    (so the borders still meet, to about 1e-7, and the joins turn by several degrees).
+
+    Patch 1 (x in [1, 2]) runs backwards in u, patch 3 (the corner square) has u along y:
+    the joins tie sides of every kind, one of them reversed.
+
+    Returns
+    -------
+    PatchGrid
+        ``patches`` (four BSplineSurface on [0, 1]^2) and their four ``BorderJoin``.
+    """
+    space = SplineSpace.quasi_uniform(poles - 3, 3)
+    s = np.linspace(0.0, 1.0, 60)
+    fit = np.linalg.pinv(space.collocation(s).toarray())
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(s, s, indexing="ij")
+    patches = []
+    for x, y in ((u, v), (2 - u, v), (u, 1 + v), (1 + v, 1 + u)):
+        net = np.einsum("ia,abd,jb->ijd", fit, _grid_truth(x, y), fit)
+        net[1:-1, 1:-1] += rng.normal(0.0, noise, net[1:-1, 1:-1].shape)
+        patches.append(BSplineSurface(net, space.knots, space.knots, 3, 3))
+    joins = [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "v1", 2, "v0"),
+             BorderJoin(2, "u1", 3, "v0"), BorderJoin(1, "v1", 3, "u0", reversed=True)]
+    return PatchGrid(patches, joins)

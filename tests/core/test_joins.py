@@ -1,47 +1,24 @@
 """Joint projection of patches (cq_fairing.core.joins) on a grid with a known answer: four
 noisy patches fitted to one smooth surface, one of them parametrized backwards and one
-transposed.  Points and normals are evaluated with scipy's B-spline basis
+transposed (cq_fairing.core.examples.patch_grid).  Points and normals are evaluated with scipy's B-spline basis
 (tests/core/naive.py), not with the code under test."""
 
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from cq_fairing.core.geometry import BSplineSurface
+from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
 from .naive import basis_matrix
 
-SOURCE_SPACE = SplineSpace.quasi_uniform(9, 3)
 SAMPLES = np.linspace(0.0, 1.0, 101)
 
 
-def _truth(x, y):
-    return np.stack([x, y, 0.3 * np.sin(2 * x) * np.cos(1.5 * y) + 0.1 * x * y], -1)
-
-
-def _patch(x0, y0, rng, noise, flip_u=False, swap=False):
-    """A 12 x 12 bicubic least-squares fit of the truth on a unit square, noise on the
-    interior poles."""
-    s = np.linspace(0, 1, 60)
-    fit = np.linalg.pinv(basis_matrix(SOURCE_SPACE.knots, 3, s))
-    u, v = np.meshgrid(s, s, indexing="ij")
-    u = 1 - u if flip_u else u
-    x, y = (x0 + v, y0 + u) if swap else (x0 + u, y0 + v)
-    net = np.einsum("ia,abd,jb->ijd", fit, _truth(x, y), fit)
-    net[1:-1, 1:-1] += noise * rng.standard_normal(net[1:-1, 1:-1].shape)
-    return BSplineSurface(net, SOURCE_SPACE.knots, SOURCE_SPACE.knots, 3, 3)
-
-
 def _grid(noise=0.003, seed=1):
-    rng = np.random.default_rng(seed)
-    patches = [_patch(0, 0, rng, noise), _patch(1, 0, rng, noise, flip_u=True),
-               _patch(0, 1, rng, noise), _patch(1, 1, rng, noise, swap=True)]
-    joins = [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "v1", 2, "v0"),
-             BorderJoin(2, "u1", 3, "v0"), BorderJoin(1, "v1", 3, "u0", reversed=True)]
-    return patches, joins
+    return patch_grid(noise, seed)
 
 
 def _derivatives(surface, u, v):
