@@ -17,15 +17,17 @@ is smooth across the former joins.  :func:`split_grid` cuts any surface on the m
 domain back into patches by knot insertion (:func:`insert_knot`, Boehm's algorithm)
 and maps every piece affinely onto its patch's original parameter domain.
 
-This module imports numpy only.
+This module imports numpy and scipy only.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 
 from ..errors import InvalidInputError, InvalidToleranceError, UnsupportedGeometryError
 from .geometry import BSplineSurface, extent, make_surface
+from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["MergedGrid", "merge_grid", "split_grid", "oriented", "insert_knot"]
@@ -36,6 +38,8 @@ KNOT_TOLERANCE = 1e-9
 BORDER_TOLERANCE = 1e-9
 # knots closer than this (relative to the domain width) to a break are taken as the break
 SNAP = 1e-12
+# weight of the break lines in MergedGrid.pinned_projection, per unit of merged parameter
+PIN_WEIGHT = 10.0
 # samples per knot span of a border curve when its length is measured (breaks="chord")
 LENGTH_SAMPLES = 8
 BREAKS = ("chord", "uniform")
@@ -87,6 +91,61 @@ class MergedGrid:
         (u0, u1), (v0, v1) = self.domains[i, j]
         return (_affine(u, (u0, u1), self.u_breaks[i:i + 2]),
                 _affine(v, (v0, v1), self.v_breaks[j:j + 2]))
+
+    def pinned_projection(self, target_u, target_v, weight=PIN_WEIGHT):
+        r"""The merged surface projected onto ``target_u x target_v`` with the patch
+        borders pinned: the least-squares surface
+
+        .. math:: \min_T \iint |T - S|^2 + w \sum_i \int |T(U_i, v) - S(U_i, v)|^2 dv
+                  + w \sum_j \int |T(u, V_j) - S(u, V_j)|^2 du
+
+        over the breaks :math:`U_0 .. U_m`, :math:`V_0 .. V_n` (the block's border
+        included).  Patches rarely share their parametrization across a join (one
+        patch's u runs faster at the join than its neighbour's), and a smooth target
+        cannot follow a jump of speed: the plain projection slides along the surface
+        there, and its pieces leave the patches they should cover.  The line terms hold
+        the former joins where they were, so each piece covers its patch.  With
+        :math:`\Phi_u` the target's functions at the breaks, :math:`N_u` the source's,
+        :math:`G` Gram and :math:`E` cross Gram matrices, the normal equations are
+
+        .. math:: (G_u + w \Phi_u^T\Phi_u)\, C\, G_v + w\, G_u\, C\, \Phi_v^T\Phi_v
+                  = (E_u + w \Phi_u^T N_u)\, P\, E_v^T + w\, E_u P N_v^T \Phi_v,
+
+        solved exactly by the generalized eigenvectors of the two u matrices (one
+        small solve per eigenvalue).
+
+        Parameters
+        ----------
+        target_u, target_v : SplineSpace
+            On the merged domain.
+        weight : float, optional
+            :math:`w`, relative to the merged parameter (each patch spans about one
+            unit).
+
+        Returns
+        -------
+        BSplineSurface
+        """
+        source = self.surface
+        terms = []
+        for target, space, breaks in ((target_u, source.u_space, self.u_breaks),
+                                      (target_v, source.v_space, self.v_breaks)):
+            at_breaks = target.collocation(breaks).toarray()
+            terms.append((gram_matrix(target).toarray(), gram_matrix(target, space).toarray(),
+                          at_breaks, at_breaks.T @ space.collocation(breaks).toarray()))
+        (gu, eu, fu, nu), (gv, ev, fv, nv) = terms
+        rhs = (np.einsum("ia,abd,jb->ijd", eu + weight * nu, source.poles, ev)
+               + weight * np.einsum("ia,abd,jb->ijd", eu, source.poles, nv))
+        # A1 C B1 + A2 C B2 = R with A2 Q = A1 Q diag(lam), Q^T A1 Q = I:  C = Q Y,
+        # (B1 + lam_i B2) y_i = (Q^T R)_i
+        lam, q = sla.eigh(gu, gu + weight * fu.T @ fu)
+        pinned_v = weight * fv.T @ fv
+        projected = np.einsum("ai,ajd->ijd", q, rhs)
+        rows = np.stack([np.linalg.solve(gv + value * pinned_v, y)
+                         for value, y in zip(lam, projected)])
+        poles = np.einsum("ia,ajd->ijd", q, rows)
+        return BSplineSurface(poles, target_u.knots, target_v.knots, target_u.degree,
+                              target_v.degree)
 
 
 # -- orientation ---------------------------------------------------------------------------

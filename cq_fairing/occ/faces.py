@@ -318,7 +318,7 @@ def _criteria(tol, search, method, objective, borders):
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria):
     surface, info = face_to_surface(face)
     density = density or tuple(int(np.clip(2 * k + 1, 20, 400)) for k in surface.shape)
-    degree = _target_degree(surface, target_degree)
+    degree = target_degrees(surface, target_degree)
     notes = []
     if info.unperiodized:
         notes.append(f"periodic in {'/'.join(info.unperiodized)}: faired the unperiodized "
@@ -430,7 +430,9 @@ def _unchanged(face, info, surface, message, tol):
                           poles_after=surface.shape, max_deviation=0.0, tolerance=tol)
 
 
-def _target_degree(surface, target_degree):
+def target_degrees(surface, target_degree):
+    """The target's degrees ``(p, q)``: ``target_degree`` (an int or a pair), by default
+    ``min(3, source degree)`` per direction."""
     if target_degree is None:
         return min(3, surface.u_degree), min(3, surface.v_degree)
     pair = (target_degree, target_degree) if np.ndim(target_degree) == 0 else tuple(target_degree)

@@ -29,16 +29,37 @@ from ..core.joins import BorderJoin, JointPatch, fair_patches
 from ..core.spaces import SplineSpace
 from .convert import face_to_surface, is_occt_error, surface_to_face
 from .deviation import sample_face_deviation
+from .grids import fair_grids
 
-__all__ = ["fair_joined", "JoinReport", "JOINS", "REFINEMENTS"]
+__all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS", "REFINEMENTS"]
 
 JOINS = ("smooth", "closed", "free")
 REFINEMENTS = 2
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 
 
+@dataclass(frozen=True)
+class JointOutcome:
+    """What :func:`fair_joined` did.
+
+    Attributes
+    ----------
+    joins : list of Join
+        The joins held closed (their faces were solved or kept together).
+    grids : list of GridFairing
+        The patch grids faired as one surface each (:mod:`cq_fairing.occ.grids`).
+    """
+
+    joins: list
+    grids: list
+
+
 def fair_joined(job, adjacency, joins):
     """Project the faces of ``job`` that meet along whole borders together.
+
+    The patch grids among them that form whole parts of the model are faired first,
+    each as one surface (:func:`~cq_fairing.occ.grids.fair_grids`): their pieces share
+    their borders pole for pole.  The other faces are projected together.
 
     Parameters
     ----------
@@ -52,17 +73,20 @@ def fair_joined(job, adjacency, joins):
 
     Returns
     -------
-    list of Join
-        The joins held closed (their faces were solved or kept together).
+    JointOutcome
     """
     border = [j for j in adjacency.joins if _is_border_join(j)]
     readable = _readable_faces(job, {s.face for j in border for s in j.sides})
     border = [j for j in border if all(s.face in readable for s in j.sides) and
               _parametric_gap(j, readable) <= SOURCE_GAP * _tolerance(job, j)]
+    grids = fair_grids(job, adjacency, readable, border, _reversed, lambda tol: SOURCE_GAP * tol)
+    gridded = {face for grid in grids for face in grid.faces}
+    in_grids = [j for j in border if set(j.faces) <= gridded]
+    border = [j for j in border if not set(j.faces) & gridded]
     faces = sorted({s.face for j in border for s in j.sides})
     kept = {i for i in faces if not _fairable(job.reports[i], readable[i])}
     if not faces or len(kept) == len(faces):
-        return []
+        return JointOutcome(in_grids, grids)
     refined = dict.fromkeys(faces, 0)
     while True:
         result, imposed = _solve(job, readable, faces, kept, refined, border, joins)
@@ -79,7 +103,7 @@ def fair_joined(job, adjacency, joins):
                 _keep(job, index, checked[index][2]["max"], adjacency.joins_of(index))
     for index, (face, surface, deviation) in checked.items():
         _install(job.reports[index], face, surface, deviation)
-    return imposed
+    return JointOutcome(in_grids + imposed, grids)
 
 
 def _tolerance(job, join):
@@ -206,11 +230,14 @@ class JoinReport:
         The faired shape's gap and angle along each join, in ``adjacency.joins`` order.
     closed_edges : set of int
         Edges of the joins held closed by the joint projection.
+    grids : list of GridFairing
+        The patch grids faired as one surface each.
     """
 
     adjacency: object
     measures: list
     closed_edges: set = field(default_factory=set)
+    grids: list = field(default_factory=list)
 
     def rows(self):
         """One dict per join: ``faces`` (1-based), ``kind``, ``held`` (closed by
@@ -231,7 +258,8 @@ class JoinReport:
         """Counts and extremes: ``joins``, ``held``, ``max_gap``, ``max_gap_opened``
         (faired minus source gap), ``smooth``, ``max_smooth_angle`` and its
         ``source_max_smooth_angle``, ``max_angle_excess`` over the smooth joins,
-        ``creases``, ``non_manifold``, ``point_contacts``."""
+        ``creases``, ``grids`` (the shape of each patch grid faired as one surface),
+        ``grid_faces`` (their faces), ``non_manifold``, ``point_contacts``."""
         rows = self.rows()
         smooth = [r for r in rows if r["kind"] == "smooth"]
         return dict(
@@ -243,6 +271,8 @@ class JoinReport:
             source_max_smooth_angle=max((r["source_angle"] for r in smooth), default=0.0),
             max_angle_excess=max((r["angle_excess"] for r in smooth), default=0.0),
             creases=len(rows) - len(smooth),
+            grids=[list(g.shape) for g in self.grids],
+            grid_faces=sum(len(g.faces) for g in self.grids),
             non_manifold=len(self.adjacency.non_manifold),
             point_contacts=len(self.adjacency.point_contacts))
 
@@ -255,4 +285,6 @@ class JoinReport:
         return (f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}; "
                 f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
                 f"{s['source_max_smooth_angle']:.2g}); {s['creases']} creases"
+                + (f"; {len(s['grids'])} patch grids ({s['grid_faces']} faces) faired as one "
+                   "surface each" if s["grids"] else "")
                 + (f"; {s['non_manifold']} non-manifold edges" if s["non_manifold"] else ""))

@@ -85,7 +85,8 @@ def max_scales(surface, target_degree):
     return tuple(out)
 
 
-def search_scales(surface, tol, target_degree, deviation, finish=None):
+def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(True, True),
+                  projection=None):
     """Fewest-poles ``(n_u, n_v)`` with ``deviation(faired) <= tol``.
 
     Parameters
@@ -97,6 +98,13 @@ def search_scales(surface, tol, target_degree, deviation, finish=None):
         ``deviation(faired_surface) -> float`` (parametric, on the face's samples).
     finish : callable, optional
         Applied to each candidate before measuring (periodic seam tying, fixed border).
+    keep : (bool, bool), optional
+        Whether the search may keep the source's space in u and in v (``None`` in
+        ``n``).  A merged patch grid must not keep a direction whose source knots hold
+        its former joins.
+    projection : callable, optional
+        ``projection(target_u, target_v) -> BSplineSurface`` (``None`` keeps a
+        direction) in place of the plain L2 projection :func:`project`.
 
     Returns
     -------
@@ -127,16 +135,22 @@ def search_scales(surface, tol, target_degree, deviation, finish=None):
 
     halves = {}
 
+    def projected(n):
+        if projection is not None:
+            return projection(space(0, n[0]), space(1, n[1]))
+        if n[0] not in halves:
+            halves[n[0]] = project_u(surface, space(0, n[0]))
+        return project(surface, space(0, n[0]), space(1, n[1]), halves[n[0]])
+
     def run(n):
         if n not in cache:
-            if n[0] not in halves:
-                halves[n[0]] = project_u(surface, space(0, n[0]))
-            faired = finish(project(surface, space(0, n[0]), space(1, n[1]), halves[n[0]]))
+            faired = finish(projected(n))
             cache[n] = (faired, deviation(faired))
         return cache[n]
 
     patterns = [top, (top[0], None), (None, top[1])]
-    patterns = [p for p in dict.fromkeys(patterns) if p != (None, None)]
+    patterns = [p for p in dict.fromkeys(patterns) if p != (None, None) and
+                all(k or n is not None for k, n in zip(keep, p))]
     feasible = [p for p in patterns if run(p)[1] <= tol]
     if not feasible:
         best = min(run(p)[1] for p in patterns) if patterns else float("inf")

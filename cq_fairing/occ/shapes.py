@@ -234,9 +234,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         job.fair_first(selected, tol, n, progress)
         adjacency = find_joins(source, angle_tol=angle_tol)
         if joins != "free" and tol is not None:
-            held = fair_joined(job, adjacency, joins)
-            job.closed_edges = {side.edge for join in held for side in join.sides}
-            job.joined_faces = {side.face for join in held for side in join.sides}
+            joint = fair_joined(job, adjacency, joins)
+            job.grids = joint.grids
+            job.closed_edges = {side.edge for join in joint.joins for side in join.sides}
+            job.joined_faces = {side.face for join in joint.joins for side in join.sides}
         copy, gaps = job.build()
         if tol is not None:
             copy, gaps = job.close_gaps(copy, gaps, max_gap)
@@ -248,7 +249,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     return ShapeFairResult(
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
         tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps,
-        JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges))
+        JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges,
+                   job.grids))
 
 
 def _check_joins(joins, angle_tol):
@@ -292,6 +294,7 @@ class _Job:
         self.source_gaps = {}
         self.closed_edges = set()   # edges whose faces were faired together, held closed
         self.joined_faces = set()   # their faces: the gap loop leaves them as they are
+        self.grids = []             # patch grids faired as one surface each
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
