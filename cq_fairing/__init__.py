@@ -1,21 +1,31 @@
 """cq-fairing: multiresolution (ARWFA/DWFA) and energy fairing of B-spline curves and surfaces.
 
-The names below come from the numerical core, which imports only numpy and scipy.
-The OCP/CadQuery layer (:mod:`cq_fairing.occ`), the viewers (:mod:`cq_fairing.viz`)
-and the command line (:mod:`cq_fairing.cli`) are imported on demand.
+The names below come from the numerical core, which imports only numpy and scipy.  They
+are loaded on first use (PEP 562 module ``__getattr__``), so ``import cq_fairing`` and
+``cq-fairing --help`` load neither numpy's nor scipy's submodules.  The OCP/CadQuery
+layer (:mod:`cq_fairing.occ`), the viewers (:mod:`cq_fairing.viz`) and the command line
+(:mod:`cq_fairing.cli`) are imported on demand.
 """
 
-from .core.fairing import (FairResult, SurfaceDetails, SurfaceFairResult, fair_curve,
-                           fair_surface)
-from .core.geometry import BSplineCurve, BSplineSurface, make_curve, make_surface
-from .core.clouds import classify_points, resample_height_field
-from .core.interpolation import interpolate_grid, interpolate_points, read_xyz
-from .core.spaces import SplineSpace
+import importlib
+
 from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidTargetError,
                      InvalidToleranceError, NumericalError, OutputPathError,
                      ToleranceNotMetError, UnsupportedGeometryError)
 
 __version__ = "0.1.0"
+
+# public name -> the core module that defines it
+_LAZY = {
+    **dict.fromkeys(("FairResult", "SurfaceDetails", "SurfaceFairResult", "fair_curve",
+                     "fair_surface"), ".core.fairing"),
+    **dict.fromkeys(("BSplineCurve", "BSplineSurface", "make_curve", "make_surface"),
+                    ".core.geometry"),
+    **dict.fromkeys(("classify_points", "resample_height_field"), ".core.clouds"),
+    **dict.fromkeys(("interpolate_grid", "interpolate_points", "read_xyz"),
+                    ".core.interpolation"),
+    "SplineSpace": ".core.spaces",
+}
 
 __all__ = [
     "fair_curve", "fair_surface", "FairResult", "SurfaceFairResult", "SurfaceDetails",
@@ -26,3 +36,16 @@ __all__ = [
     "ToleranceNotMetError", "UnsupportedGeometryError", "NumericalError",
     "FileFormatError", "OutputPathError",
 ]
+
+
+def __getattr__(name):
+    """Import the core module behind a public name on first access, then keep the name."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

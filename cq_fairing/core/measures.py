@@ -56,6 +56,7 @@ from .spaces import basis_functions, find_spans, require_in_domain
 __all__ = [
     "Deviation", "DeviationMap", "sample_parameters", "extent", "curve_derivatives",
     "surface_derivatives", "closest_points_curve", "closest_points_surface",
+    "closest_points_surface_restarted",
     "CurveProbe", "SurfaceProbe", "deviation", "deviation_map",
     "curve_curvature", "curvature_derivative_energy", "surface_curvatures",
     "bending_energy", "count_extrema", "count_sign_changes", "curve_wiggles",
@@ -333,6 +334,49 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         uv[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
     return uv[:, 0], uv[:, 1], dist
+
+
+def closest_points_surface_restarted(surface, points, u0, v0, per_span=4, max_samples=257,
+                                     starts=2):
+    r"""Foot points by :func:`closest_points_surface` from ``(u0, v0)``, restarted from
+    the nearest coarse samples of the surface that lie elsewhere.
+
+    The coarse samples are ``per_span`` per knot span and direction (one per span where
+    that would exceed ``max_samples`` per direction; ends and breakpoints included), held
+    in a ``cKDTree``.  Each of a point's ``starts`` nearest samples that is nearer than
+    its foot point, or lies more than two samples away from it in parameters, is a new
+    Newton start, and the nearest result is kept: Newton from the same parameter can
+    stop at an extremum that is not the nearest (the IEA blade's airfoil face has points
+    nearer to the other side of its closed trailing edge, where the samples at both ends
+    of v coincide).  No distance returned exceeds the nearest coarse sample's, and each
+    is that of an actual surface point: never below the exact one.
+
+    Returns
+    -------
+    u, v, distance : ndarray, shape (q,)
+    """
+    points = np.asarray(points, dtype=float)
+    u, v, dist = closest_points_surface(surface, points, u0, v0)
+    axes = []
+    for space in (surface.u_space, surface.v_space):
+        x = sample_parameters(space, per_span=per_span)
+        axes.append(x if x.size <= max_samples else sample_parameters(space, per_span=1))
+    grid = surface.evaluate_grid(*axes).reshape(-1, points.shape[1])
+    near, index = cKDTree(grid).query(points, k=min(starts, grid.shape[0]))
+    for column in range(near.shape[1] if near.ndim == 2 else 1):
+        d0, k = (near[:, column], index[:, column]) if near.ndim == 2 else (near, index)
+        i, j = np.unravel_index(k, (axes[0].size, axes[1].size))
+        elsewhere = ((np.abs(np.searchsorted(axes[0], u) - i) > 2)
+                     | (np.abs(np.searchsorted(axes[1], v) - j) > 2))
+        again = np.flatnonzero((d0 < dist) | elsewhere)
+        if again.size == 0:
+            continue
+        u2, v2, d2 = closest_points_surface(surface, points[again], axes[0][i[again]],
+                                            axes[1][j[again]])
+        better = d2 < dist[again]
+        take = again[better]
+        u[take], v[take], dist[take] = u2[better], v2[better], d2[better]
+    return u, v, dist
 
 
 def _newton_step(s, r, uv, bounds):

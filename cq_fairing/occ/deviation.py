@@ -1,25 +1,46 @@
-r"""How far a faired face moved, measured by OCCT itself, both ways.
+r"""How far a faired face moved, measured both ways, with OCCT as the final judge.
 
 For UV samples :math:`(u_i, v_i)` inside the original face (``BRepTopAdaptor_FClass2d``),
-the original points :math:`p_i = S_0(u_i, v_i)` come from ``BRepAdaptor_Surface`` and the
-*true* distance :math:`d_i = \min_{(s,t)} |S_1(s, t) - p_i|` from
-``GeomAPI_ProjectPointOnSurf`` on the faired surface :math:`S_1`.  The way back is
-measured the same way: the faired points :math:`q_i = S_1(u_i, v_i)` (the faired face
-keeps the original's trim and parameter domain) and their distances
+the original points are :math:`p_i = S_0(u_i, v_i)` and the *true* distance is
+:math:`d_i = \min_{(s,t)} |S_1(s, t) - p_i|` to the faired surface :math:`S_1`.  The way
+back is measured the same way: the faired points :math:`q_i = S_1(u_i, v_i)` (the faired
+face keeps the original's trim and parameter domain) and their distances
 :math:`b_i = \min_{(s,t)} |S_0(s, t) - q_i|` to the original surface.  The way there
 alone misses a faired face that reaches beyond the original: an impeller fillet faired
 onto one cubic span in u was 0.0082 from every original sample but 0.070 away at its
-own samples (tol 0.01).  The *parametric*
-distance :math:`|S_1(u_i, v_i) - p_i|` is an upper bound of :math:`d_i` (fairing keeps
-the parameter domain).  OCCT's projection finds orthogonal extrema only, so near a
-border, where the nearest point of the bounded patch may be a border point, it can
-return a farther extremum; :math:`d_i` is therefore the smallest of the two and, where
-Newton finds no projection, of the nearest points of the four border curves; the
-largest :math:`d_i` are measured again with the global projection and the border curves
-(Newton can converge to an extremum that is not the nearest).  Every :math:`d_i` is the
-distance to a point of :math:`S_1`, never below the true one.  The signed distance takes
-the sign of :math:`(q_i - p_i)\cdot n_0(u_i, v_i)` with :math:`q_i` the projected point
-and :math:`n_0` the original face's outward normal (face orientation applied).
+own samples (tol 0.01).  The *parametric* distance :math:`|S_1(u_i, v_i) - p_i|` is an
+upper bound of :math:`d_i` (fairing keeps the parameter domain).
+
+**Batched, then judged by OCCT.**  On B-spline faces (``projection="local"``) every
+sample is measured at once by the core's vectorized Newton iteration
+(:func:`~cq_fairing.core.measures.closest_points_surface_restarted`: started at the
+sample's own parameters, where both surfaces share their parametrization, and again
+from the nearest of a coarse sampling where that is nearer): each value is the
+distance to an actual point of the surface, so it bounds the true distance from above
+and is never above the parametric distance.  OCCT then measures again, from the largest
+value down (:func:`_judge`), every sample whose batched value is at least
+``JUDGED_FRACTION`` of the largest OCCT value: the sample's point evaluated by
+``BRepAdaptor_Surface``, the batched foot point evaluated by OCCT and OCCT's Newton
+projection (``Extrema_GenLocateExtPS``) started there; the largest are measured once
+more with the global projection and the border curves (:func:`_refine_largest`).  The
+maximum is therefore an OCCT measurement, and every sample left to the batched value is
+below ``JUDGED_FRACTION`` of it.  Where OCCT's points differ from the core's (a face the
+core reads differently), every sample is measured by OCCT, as for other faces.
+
+**OCCT at every sample** (non-B-spline faces, ``projection="global"``): the point and
+normal from ``BRepAdaptor_Surface`` and the distance from ``Extrema_GenLocateExtPS``
+started at the sample's parameters, capped by the parametric distance (with
+``"global"`` also ``GeomAPI_ProjectPointOnSurf`` over the whole surface).  OCCT's
+projection finds orthogonal extrema only, so near a border, where the nearest point of
+the bounded patch may be a border point, it can return a farther extremum; :math:`d_i`
+is therefore the smallest of the two and, where Newton finds no projection, of the
+nearest points of the four border curves; the largest :math:`d_i` are measured again
+with the global projection and the border curves.
+
+Every :math:`d_i` is the distance to a point of :math:`S_1`, never below the true one.
+The signed distance takes the sign of :math:`(q_i - p_i)\cdot n_0(u_i, v_i)` with
+:math:`q_i` the projected point and :math:`n_0` the original face's outward normal (face
+orientation applied).
 """
 
 import numpy as np
@@ -34,13 +55,17 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.TopAbs import TopAbs_REVERSED
 from OCP.gp import gp_Pnt
 
-from ..errors import InvalidInputError
-from .convert import as_face
+from ..core.measures import closest_points_surface_restarted, surface_derivatives
+from ..errors import InvalidInputError, UnsupportedGeometryError
+from .convert import as_face, face_to_surface
 from .trims import face_region
 
 __all__ = ["sample_face_deviation", "face_uv_grid", "DEFAULT_DENSITY"]
 
 DEFAULT_DENSITY = 40
+JUDGED_FRACTION = 0.9   # OCCT measures again every sample at least this share of the maximum
+JUDGED_BLOCK = 64       # samples OCCT measures again per step of the walk down from the largest
+SAME_GEOMETRY = 1e-9    # the core's and OCCT's points agree within this share of the size
 
 
 def _density(density):
@@ -99,26 +124,29 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         Samples per direction over the original face's UV box; samples outside the trim
         are dropped.
     projection : {"local", "global"}, optional
-        ``"local"``: OCCT's Newton projection (``Extrema_GenLocateExtPS``) started at the
-        sample's own parameters, about 10 us a point; ``"global"``:
-        ``GeomAPI_ProjectPointOnSurf`` over the whole surface (about 1 ms a point), also
-        capped by the local result.  Either way the largest distances are then measured
-        again with ``GeomAPI_ProjectPointOnSurf`` and the border curves, down to the
-        first that stays the largest (:func:`_refine_largest`).  Every distance returned
-        is the length to an actual point of the faired surface, so it is never below the
-        true distance: a tolerance verified with ``"local"`` holds.
+        ``"local"``: on B-spline faces, the core's batched Newton projection started at
+        each sample's own parameters, OCCT measuring again every sample near the maximum
+        (module notes); on other faces OCCT's Newton projection
+        (``Extrema_GenLocateExtPS``) at every sample, about 10 us a point.
+        ``"global"``: OCCT at every sample, also ``GeomAPI_ProjectPointOnSurf`` over the
+        whole surface (about 1 ms a point), capped by the local result.  Either way the
+        largest distances are then measured again by OCCT with
+        ``GeomAPI_ProjectPointOnSurf`` and the border curves, down to the first that
+        stays the largest (:func:`_refine_largest`).  Every distance returned is the
+        length to an actual point of the faired surface, so it is never below the true
+        distance: a tolerance verified with ``"local"`` holds.
 
     Returns
     -------
     dict
         ``uv`` (N, 2), ``points`` (N, 3) on the original, ``faired_points`` (N, 3) at the
         same parameters on the faired face, ``normals`` (N, 3) of the original,
-        ``distance`` (N,) true distance of the original points to the faired surface
-        (OCCT projection), ``distance_back`` (N,) of the faired points to the original
-        surface, ``parametric`` (N,), ``signed`` (N,) (``distance`` with the side of the
+        ``distance`` (N,) true distance of the original points to the faired surface,
+        ``distance_back`` (N,) of the faired points to the original surface,
+        ``parametric`` (N,), ``signed`` (N,) (``distance`` with the side of the
         original's normal); the summaries ``max`` (two-sided: the largest of
-        ``distance`` and ``distance_back``), ``mean``, ``rms`` (of ``distance``) and
-        ``max_parametric``.
+        ``distance`` and ``distance_back``, measured by OCCT), ``mean``, ``rms`` (of
+        ``distance``) and ``max_parametric``.
     """
     original_face = as_face(original_face, "original_face")
     faired_face = as_face(faired_face, "faired_face")
@@ -130,28 +158,44 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
                              face_uv_grid(original_face, density), projection)
 
 
-def reference_samples(face, *grids):
-    """``(uv, points, normals)`` of ``face`` on one or more :func:`face_uv_grid` grids."""
-    uv = np.array([(a, b) for u, v, inside in grids for i, a in enumerate(u)
-                   for j, b in enumerate(v) if inside[i, j]])
+def reference_samples(face, *grids, surface=None):
+    """``(uv, points, normals)`` of ``face`` on one or more :func:`face_uv_grid` grids.
+
+    ``surface``: the face's core surface if already read (``face_to_surface``).
+    """
+    uv = np.concatenate([np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)[inside]
+                         for u, v, inside in grids])
     if uv.size == 0:
         raise InvalidInputError("no UV sample falls inside the face; raise the density.")
-    points, normals = _points_and_normals(face, uv)
+    surface = surface or _core_surface(face)
+    if surface is None:
+        points, normals = _points_and_normals(face, uv)
+    else:
+        points, normals = _core_points_and_normals(surface, face, uv)
     return uv, points, normals
 
 
-def deviation_on_grid(original_face, faired_face, grid, projection="local", reference=None):
+def deviation_on_grid(original_face, faired_face, grid, projection="local", reference=None,
+                      surfaces=None):
     """:func:`sample_face_deviation` on a precomputed :func:`face_uv_grid` (trusted).
 
-    ``reference`` may hold :func:`reference_samples` of the original on that grid.
+    ``reference`` may hold :func:`reference_samples` of the original on that grid, and
+    ``surfaces`` the core surfaces of both faces if already at hand (the faired one as
+    built into ``faired_face``); OCCT's judge checks that they agree with the faces.
     """
-    uv, points, normals = reference or reference_samples(original_face, grid)
-    faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
-    parametric = np.linalg.norm(faired_points - points, axis=1)
-    use_global = projection == "global"
-    distance, projected = _distances_to(faired_face, points, uv, faired_points, parametric,
-                                        use_global)
-    back, _ = _distances_to(original_face, faired_points, uv, points, parametric, use_global)
+    if projection == "local" and surfaces is None:
+        surfaces = _core_surface(original_face), _core_surface(faired_face)
+    uv, points, normals = reference or reference_samples(
+        original_face, grid, surface=surfaces[0] if surfaces else None)
+    measured = None
+    if projection == "local" and None not in surfaces:
+        try:
+            measured = _batched(original_face, faired_face, surfaces, uv, points)
+        except _NotTheSameGeometry:
+            points, normals = _points_and_normals(original_face, uv)
+    if measured is None:
+        measured = _by_occt(original_face, faired_face, uv, points, projection == "global")
+    faired_points, parametric, (distance, projected), (back, _) = measured
     sign = np.sign(np.einsum("ij,ij->i", projected - points, normals))
     return {
         "uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
@@ -160,6 +204,136 @@ def deviation_on_grid(original_face, faired_face, grid, projection="local", refe
         "mean": float(distance.mean()), "rms": float(np.sqrt(np.mean(distance ** 2))),
         "max_parametric": float(parametric.max()),
     }
+
+
+class _NotTheSameGeometry(Exception):
+    """OCCT's point of a face differs from the core's reading of it: measure with OCCT."""
+
+
+def _core_surface(face):
+    """The core's :class:`~cq_fairing.core.geometry.BSplineSurface` of a B-spline face
+    (:func:`~cq_fairing.occ.convert.face_to_surface`), ``None`` for other faces."""
+    try:
+        return face_to_surface(face)[0]
+    except UnsupportedGeometryError:
+        return None
+
+
+def _in_domain(surface, uv):
+    (u0, u1), (v0, v1) = surface.domain
+    return np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)
+
+
+def _core_points(surface, uv):
+    return surface_derivatives(surface, *_in_domain(surface, uv), 0)[(0, 0)]
+
+
+def _core_points_and_normals(surface, face, uv):
+    """Points and unit normals (face orientation applied; zero where ``S_u x S_v``
+    vanishes) of the core's ``surface`` at ``uv``, all at once."""
+    d = surface_derivatives(surface, *_in_domain(surface, uv), 1)
+    normals = np.cross(d[(1, 0)], d[(0, 1)])
+    length = np.linalg.norm(normals, axis=1)
+    defined = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+    flip = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
+    normals[defined] *= flip / length[defined, None]
+    normals[~defined] = 0.0
+    return d[(0, 0)], normals
+
+
+def _batched(original_face, faired_face, surfaces, uv, points):
+    """Both ways by the core's batched projection, OCCT judging the maxima
+    (:func:`_judged_distances`); ``(faired_points, parametric, (distance, projected),
+    (back, projected_back))``."""
+    original, faired = surfaces
+    faired_points = _core_points(faired, uv)
+    parametric = np.linalg.norm(faired_points - points, axis=1)
+    there = _judged_distances(faired_face, faired, original_face, points, uv)
+    back = _judged_distances(original_face, original, faired_face, faired_points, uv)
+    return faired_points, parametric, there, back
+
+
+def _by_occt(original_face, faired_face, uv, points, use_global):
+    """Both ways by OCCT at every sample; the same tuple as :func:`_batched`."""
+    faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
+    parametric = np.linalg.norm(faired_points - points, axis=1)
+    there = _distances_to(faired_face, points, uv, faired_points, parametric, use_global)
+    back = _distances_to(original_face, faired_points, uv, points, parametric, use_global)
+    return faired_points, parametric, there, back
+
+
+def _judged_distances(target_face, target, source_face, points, uv):
+    """Distances of ``points`` (``source_face``'s points at ``uv``) to ``target_face``'s
+    surface (the core's ``target``) and the nearest points found.
+
+    The core's batched Newton projection from ``uv``, restarted from a coarse sample
+    where one is nearer (:func:`~cq_fairing.core.measures.closest_points_surface_restarted`),
+    gives every sample an upper bound; OCCT then judges the samples near the maximum
+    (:func:`_judge`).
+    """
+    s, t, distance = closest_points_surface_restarted(target, points, uv[:, 0], uv[:, 1])
+    feet = np.column_stack([s, t])
+    projected = _core_points(target, feet)
+    _judge(target_face, source_face, uv, feet, points, distance, projected, target.size)
+    return distance, projected
+
+
+def _judge(target_face, source_face, uv, feet, points, distance, projected, size):
+    """OCCT measures again, in place, every sample whose batched ``distance`` is at least
+    ``JUDGED_FRACTION`` of the largest OCCT value, walking down from the largest in
+    blocks of ``JUDGED_BLOCK``, and measures the largest once more with the global
+    projection and the border curves (:func:`_refine_largest`), until the walk's next
+    sample is below that share of the maximum.
+
+    Per judged sample: the point ``source_face`` has at ``uv`` (``BRepAdaptor_Surface``),
+    the batched foot point evaluated by OCCT, and OCCT's Newton projection
+    (``Extrema_GenLocateExtPS``) started at the foot's parameters, the nearer kept.
+
+    Raises
+    ------
+    _NotTheSameGeometry
+        OCCT's source point or its distance to the foot point differs from the core's
+        by more than ``SAME_GEOMETRY`` times ``size``.
+    """
+    surface = BRep_Tool.Surface_s(target_face)
+    adaptor, source = GeomAdaptor_Surface(surface), BRepAdaptor_Surface(source_face)
+    borders = _Borders(surface)
+    order = np.argsort(distance)[::-1]
+    judged = np.zeros(distance.size, dtype=bool)
+    walked = 0
+    while walked < order.size:
+        while walked < order.size and distance[order[walked]] >= JUDGED_FRACTION * \
+                distance[judged].max(initial=0.0):
+            block = order[walked:walked + JUDGED_BLOCK]
+            walked += block.size
+            for k in block:
+                _judge_one(adaptor, source, k, uv, feet, points, distance, projected,
+                           SAME_GEOMETRY * max(size, 1e-300))
+            judged[block] = True
+        index = np.flatnonzero(judged)
+        d, q = distance[index], projected[index]
+        _refine_largest(surface, points[index], d, q, borders)
+        distance[index], projected[index] = d, q
+        if walked >= order.size or distance[order[walked]] < JUDGED_FRACTION * d.max():
+            break
+
+
+def _judge_one(adaptor, source, k, uv, feet, points, distance, projected, agree):
+    """OCCT's distance of sample ``k`` (see :func:`_judge`), in place."""
+    p = source.Value(float(uv[k, 0]), float(uv[k, 1]))
+    if np.linalg.norm([p.X() - points[k, 0], p.Y() - points[k, 1], p.Z() - points[k, 2]]) \
+            > agree:
+        raise _NotTheSameGeometry
+    s, t = float(feet[k, 0]), float(feet[k, 1])
+    q = adaptor.Value(s, t)
+    if abs(p.Distance(q) - distance[k]) > agree:
+        raise _NotTheSameGeometry
+    local = Extrema_GenLocateExtPS(adaptor)
+    local.Perform(p, s, t)
+    if local.IsDone() and p.Distance(local.Point().Value()) < p.Distance(q):
+        q = local.Point().Value()
+    distance[k] = p.Distance(q)
+    projected[k] = (q.X(), q.Y(), q.Z())
 
 
 def _distances_to(face, points, uv, same_parameter, parametric, use_global):
@@ -178,6 +352,7 @@ def _distances_to(face, points, uv, same_parameter, parametric, use_global):
 
 
 def _points_and_normals(face, uv, normals=True):
+    """OCCT's points and unit normals (face orientation applied) at ``uv``, one by one."""
     adaptor = BRepAdaptor_Surface(face)
     points = np.empty((len(uv), 3))
     out_normals = np.zeros((len(uv), 3))

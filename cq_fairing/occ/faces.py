@@ -344,12 +344,12 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
                               sampler, finish, details, criteria, notes)
 
 
-def _check_samples(face, grid, trimmed):
+def _check_samples(face, grid, trimmed, surface):
     """Search grid plus the centres of its cells: the OCCT check sees between samples."""
     u, v, _ = grid
     cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
     inside = face_region(face)(cu, cv) if trimmed else np.ones((cu.size, cv.size), dtype=bool)
-    return reference_samples(face, grid, (cu, cv, inside))
+    return reference_samples(face, grid, (cu, cv, inside), surface=surface)
 
 
 def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish, details,
@@ -379,8 +379,9 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
             return _unchanged(face, info, surface, "the adaptive target needs as many poles "
                               "as the source; nothing to reduce", tol)
         new_face = surface_to_face(faired, face)
-        check = check or _check_samples(face, sampler.grid, info.trimmed)
-        deviation = deviation_on_grid(face, new_face, None, reference=check)
+        check = check or _check_samples(face, sampler.grid, info.trimmed, surface)
+        deviation = deviation_on_grid(face, new_face, None, reference=check,
+                                      surfaces=(surface, faired))
         if tol is None or deviation["max"] <= tol:
             if details and result is None:
                 result = _core_fair(source, target, degree)

@@ -59,3 +59,99 @@ def test_a_faired_face_reaching_beyond_the_original_is_measured_on_the_way_back(
     independent[beyond] = samples["faired_points"][beyond, 0] - 10.0   # nearest: the end x = 10
     np.testing.assert_allclose(samples["distance_back"], independent, atol=1e-9)
     assert samples["max"] == pytest.approx(0.5)
+
+
+def _real_faired(real, name, pick, tol):
+    """A face of a bundled model (the ``pick(surface)``-th match) and its face faired
+    at ``tol`` with explicit scales kept small, so the distances are far from zero."""
+    from cq_fairing.occ import face_to_surface, fair_face
+    from tests.occ.helpers import faces_of
+
+    for face in faces_of(real(name)):
+        try:
+            surface, _ = face_to_surface(face)
+        except cf.UnsupportedGeometryError:
+            continue
+        if pick(surface):
+            return face, fair_face(face, tol=tol, details=False)
+    raise LookupError(name)
+
+
+REAL_FACES = {
+    "IEA main face": ("IEA_15MW_CFD.stp", lambda s: s.shape[1] > 200, 0.05),
+    "testtoler strip": ("testtoler.brep", lambda s: s.shape[0] > 100, 2.0),
+    "impeller fillet (rational)": ("impeller.igs",
+                                   lambda s: s.shape == (50, 3) and s.is_rational, 2e-3),
+}
+
+
+@pytest.mark.parametrize("label", list(REAL_FACES))
+def test_batched_distances_agree_with_occts_global_projection(real, label):
+    """The batched distances (the core's Newton for every sample, OCCT at the maxima) are
+    never above OCCT's own GeomAPI_ProjectPointOnSurf distance (where OCCT finds an
+    orthogonal projection; its extrema are approximate, and a border point can be
+    nearer), agree with it to far below the tolerance at every sample, and the maximum
+    is OCCT's to round-off.  That they are never below the true distance is the dense
+    test's part."""
+    name, pick, tol = REAL_FACES[label]
+    face, report = _real_faired(real, name, pick, tol)
+    assert report.faired
+    samples = sample_face_deviation(face, report.face, density=30)
+    there = global_distance(samples["points"], report.face)
+    back = global_distance(samples["faired_points"], face)
+    for batched, occt in ((samples["distance"], there), (samples["distance_back"], back)):
+        found = np.isfinite(occt)           # OCCT finds no orthogonal projection off borders
+        assert found.mean() > 0.5
+        assert np.all(batched[found] <= occt[found] + 1e-6 * tol)
+        assert np.median(occt[found] - batched[found]) <= 1e-6 * tol
+    assert samples["max"] <= tol
+    assert samples["max"] <= max(there[np.isfinite(there)].max(),
+                                 back[np.isfinite(back)].max()) + 1e-6 * tol
+
+
+@pytest.mark.parametrize("label", list(REAL_FACES))
+def test_batched_distances_agree_with_a_naive_dense_search(real, label):
+    """Against brute force: the nearest of 600 x 600 points of the faired surface (its
+    own core evaluation) is at most ``spacing`` farther than the true foot point, so the
+    batched distance lies within [dense - spacing, dense]."""
+    from scipy.spatial import cKDTree
+
+    from cq_fairing.occ import face_to_surface
+
+    name, pick, tol = REAL_FACES[label]
+    face, report = _real_faired(real, name, pick, tol)
+    samples = sample_face_deviation(face, report.face, density=20)
+    faired, _ = face_to_surface(report.face)
+    (u0, u1), (v0, v1) = faired.domain
+    dense = faired.evaluate_grid(np.linspace(u0, u1, 600), np.linspace(v0, v1, 600))
+    spacing = max(np.linalg.norm(np.diff(dense, axis=0), axis=-1).max(),
+                  np.linalg.norm(np.diff(dense, axis=1), axis=-1).max())
+    nearest, _ = cKDTree(dense.reshape(-1, 3)).query(samples["points"])
+    assert np.all(samples["distance"] <= nearest + 1e-9 * tol)
+    assert np.all(samples["distance"] >= nearest - spacing)
+
+
+def test_core_surfaces_that_are_not_the_faces_fall_back_to_occt(real):
+    """Surfaces that are not the faces' own (shifted by 1e-3) are caught by OCCT's judge:
+    every sample is then measured by OCCT alone (its points, Newton projections and
+    refinement), and the maximum is the batched one's."""
+    from dataclasses import replace
+
+    from cq_fairing.occ import face_to_surface
+    from cq_fairing.occ.deviation import (_by_occt, _points_and_normals, deviation_on_grid,
+                                          face_uv_grid, reference_samples)
+
+    name, pick, tol = REAL_FACES["IEA main face"]
+    face, report = _real_faired(real, name, pick, tol)
+    grid = face_uv_grid(face, 25)
+    right = deviation_on_grid(face, report.face, grid)
+    original, _ = face_to_surface(face)
+    shifted = replace(report.surface, poles=report.surface.poles + 1e-3)
+    wrong = deviation_on_grid(face, report.face, grid, surfaces=(original, shifted))
+    uv, _, _ = reference_samples(face, grid)
+    occt_points, _ = _points_and_normals(face, uv)
+    _, _, (by_occt, _), (back, _) = _by_occt(face, report.face, uv, occt_points, False)
+    np.testing.assert_array_equal(wrong["points"], occt_points)
+    np.testing.assert_array_equal(wrong["distance"], by_occt)
+    np.testing.assert_array_equal(wrong["distance_back"], back)
+    assert wrong["max"] == pytest.approx(right["max"], abs=1e-6 * tol)

@@ -188,8 +188,13 @@ def test_deviation_samples_agree_with_global_projection(real):
     report = fair_face(face, tol=0.02, details=False)
     local = sample_face_deviation(face, report.face, density=12)
     full = sample_face_deviation(face, report.face, density=12, projection="global")
-    assert np.all(full["distance"] <= local["distance"] + 1e-12)
-    np.testing.assert_allclose(full["distance"], local["distance"], atol=1e-6)
+    # every value is the distance to a point of the surface: the smaller is the nearer;
+    # the batched local projection (restarted from coarse samples) finds OCCT's global
+    # foot points or nearer ones, and OCCT judges the same maximum
+    for key in ("distance", "distance_back"):
+        assert np.all(local[key] <= full[key] + 1e-12)
+        np.testing.assert_allclose(full[key], local[key], atol=1e-4)
+    assert local["max"] == pytest.approx(full["max"], abs=1e-12)
     assert np.all(local["distance"] <= local["parametric"] + 1e-12)
     np.testing.assert_allclose(np.abs(local["signed"]), local["distance"])
     assert local["max"] == pytest.approx(local["distance"].max())
