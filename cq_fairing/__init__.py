@@ -11,9 +11,9 @@ from .core.geometry import BSplineCurve, BSplineSurface, make_curve, make_surfac
 from .core.clouds import classify_points, resample_height_field
 from .core.interpolation import interpolate_grid, interpolate_points, read_xyz
 from .core.spaces import SplineSpace
-from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidTargetError,
-                     InvalidToleranceError, NumericalError, OutputPathError,
-                     ToleranceNotMetError, UnsupportedGeometryError)
+from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidOutputError,
+                     InvalidTargetError, InvalidToleranceError, NumericalError,
+                     OutputPathError, ToleranceNotMetError, UnsupportedGeometryError)
 
 __version__ = "0.1.0"
 
@@ -24,5 +24,5 @@ __all__ = [
     "resample_height_field",
     "FairingError", "InvalidInputError", "InvalidTargetError", "InvalidToleranceError",
     "ToleranceNotMetError", "UnsupportedGeometryError", "NumericalError",
-    "FileFormatError", "OutputPathError",
+    "FileFormatError", "OutputPathError", "InvalidOutputError",
 ]
