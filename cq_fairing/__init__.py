@@ -9,9 +9,9 @@ layer (:mod:`cq_fairing.occ`), the viewers (:mod:`cq_fairing.viz`) and the comma
 
 import importlib
 
-from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidTargetError,
-                     InvalidToleranceError, NumericalError, OutputPathError,
-                     ToleranceNotMetError, UnsupportedGeometryError)
+from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidOutputError,
+                     InvalidTargetError, InvalidToleranceError, NumericalError,
+                     OutputPathError, ToleranceNotMetError, UnsupportedGeometryError)
 
 __version__ = "0.1.0"
 
@@ -34,7 +34,7 @@ __all__ = [
     "resample_height_field",
     "FairingError", "InvalidInputError", "InvalidTargetError", "InvalidToleranceError",
     "ToleranceNotMetError", "UnsupportedGeometryError", "NumericalError",
-    "FileFormatError", "OutputPathError",
+    "FileFormatError", "OutputPathError", "InvalidOutputError",
 ]
 
 

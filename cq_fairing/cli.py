@@ -29,11 +29,14 @@ Subcommands
 Exit codes
 ----------
 0  success: every requested face met the tolerance
-1  some requested face did not meet the tolerance (the output is still written)
+1  some requested face missed the tolerance or failed and was kept unchanged (the output
+   is still written; the summary says why)
 2  usage error (bad option or value): one line, then see cq-fairing fair --help
 3  input file missing, empty, corrupt or of an unknown format
 4  output path refused (exists without --force, is the input, folder missing/unwritable)
 5  internal error (run with --debug for the traceback)
+6  the output failed its own validation (it does not read back as a valid shape with
+   every face); nothing was written
 130 interrupted (Ctrl-C); no partial output is left behind
 
 Every file is written to a temporary name beside the target, read back and checked,
@@ -47,10 +50,11 @@ import sys
 import time
 from pathlib import Path
 
-from .errors import (FairingError, FileFormatError, InvalidInputError, OutputPathError,
-                     ToleranceNotMetError)
+from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidOutputError,
+                     OutputPathError, ToleranceNotMetError)
 
 EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
+EXIT_INVALID_OUTPUT = 6
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a writer whose reader left
 
@@ -683,6 +687,7 @@ def _surface_shape(surface):
 
 # -- entry point -----------------------------------------------------------------------------
 _EXIT_BY_ERROR = ((FileFormatError, EXIT_INPUT), (OutputPathError, EXIT_OUTPUT),
+                  (InvalidOutputError, EXIT_INVALID_OUTPUT),
                   (ToleranceNotMetError, EXIT_TOLERANCE), (InvalidInputError, EXIT_USAGE),
                   (FairingError, EXIT_INTERNAL))
 

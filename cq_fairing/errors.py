@@ -18,6 +18,7 @@ __all__ = [
     "NumericalError",
     "FileFormatError",
     "OutputPathError",
+    "InvalidOutputError",
 ]
 
 
@@ -68,3 +69,8 @@ class FileFormatError(FairingError):
 
 class OutputPathError(FairingError):
     """An output path exists (without ``force``), is the input, or cannot be written."""
+
+
+class InvalidOutputError(FairingError):
+    """The model to write could not be turned into a file that reads back as itself (valid
+    by ``BRepCheck``, the same number of faces); nothing was written."""

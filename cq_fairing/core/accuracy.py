@@ -49,7 +49,9 @@ beat the best total so far and, if that passes, bisects down to the smallest pas
 :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
 when even :math:`n_v = 1` could not improve (not :math:`v_{lo}`: between non-nested spaces a
 smaller :math:`n_u` can pass where the source's :math:`n_u` fails).  The answer is measured within ``tol``
-and scanned like the curve case in both directions.  ``"linear"`` and ``"polyfit"``
+and scanned like the curve case in both directions.  A closed direction (end rows that
+coincide) counts scales below :func:`~cq_fairing.core.geometry.fewest_spans` as
+inadmissible, so the coarsest answer still closes as a valid face.  ``"linear"`` and ``"polyfit"``
 apply the seed's methods along the equal-ratio diagonal
 :math:`(n_u, n_v) \approx s\,(n_{u,\max}, n_{v,\max})`.
 
@@ -66,7 +68,7 @@ from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetEr
 from .decomposition import decomposition
 from .fairing import (_cartesian, _coefficients, largest_resolved_scale, project_curve,
                       project_surface, resolved_plan)
-from .geometry import BSplineCurve, BSplineSurface
+from .geometry import BSplineCurve, BSplineSurface, fewest_spans
 from .measures import CurveProbe, SurfaceProbe, sample_parameters, within_box
 from .spaces import SplineSpace
 
@@ -242,7 +244,8 @@ def _curve_error(curve, degree, schedule, deviation):
 
 
 def _deviation(probe, faired, tol=None):
-    """``probe``'s maximum deviation of ``faired``; ``inf`` for an inadmissible scale (None)."""
+    """``probe``'s maximum deviation of ``faired``; ``inf`` for an inadmissible scale (None:
+    not resolved by the source, or below :func:`~cq_fairing.core.geometry.fewest_spans`)."""
     return float("inf") if faired is None else probe.max_deviation(faired, tol)[0]
 
 
@@ -467,8 +470,11 @@ def _surface_error(surface, degrees, schedule, deviation, window=None):
                                        sample_parameters(surface.v_space), bounds))
     strict = SurfaceProbe(surface, method=deviation, hold_grid=False, bounds=bounds)
     net = _coefficients(surface)
+    lowest = [min(n, chain.n_max) for n, chain in zip(fewest_spans(surface), (chain_u, chain_v))]
 
     def geometry(nu, nv):
+        if nu < lowest[0] or nv < lowest[1]:   # a closed direction cannot close on so few
+            return None
         upper = chain_u.coarse(net, nu, key="u")
         if upper is None:
             return None

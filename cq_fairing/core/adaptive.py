@@ -79,7 +79,8 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
     section is one rational quadratic span (a circular arc) keeps that section with its
     three poles while the sweep direction is reduced (impeller fillets: 50 x 3 -> 9 x 3
     poles, where a polynomial approximation needs 4 to 6 poles across).  A candidate
-    with a weight :math:`\le 0` fails.  The energy polish and the objective ``"fair"`` act on
+    with a weight :math:`\le 0` fails, and so does one with fewer spans along a closed
+    direction than :func:`~cq_fairing.core.geometry.fewest_spans` allows.  The energy polish and the objective ``"fair"`` act on
     polynomial geometry and are not applied: the energy of the homogeneous net is not
     that of the surface, and on the impeller fillet of the peer benchmark a polish of it
     lowered the iso-lines' :math:`\int (d\kappa/ds)^2` from 1.81e3 to 1.70e3 but bent
@@ -100,7 +101,7 @@ from .decomposition import decomposition
 from .fairing import FairResult, SurfaceFairResult
 from .fidelity import (NOISE_FRACTION, CurveResidual, SurfaceResidual, noise_level,
                        noise_limit)
-from .geometry import BSplineCurve, BSplineSurface
+from .geometry import BSplineCurve, BSplineSurface, fewest_spans
 from .gram import gram_matrix
 from .measures import CurveProbe, SurfaceProbe, box_region, sample_parameters
 from .spaces import SplineSpace
@@ -662,6 +663,7 @@ class _SurfaceFit:
         self._span_starts = (np.searchsorted(u, surface.u_space.breakpoints[:-1]),
                              np.searchsorted(v, surface.v_space.breakpoints[:-1]))
         self.lengths = net_lengths(surface.poles)
+        self.lowest = fewest_spans(surface)
         self.evaluations = 0
         self._cache = {}
         self._refused = {}   # screened_trial's refusals, by candidate
@@ -856,13 +858,17 @@ class _SurfaceFit:
         return BSplineSurface(net[..., :-1] / w[..., None], tu.knots, tv.knots, tu.degree,
                               tv.degree, w)
 
-    def unweighted(self, faired):
-        """True for a rational candidate with a weight ``<= 0``: it may pass through
-        infinity between samples, so it fails whatever its samples say."""
-        return self.rational and not np.all(faired.weights > 0)
+    def inadmissible(self, faired):
+        """True for a candidate that fails whatever its samples say: a rational one with a
+        weight ``<= 0`` (it may pass through infinity between samples), or one with fewer
+        spans along a closed direction than :func:`~cq_fairing.core.geometry.fewest_spans`
+        (it cannot close as a valid face)."""
+        spans = (faired.u_space.n_spans, faired.v_space.n_spans)
+        return (any(n < low for n, low in zip(spans, self.lowest))
+                or self.rational and not np.all(faired.weights > 0))
 
     def _measured(self, faired):
-        if self.unweighted(faired):
+        if self.inadmissible(faired):
             # its samples say nothing about where the error is: all get twice the
             # tolerance, which keeps the knot density as it is (as for curves)
             self.evaluations += 1
@@ -891,7 +897,7 @@ class _SurfaceFit:
         if key in self._refused:
             return self._refused[key]
         faired = self._faired(tu, tv, lam)
-        excess = np.inf if self.unweighted(faired) else self._coarse_excess(faired)
+        excess = np.inf if self.inadmissible(faired) else self._coarse_excess(faired)
         if excess is not None:
             self.evaluations += 1
             self._refused[key] = (faired, None, excess)
@@ -1168,7 +1174,7 @@ def fair_surface_adaptive(surface, tol, *, target_degree=None, objective="compac
         spaces, sigma = _faithful_net(fit, family, dens, tops)
         table = (("noise", sigma),)
         faired = fit.geometry(spaces, fit.project(*spaces))
-        e = np.inf if fit.unweighted(faired) else check(faired)
+        e = np.inf if fit.inadmissible(faired) else check(faired)
         found = (spaces, faired, e, 0.0, 1.0) if e <= tol else None
     if found is None:
         candidates = _compact_candidates(fit, family, dens, tops, tol, borders == "auto")
@@ -1487,7 +1493,7 @@ def _faithful_net(fit, family, dens, tops):
 
     def variance(spaces):
         faired = fit.geometry(spaces, fit.project(*spaces))
-        return np.inf if fit.unweighted(faired) else residual.variance(faired)
+        return np.inf if fit.inadmissible(faired) else residual.variance(faired)
 
     @cache
     def at_fraction(fraction):

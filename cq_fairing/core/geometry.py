@@ -28,8 +28,12 @@ ALONG_V_SLICE = 2 ** 17
 # and the fifth powers of a net's lengths (curvature-variation energy) stay in float range
 COORDINATE_LIMIT = 1e50
 EXTENT_FLOOR = 1e-50
+# rows within this fraction of the net's extent coincide (a closed seam, a collapsed border)
+COINCIDENT = 1e-9
+CLOSED_MIN_SPANS = 3
 
-__all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles", "extent"]
+__all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles", "extent",
+           "closed_axes", "fewest_spans", "CLOSED_MIN_SPANS"]
 
 
 def extent(poles):
@@ -37,6 +41,34 @@ def extent(poles):
     the size of a geometry, which scales a converged Newton step or a noise floor."""
     flat = np.asarray(poles).reshape(-1, np.asarray(poles).shape[-1])
     return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
+
+
+def closed_axes(surface):
+    """``(u, v)``: True along a direction whose first and last pole rows coincide (within
+    :data:`COINCIDENT` of the net's extent), a closed seam such as that of an unperiodized
+    periodic surface."""
+    size = extent(surface.poles)
+    return tuple(bool(np.abs(rows[0] - rows[-1]).max() <= COINCIDENT * size)
+                 for rows in (surface.poles, np.swapaxes(surface.poles, 0, 1)))
+
+
+def fewest_spans(surface):
+    r"""The fewest knot spans per direction of a target that can still be a valid face.
+
+    One span along an open direction; :data:`CLOSED_MIN_SPANS` (3) along a closed one
+    (:func:`closed_axes`).  A closed direction is faired with its end rows tied, and the
+    target space then holds the closed loops of its span count.  The periodic splines of
+    :math:`m` uniform spans (those without a corner at the seam) form an
+    :math:`m`-dimensional subspace: one or two spans give only a point or a segment
+    traversed twice, three (a rounded triangle) are the fewest that enclose an area.  Below
+    that a tied net closes only through a corner at the seam: a tube swept along such a
+    loop folds through itself there (a torus faired to 4 x 4 poles wrote a STEP file that
+    reads back as a self-intersecting wire).  A direction with fewer spans than that keeps
+    its own count.
+    """
+    spans = (surface.u_space.n_spans, surface.v_space.n_spans)
+    return tuple(min(CLOSED_MIN_SPANS, n) if closed else 1
+                 for closed, n in zip(closed_axes(surface), spans))
 
 
 @dataclass(frozen=True, eq=False)

@@ -12,7 +12,7 @@ from OCP.TColgp import TColgp_Array1OfPnt
 from OCP.TColStd import TColStd_Array1OfReal
 
 from ..core.geometry import BSplineCurve
-from ..errors import InvalidInputError, NumericalError
+from ..errors import InvalidInputError, InvalidOutputError, NumericalError
 from .convert import _distinct, to_geom_surface
 
 __all__ = ["curve_to_edge", "surface_to_natural_face", "face_uv_box", "write_edge"]
@@ -73,8 +73,9 @@ def write_edge(edge, path, *, force=False, input_path=None):
     ------
     OutputPathError
         See :func:`cq_fairing.report.check_output_path`.
-    NumericalError
-        The written file does not read back with one edge.
+    InvalidOutputError
+        OCCT could not write the edge, or the written file does not read back with one
+        edge (nothing is written).
     """
     from OCP.BRep import BRep_Builder
     from OCP.BRepTools import BRepTools
@@ -94,7 +95,7 @@ def write_edge(edge, path, *, force=False, input_path=None):
             writer = STEPControl_Writer()
             writer.Transfer(edge, STEPControl_AsIs)
             if writer.Write(str(tmp)) != IFSelect_RetDone:
-                raise NumericalError(f"OCCT could not write {path}.")
+                raise InvalidOutputError(f"OCCT could not write {path}; nothing was written.")
             reader = STEPControl_Reader()
             reader.ReadFile(str(tmp))
             reader.TransferRoots()
@@ -108,5 +109,6 @@ def write_edge(edge, path, *, force=False, input_path=None):
             edges += 1
             explorer.Next()
         if edges < 1:
-            raise NumericalError(f"{path} did not read back with the faired curve; not written.")
+            raise InvalidOutputError(
+                f"{path} did not read back with the faired curve; nothing was written.")
     return path

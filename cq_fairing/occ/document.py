@@ -37,7 +37,7 @@ from OCP.TopoDS import TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
 
-from ..errors import FileFormatError
+from ..errors import FileFormatError, InvalidOutputError
 
 __all__ = ["Model", "read_step_model", "document_step_bytes"]
 
@@ -145,7 +145,7 @@ def document_step_bytes(document):
 
     Raises
     ------
-    FileFormatError
+    InvalidOutputError
         The transfer or the writing failed.
     """
     writer = STEPCAFControl_Writer()
@@ -153,7 +153,8 @@ def document_step_bytes(document):
         set_mode(True)
     writer.SetPropsMode(False)
     if not writer.Transfer(document, STEPControl_AsIs):
-        raise FileFormatError("STEP transfer of the model's document failed.")
+        raise InvalidOutputError("STEP transfer of the model's document failed; nothing was "
+                                 "written.")
     return written_step(writer)
 
 
@@ -162,7 +163,7 @@ def written_step(writer):
 
     Raises
     ------
-    FileFormatError
+    InvalidOutputError
         The writing failed.
     """
     import io
@@ -170,7 +171,8 @@ def written_step(writer):
     stream = io.BytesIO()
     status = writer.WriteStream(stream)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(f"writing the STEP data failed (status {status.name}).")
+        raise InvalidOutputError(
+            f"writing the STEP data failed (status {status.name}); nothing was written.")
     return stream.getvalue()
 
 

@@ -40,7 +40,7 @@ from OCP.TopoDS import TopoDS
 
 from ..core.adaptive import BORDERS, fair_surface_adaptive
 from ..core.fairing import SurfaceFairResult, check_search_options, fair_surface, target_space
-from ..core.geometry import BSplineSurface
+from ..core.geometry import COINCIDENT, BSplineSurface, closed_axes, extent
 from ..core.spaces import SplineSpace
 from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
                       ToleranceNotMetError, UnsupportedGeometryError)
@@ -51,7 +51,7 @@ from .search import max_scales, search_scales
 from .trims import face_region
 
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
-           "check_options"]
+           "check_options", "collapsed_kept"]
 
 METHODS = ("wavelet", "adaptive", "energy")
 # methods that choose their own net and so need tol, never n
@@ -573,10 +573,12 @@ def _finisher(surface, periodic, boundary):
       sphere: a degenerated edge) is set back to :math:`c` in the faired net
       (:func:`_collapse_rows`), so the degenerated edge and its vertex stay exact.
 
-    Rows count as coincident or collapsed within ``1e-9`` of the net's size.
+    Rows count as coincident or collapsed within ``COINCIDENT`` (1e-9) of the net's extent
+    (:func:`~cq_fairing.core.geometry.closed_axes`).
     ``boundary="fixed"`` first restores all the source's border rows.
     """
-    tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or _seam_closed(surface, axis)]
+    closed = closed_axes(surface)
+    tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or closed[axis]]
     collapsed = _collapsed_rows(surface)
 
     def finish(faired):
@@ -588,27 +590,23 @@ def _finisher(surface, periodic, boundary):
     return finish
 
 
-def _net_size(surface):
-    return float(np.linalg.norm(np.ptp(surface.poles.reshape(-1, surface.poles.shape[-1]),
-                                       axis=0)))
-
-
-def _seam_closed(surface, axis):
-    """True when the first and last pole rows along ``axis`` coincide (a closed seam)."""
-    rows = np.moveaxis(surface.poles, axis, 0)
-    return bool(np.abs(rows[0] - rows[-1]).max() <= 1e-9 * _net_size(surface))
-
-
 def _collapsed_rows(surface):
     """``[(axis, end, point)]`` of the border rows whose poles all lie at one point."""
-    size = _net_size(surface)
+    size = extent(surface.poles)
     out = []
     for axis in (0, 1):
         rows = np.moveaxis(surface.poles, axis, 0)
         for end in (0, -1):
-            if np.ptp(rows[end], axis=0).max() <= 1e-9 * size:
+            if np.ptp(rows[end], axis=0).max() <= COINCIDENT * size:
                 out.append((axis, end, rows[end].mean(axis=0)))
     return out
+
+
+def collapsed_kept(source, faired):
+    """``faired`` with every border row that is collapsed in ``source`` (the pole of a
+    sphere-like face) put back onto its point, as :func:`_finisher` does for a face faired
+    alone; the joint projection of :mod:`cq_fairing.occ.joint` uses it too."""
+    return _collapse_rows(faired, _collapsed_rows(source))
 
 
 def _collapse_rows(surface, collapsed):

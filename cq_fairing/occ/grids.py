@@ -38,7 +38,7 @@ from ..core.patch_grid import merge_grid, split_grid
 from ..core.patch_layout import find_grids
 from .convert import surface_to_face
 from .deviation import sample_face_deviation
-from .faces import FaceFairReport, _Sampler, target_degrees
+from .faces import FaceFairReport, _Sampler, collapsed_kept, target_degrees
 from .search import search_scales
 
 __all__ = ["fair_grids", "GridFairing", "RETRIES", "SHRINK"]
@@ -150,7 +150,8 @@ def _fair_block(job, block, cell_faces, readable, merge_gap):
         if faired is None:
             return None
         pieces = split_grid(merged, faired)
-        checked = {f: _checked(job, f, cell.from_grid(pieces[i][j]))
+        checked = {f: _checked(job, f, collapsed_kept(readable[f],
+                                                      cell.from_grid(pieces[i][j])))
                    for i, (column, faces) in enumerate(zip(block.cells, cell_faces))
                    for j, (cell, f) in enumerate(zip(column, faces))}
         if all(deviation["max"] <= job.tol[f] for f, (_, _, deviation) in checked.items()):

@@ -36,7 +36,7 @@ from OCP.Message import Message
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
 from OCP.TopoDS import TopoDS_Shape
 
-from ..errors import FileFormatError, OutputPathError
+from ..errors import FileFormatError, InvalidOutputError, OutputPathError
 from ..report import atomic_output, folder_error
 from .convert import as_shape, indexed_faces
 from .document import Model, document_step_bytes, read_step_model, written_step
@@ -276,8 +276,10 @@ def write_shape(shape, path, *, force=False, input_path=None, unit=None):
         Also when the bytes do not fit (a full disk, a file size limit): the message
         names the reason (``strerror``), the bytes written and the free space.
     FileFormatError
-        Unknown suffix, or the written file does not read back as a valid shape with the
-        same number of faces.
+        Unknown suffix.
+    InvalidOutputError
+        OCCT could not transfer the shape, or the written file does not read back as a
+        valid shape with the same number of faces (nothing is written).
     """
     write_model(Model(as_shape(shape)), path, force=force, input_path=input_path, unit=unit)
 
@@ -356,7 +358,8 @@ def _step_bytes(shape):
     writer = STEPControl_Writer()
     status = writer.Transfer(shape, STEPControl_AsIs)
     if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise FileFormatError(f"STEP transfer of the shape failed (status {status.name}).")
+        raise InvalidOutputError(
+            f"STEP transfer of the shape failed (status {status.name}); nothing was written.")
     return written_step(writer)
 
 
@@ -366,20 +369,26 @@ def _brep_bytes(shape):
     BRepTools.Write_s(shape, stream)
     data = stream.getvalue()
     if not data:
-        raise FileFormatError("writing the BREP data failed.")
+        raise InvalidOutputError("writing the BREP data failed; nothing was written.")
     return data
 
 
 def _verify_written(tmp, n_faces):
-    back = read_shape(tmp)
+    """Refuse a written temporary that does not read back as a valid shape with
+    ``n_faces`` faces (:class:`~cq_fairing.errors.InvalidOutputError`)."""
+    try:
+        back = read_shape(tmp)
+    except FileFormatError as exc:
+        raise InvalidOutputError(
+            f"the written file cannot be read back ({exc}); nothing was written.") from exc
     got = len(indexed_faces(back))
     if got != n_faces:
-        raise FileFormatError(
+        raise InvalidOutputError(
             f"the written file reads back with {got} faces instead of {n_faces}; "
             "nothing was written."
         )
     if not BRepCheck_Analyzer(back).IsValid():
-        raise FileFormatError(
+        raise InvalidOutputError(
             "the written file does not read back as a valid shape (BRepCheck_Analyzer); "
             "nothing was written."
         )

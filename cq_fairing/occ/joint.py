@@ -29,6 +29,7 @@ from ..core.joins import BorderJoin, JointPatch, fair_patches
 from ..core.spaces import SplineSpace
 from .convert import face_to_surface, is_occt_error, surface_to_face
 from .deviation import sample_face_deviation
+from .faces import collapsed_kept
 from .grids import fair_grids
 
 __all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS", "REFINEMENTS"]
@@ -90,7 +91,7 @@ def fair_joined(job, adjacency, joins):
     refined = dict.fromkeys(faces, 0)
     while True:
         result, imposed = _solve(job, readable, faces, kept, refined, border, joins)
-        checked = _checked(job, faces, kept, result)
+        checked = _checked(job, readable, faces, kept, result)
         over = [i for i, (_, _, deviation) in checked.items()
                 if deviation["max"] > job.tol[i]]
         if not over:
@@ -192,13 +193,16 @@ def _reversed(join):
     return ((a.along[1] > a.along[0]) != (b.along[1] > b.along[0])) != join.opposed
 
 
-def _checked(job, faces, kept, result):
+def _checked(job, readable, faces, kept, result):
     """``{face: (new face, surface, deviation)}`` of every solved face, measured both
-    ways by OCCT against its original."""
+    ways by OCCT against its original.  A border row collapsed in the source (the nose of
+    a fuselage, where several faces meet at one point) is put back onto its point, which
+    the faces that share it then share exactly: the projection alone spreads it, and a
+    STEP file of such faces read back as unclosed wires."""
     out = {}
     for k, index in enumerate(faces):
         if index not in kept:
-            surface = result.surfaces[k]
+            surface = collapsed_kept(readable[index], result.surfaces[k])
             face = surface_to_face(surface, job.originals[index])
             out[index] = (face, surface, sample_face_deviation(job.originals[index], face))
     return out

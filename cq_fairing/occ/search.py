@@ -14,7 +14,9 @@ checks the final face again (:mod:`cq_fairing.occ.faces`).
 
 The search is a bisection on a common fraction of the largest scales, then on each
 direction alone.  Deviation is not strictly monotone in ``n``, so the result is the
-fewest poles *found*, always verified, not a proven minimum.
+fewest poles *found*, always verified, not a proven minimum.  Along a closed direction
+(end rows that coincide) fewer spans than :func:`~cq_fairing.core.geometry.fewest_spans`
+count as failing: the coarsest net still closes as a valid face.
 
 This is the local stand-in for ``cq_fairing.fair_surface(tol=...)`` until the core's
 accuracy control lands with a surface search.
@@ -26,7 +28,7 @@ import numpy as np
 
 from ..core.banded import BandedSPD
 from ..core.fairing import _cartesian, _coefficients, target_space
-from ..core.geometry import BSplineSurface
+from ..core.geometry import BSplineSurface, fewest_spans
 from ..core.gram import gram_matrix
 from ..errors import ToleranceNotMetError
 
@@ -142,7 +144,12 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
             halves[n[0]] = project_u(surface, space(0, n[0]))
         return project(surface, space(0, n[0]), space(1, n[1]), halves[n[0]])
 
+    lowest = [None if m is None else min(low, m)
+              for low, m in zip(fewest_spans(surface), top)]
+
     def run(n):
+        if any(k is not None and k < low for k, low in zip(n, lowest)):
+            return None, np.inf   # a closed direction cannot close on so few spans
         if n not in cache:
             faired = finish(projected(n))
             cache[n] = (faired, deviation(faired))

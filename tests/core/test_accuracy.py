@@ -325,3 +325,31 @@ def test_an_everywhere_region_changes_nothing_and_a_bad_one_is_refused():
         fair_surface_adaptive(source, 3e-3, region=(0.0, 0.7, 0.0, 1.0))
     with pytest.raises(cf.InvalidInputError, match="boolean array of shape"):
         fair_surface_adaptive(source, 3e-3, region=lambda u, v: np.ones(u.size, dtype=bool))
+
+
+def _tube(rows=20, columns=9):
+    """A cubic tube closed along u (end rows equal: a circle of radius 1 around an arc of
+    radius 5), open along v; uniform clamped knots."""
+    from cq_fairing.core.geometry import make_surface
+
+    a = np.linspace(0.0, 2 * np.pi, rows)
+    b = np.linspace(0.0, 1.0, columns)
+    ring = 5.0 + np.cos(a)[:, None]
+    poles = np.stack([ring * np.cos(b)[None, :], ring * np.sin(b)[None, :],
+                      np.sin(a)[:, None] * np.ones_like(b)[None, :]], axis=-1)
+    poles[-1] = poles[0]
+    return make_surface(poles, degree=3)
+
+
+@pytest.mark.parametrize("method", ["wavelet", "adaptive"])
+def test_a_huge_tolerance_keeps_three_spans_along_a_closed_direction(method):
+    """The coarsest answer of either tolerance search keeps 3 spans along the closed u
+    (:func:`~cq_fairing.core.geometry.fewest_spans`) and goes down to 1 along the open v."""
+    from cq_fairing.core.geometry import closed_axes, fewest_spans
+
+    tube = _tube()
+    assert closed_axes(tube) == (True, False) and fewest_spans(tube) == (3, 1)
+    result = cf.fair_surface(tube.poles, tol=1e30, u_knots=tube.u_knots,
+                             v_knots=tube.v_knots, degree=3, method=method)
+    spans = (result.surface.u_space.n_spans, result.surface.v_space.n_spans)
+    assert spans == (3, 1)

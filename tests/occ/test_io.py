@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from cq_fairing.errors import FileFormatError, OutputPathError
+from cq_fairing.errors import FileFormatError, InvalidOutputError, OutputPathError
 from cq_fairing.occ import list_faces, read_shape, write_shape
 from tests.conftest import data_path
 from tests.occ.helpers import area, faces_of, volume
@@ -93,7 +93,7 @@ def test_invalid_shape_is_not_written(tmp_path):
 
     compound = TopoDS_Compound()
     BRep_Builder().MakeCompound(compound)
-    with pytest.raises(FileFormatError):
+    with pytest.raises(InvalidOutputError, match="cannot be read back .*nothing was written"):
         write_shape(compound, tmp_path / "empty.brep")
     assert not list(tmp_path.iterdir())
 
