@@ -2,8 +2,10 @@
 
 1. The synthetic 2 x 2 grid of ``cq_fairing.core.examples.patch_grid`` (noisy patches of
    one surface) faired onto quasi-uniform bicubic targets by ``fair_patches``: alone,
-   G0 and G1; gap and normal angle at 101 samples per join, deviation as the largest
-   distance to the source at equal parameters (41 x 41 per patch).
+   G0 and G1; and merged into one surface on as many poles per patch, cut back into its
+   patches (what ``fair_shape`` does with a grid that forms a whole model); gap and
+   normal angle at 101 samples per join, deviation as the largest distance to the
+   source at equal parameters (41 x 41 per patch).
 2. Whole models faired with joins held (``joins="smooth"``, the default) against each
    face alone (``joins="free"``): time, faces faired, poles, and every join's gap and
    normal angle measured by projection both ways (``ShapeFairResult.joins``).
@@ -18,6 +20,8 @@ import numpy as np
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import JointPatch, fair_patches
+from cq_fairing.core.patch_grid import merge_grid, split_grid
+from cq_fairing.core.patch_layout import find_grids
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.occ import read_shape
 from cq_fairing.occ.shapes import fair_shape
@@ -80,6 +84,24 @@ def synthetic():
         for continuity in ("G0", "G1"):
             result = fair_patches(patches, grid.joins, continuity=continuity)
             print(grid_row(f"{n + 3} x {n + 3}, {continuity}", result.surfaces, grid))
+        print(grid_row(f"{2 * n + 3} x {2 * n + 3} merged, cut into 4", _merged(grid, 2 * n),
+                       grid))
+
+
+def _merged(grid, n):
+    """The grid merged into one surface, projected onto n x n spans with its patch
+    borders pinned, cut back into its patches in their own orientations."""
+    block = find_grids(grid.patches, grid.joins)[0]
+    merged = merge_grid([[c.to_grid(grid.patches[c.patch]) for c in column]
+                         for column in block.cells], tol=1e-6)
+    (u0, u1), (v0, v1) = merged.surface.domain
+    pieces = split_grid(merged, merged.pinned_projection(
+        SplineSpace.quasi_uniform(n, 3, (u0, u1)), SplineSpace.quasi_uniform(n, 3, (v0, v1))))
+    out = [None] * len(grid.patches)
+    for i, column in enumerate(block.cells):
+        for j, cell in enumerate(column):
+            out[cell.patch] = cell.from_grid(pieces[i][j])
+    return out
 
 
 def main():

@@ -84,9 +84,25 @@ def test_smooth_joins_keep_one_tangent_plane_and_cost_little_accuracy():
     assert gap <= 1e-9 * 2.0
     assert _joins_measured(alone, joins)[1] > 5.0
     assert _joins_measured(closed.surfaces, joins)[1] > 4.0
-    assert angle < 0.15
+    assert angle < 0.06
     assert smooth.g1_rows > 0
     assert _deviation(smooth.surfaces, patches) < 1.5 * _deviation(alone, patches)
+
+
+def test_tangent_planes_agree_to_round_off_away_from_the_inner_vertex():
+    """One ratio per join makes the cross derivatives parallel along the whole join; only
+    where the poles next to the grid's inner vertex (at x = y = 1) reach, one mirrored
+    row of the cycle around it being left out, may the planes turn: on 7-pole targets
+    (4 spans) the span at the outer end is out of their reach."""
+    patches, joins = _grid()
+    smooth = fair_patches(_targets(patches), joins, continuity="G1")
+    for join in joins:
+        pa, na = _border(smooth.surfaces[join.a], join.side_a, SAMPLES)
+        _, nb = _border(smooth.surfaces[join.b], join.side_b,
+                        1 - SAMPLES if join.reversed else SAMPLES)
+        far = np.linalg.norm(pa[:, :2] - 1.0, axis=1) > 0.76
+        cos = np.clip(np.abs(np.sum(na * nb, axis=1)), -1, 1)
+        assert np.degrees(np.arccos(cos[far])).max() < 1e-5
 
 
 def test_a_kept_patch_constrains_its_neighbours_exactly():
