@@ -131,6 +131,9 @@ class BSplineCurve:
         return self.space.domain
 
 
+DEGENERATE = 1e-2   # a normal shorter than this x the longest on the grid is undefined
+
+
 @dataclass(frozen=True, eq=False)
 class BSplineSurface:
     """A clamped (optionally rational) tensor-product B-spline surface.
@@ -199,6 +202,19 @@ class BSplineSurface:
         if nu + nv > 2:
             raise InvalidInputError("rational surfaces evaluate derivatives up to order 2.")
         return _rational_grid(self, u, v, nu, nv)
+
+    def folds_against(self, reference, u, v):
+        r"""True where the surface's normal turns by more than 90 degrees from
+        ``reference``'s on the grid ``u x v``: :math:`(S_u\times S_v)\cdot
+        (R_u\times R_v) < 0`, where both normals are defined (longer than
+        :data:`DEGENERATE` times their largest: a collapsed border has none).  A faired
+        surface that folds back over itself keeps its distance to the source small but
+        reverses its normal there."""
+        normals = [np.cross(s.evaluate_grid(u, v, 1, 0), s.evaluate_grid(u, v, 0, 1))
+                   for s in (self, reference)]
+        lengths = [np.linalg.norm(n, axis=-1) for n in normals]
+        defined = np.logical_and(*(n > DEGENERATE * max(n.max(), 1e-300) for n in lengths))
+        return defined & (np.einsum("...i,...i->...", *normals) < 0.0)
 
     def grid_blocks(self, u, v, step):
         """:class:`GridBlocks` of this surface on the grid ``u x v``, ``step`` rows per block."""

@@ -180,13 +180,11 @@ def _fair_merged(merged, tol, target_degree):
     surface = merged.surface
     u, v = (_samples(breaks) for breaks in (merged.u_breaks, merged.v_breaks))
     sampler = _Sampler((u, v, np.ones((u.size, v.size), dtype=bool)), surface)
-    normals = _normals(surface, u, v)
     lines = [(merged.u_breaks, v), (u, merged.v_breaks)]
     on_lines = [surface.evaluate_grid(a, b) for a, b in lines]
 
     def distance(faired):
-        folded = np.einsum("...i,...i->...", _normals(faired, u, v), normals) < 0.0
-        if folded.any():
+        if faired.folds_against(surface, u, v).any():
             return np.inf
         slide = max(float(np.linalg.norm(faired.evaluate_grid(a, b) - exact, axis=-1).max())
                     for (a, b), exact in zip(lines, on_lines))
@@ -203,11 +201,6 @@ def _fair_merged(merged, tol, target_degree):
     except ToleranceNotMetError:
         return None
     return faired
-
-
-def _normals(surface, u, v):
-    """Unnormalised normals :math:`S_u \\times S_v` on the grid ``u x v``."""
-    return np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
 
 
 def _samples(breaks):

@@ -31,6 +31,7 @@ from .convert import face_to_surface, is_occt_error, surface_to_face
 from .deviation import sample_face_deviation
 from .faces import collapsed_kept
 from .grids import fair_grids
+from .networks import fair_networks
 
 __all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS", "REFINEMENTS"]
 
@@ -49,10 +50,14 @@ class JointOutcome:
         The joins held closed (their faces were solved or kept together).
     grids : list of GridFairing
         The patch grids faired as one surface each (:mod:`cq_fairing.occ.grids`).
+    networks : list of NetworkFairing
+        The faces at their coarsest faired together by energy
+        (:mod:`cq_fairing.occ.networks`).
     """
 
     joins: list
     grids: list
+    networks: list
 
 
 def fair_joined(job, adjacency, joins):
@@ -60,7 +65,9 @@ def fair_joined(job, adjacency, joins):
 
     The patch grids among them that form whole parts of the model are faired first,
     each as one surface (:func:`~cq_fairing.occ.grids.fair_grids`): their pieces share
-    their borders pole for pole.  The other faces are projected together.
+    their borders pole for pole.  The faces faired alone are then projected together,
+    and the faces that were already at their coarsest are faired together by energy
+    across their joins (:func:`~cq_fairing.occ.networks.fair_networks`).
 
     Parameters
     ----------
@@ -84,10 +91,21 @@ def fair_joined(job, adjacency, joins):
     gridded = {face for grid in grids for face in grid.faces}
     in_grids = [j for j in border if set(j.faces) <= gridded]
     border = [j for j in border if not set(j.faces) & gridded]
+    imposed = _project_jointly(job, adjacency, readable, border, joins)
+    networks = fair_networks(job, adjacency, readable, border, _reversed,
+                             "G1" if joins == "smooth" else "G0")
+    moved = {face for network in networks for face in network.moved}
+    in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
+    return JointOutcome(in_grids + imposed + in_networks, grids, networks)
+
+
+def _project_jointly(job, adjacency, readable, border, joins):
+    """The joint projection of the faces faired alone, the others kept; the joins it
+    held."""
     faces = sorted({s.face for j in border for s in j.sides})
     kept = {i for i in faces if not _fairable(job.reports[i], readable[i])}
     if not faces or len(kept) == len(faces):
-        return JointOutcome(in_grids, grids)
+        return []
     refined = dict.fromkeys(faces, 0)
     while True:
         result, imposed = _solve(job, readable, faces, kept, refined, border, joins)
@@ -104,7 +122,7 @@ def fair_joined(job, adjacency, joins):
                 _keep(job, index, checked[index][2]["max"], adjacency.joins_of(index))
     for index, (face, surface, deviation) in checked.items():
         _install(job.reports[index], face, surface, deviation)
-    return JointOutcome(in_grids + imposed, grids)
+    return imposed
 
 
 def _tolerance(job, join):
@@ -236,12 +254,15 @@ class JoinReport:
         Edges of the joins held closed by the joint projection.
     grids : list of GridFairing
         The patch grids faired as one surface each.
+    networks : list of NetworkFairing
+        The networks of faces faired together by energy.
     """
 
     adjacency: object
     measures: list
     closed_edges: set = field(default_factory=set)
     grids: list = field(default_factory=list)
+    networks: list = field(default_factory=list)
 
     def rows(self):
         """One dict per join: ``faces`` (1-based), ``kind``, ``held`` (closed by
@@ -263,7 +284,8 @@ class JoinReport:
         (faired minus source gap), ``smooth``, ``max_smooth_angle`` and its
         ``source_max_smooth_angle``, ``max_angle_excess`` over the smooth joins,
         ``creases``, ``grids`` (the shape of each patch grid faired as one surface),
-        ``grid_faces`` (their faces), ``non_manifold``, ``point_contacts``."""
+        ``grid_faces`` (their faces), ``network_faces`` (faces faired together by energy),
+        ``non_manifold``, ``point_contacts``."""
         rows = self.rows()
         smooth = [r for r in rows if r["kind"] == "smooth"]
         return dict(
@@ -277,6 +299,7 @@ class JoinReport:
             creases=len(rows) - len(smooth),
             grids=[list(g.shape) for g in self.grids],
             grid_faces=sum(len(g.faces) for g in self.grids),
+            network_faces=sum(len(n.moved) for n in self.networks),
             non_manifold=len(self.adjacency.non_manifold),
             point_contacts=len(self.adjacency.point_contacts))
 
@@ -291,4 +314,6 @@ class JoinReport:
                 f"{s['source_max_smooth_angle']:.2g}); {s['creases']} creases"
                 + (f"; {len(s['grids'])} patch grids ({s['grid_faces']} faces) faired as one "
                    "surface each" if s["grids"] else "")
+                + (f"; {s['network_faces']} faces at their coarsest faired together"
+                   if s["network_faces"] else "")
                 + (f"; {s['non_manifold']} non-manifold edges" if s["non_manifold"] else ""))

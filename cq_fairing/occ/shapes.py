@@ -235,7 +235,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         adjacency = find_joins(source, angle_tol=angle_tol)
         if joins != "free" and tol is not None:
             joint = fair_joined(job, adjacency, joins)
-            job.grids = joint.grids
+            job.grids, job.networks = joint.grids, joint.networks
             job.closed_edges = {side.edge for join in joint.joins for side in join.sides}
             job.joined_faces = {side.face for join in joint.joins for side in join.sides}
         copy, gaps = job.build()
@@ -250,7 +250,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
         tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps,
         JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges,
-                   job.grids))
+                   job.grids, job.networks))
 
 
 def _check_joins(joins, angle_tol):
@@ -295,6 +295,7 @@ class _Job:
         self.closed_edges = set()   # edges whose faces were faired together, held closed
         self.joined_faces = set()   # their faces: the gap loop leaves them as they are
         self.grids = []             # patch grids faired as one surface each
+        self.networks = []          # faces at their coarsest faired together by energy
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""

@@ -1,0 +1,47 @@
+"""Faces at their coarsest faired together by energy (occ.networks): the 99 bicubic
+4 x 4 patches of shell_patches.brep, measured by OCCT, against the same shell faired
+face by face (which leaves every patch as it is)."""
+
+import numpy as np
+import pytest
+from OCP.BRepCheck import BRepCheck_Analyzer
+
+from cq_fairing.occ.io import read_shape
+from cq_fairing.occ.shapes import fair_shape
+
+from tests.conftest import data_path
+
+TOL = 0.083   # the model's default tolerance (1e-3 of its diagonal)
+SIZE = 83.1   # its bounding-box diagonal
+
+
+@pytest.fixture(scope="module")
+def shell():
+    return read_shape(data_path("shell_patches.brep"))
+
+
+@pytest.fixture(scope="module")
+def runs(shell):
+    return {joins: fair_shape(shell, tol=TOL, joins=joins) for joins in ("smooth", "free")}
+
+
+def test_face_by_face_nothing_can_be_faired(runs):
+    assert runs["free"].n_faired == 0
+    assert {r.status for r in runs["free"].faces} == {"unchanged"}
+
+
+def test_a_network_of_patches_is_faired_together(runs):
+    result = runs["smooth"]
+    networked = [r for r in result.faces if r.faired and "network" in r.message]
+    assert len(networked) >= 10
+    assert result.joins.summary()["network_faces"] == len(networked)
+    assert all(r.poles_after == (5, 5) for r in networked)   # one span halved each way
+    assert all(r.max_deviation <= TOL for r in networked)
+    assert result.valid and BRepCheck_Analyzer(result.shape).IsValid()
+
+
+def test_joins_stay_closed_and_turn_no_more_than_the_source_plus_a_twentieth(runs):
+    rows = runs["smooth"].joins.rows()
+    assert max(r["gap"] - r["source_gap"] for r in rows) <= 1e-7 * SIZE
+    assert max(r["angle_excess"] for r in rows if r["kind"] == "smooth") <= 0.05
+    assert sum(r["held"] for r in rows) >= 20
