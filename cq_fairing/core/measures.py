@@ -246,8 +246,12 @@ def _above(active, dist, stop_below):
     return active if stop_below is None else active[dist[active] > stop_below]
 
 
-def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=2, tol=None):
+def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=3, tol=None):
     """Smallest Newton distance from the same parameter and the ``starts`` nearest samples.
+
+    Three starts, not two: the two nearest samples of a wavy faired curve can lie on one
+    lobe, and Newton from both ends in the same local minimum (a seed-like curve of 53
+    poles projected onto 23: 0.0518 against the true 0.0476).
 
     With ``tol`` the other starts are tried only where the first distance exceeds it,
     and every Newton iteration stops once below it.
