@@ -3,14 +3,17 @@
 1. The synthetic 2 x 2 grid of ``cq_fairing.core.examples.patch_grid`` (noisy patches of
    one surface) faired onto quasi-uniform bicubic targets by ``fair_patches``: alone,
    G0 and G1; and merged into one surface on as many poles per patch, cut back into its
-   patches (what ``fair_shape`` does with a grid that forms a whole model); gap and
-   normal angle at 101 samples per join, deviation as the largest distance to the
-   source at equal parameters (41 x 41 per patch).
+   patches (what ``fair_shape`` does with a grid that forms a whole model); and faired
+   as a network by energy on the sources' own spaces (``fair_network``, what
+   ``fair_shape`` does with faces at their coarsest); gap and normal angle at 101
+   samples per join, deviation as the largest distance to the source at equal
+   parameters (41 x 41 per patch), curvature sign changes along 16 lines across joins.
 2. Whole models faired with joins held (``joins="smooth"``, the default) against each
    face alone (``joins="free"``): time, faces faired, poles, and every join's gap and
    normal angle measured by projection both ways (``ShapeFairResult.joins``).
 
-    python benchmarks/bench_joins.py            # grid; fuselage at 2.5, testtoler at 0.01
+    python benchmarks/bench_joins.py    # grid; fuselage 2.5, testtoler 0.01, shell_patches
+                                        # 0.083 (its default), linkrods 0.01
 """
 
 import time
@@ -20,6 +23,7 @@ import numpy as np
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import JointPatch, fair_patches
+from cq_fairing.core.network import fair_network
 from cq_fairing.core.patch_grid import merge_grid, split_grid
 from cq_fairing.core.patch_layout import find_grids
 from cq_fairing.core.spaces import SplineSpace
@@ -27,7 +31,8 @@ from cq_fairing.occ import read_shape
 from cq_fairing.occ.shapes import fair_shape
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
-CASES = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01))
+CASES = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01), ("shell_patches.brep", 0.083),
+         ("linkrods.step", 0.01))
 
 
 def run(name, tol, joins):
@@ -37,7 +42,7 @@ def run(name, tol, joins):
     seconds = time.perf_counter() - start
     s = result.joins.summary()
     poles = sum(r.poles_after[0] * r.poles_after[1] for r in result.faces if r.poles_after)
-    worst = max((r.max_deviation or 0.0) for r in result.faces if r.faired)
+    worst = max(((r.max_deviation or 0.0) for r in result.faces if r.faired), default=0.0)
     return (f"| {name} | {tol:g} | {joins} | {seconds:.2f} | {result.n_faired} | {poles} | "
             f"{s['held']}/{s['joins']} | {s['max_gap_opened']:.2g} | "
             f"{s['max_angle_excess']:.3f} | {worst / tol:.2f} | {result.valid} |")
@@ -68,13 +73,35 @@ def grid_row(label, surfaces, grid):
     g = np.linspace(0.0, 1.0, 41)
     deviation = max(np.linalg.norm(s.evaluate_grid(g, g) - p.evaluate_grid(g, g), axis=2).max()
                     for s, p in zip(surfaces, grid.patches))
-    return f"| {label} | {gap:.2g} | {angle:.3f} | {deviation:.4f} |"
+    return (f"| {label} | {gap:.2g} | {angle:.3f} | {deviation:.4f} | "
+            f"{sign_changes(surfaces)} |")
+
+
+def sign_changes(surfaces, samples=201):
+    """Curvature sign changes along 16 iso-parameter lines that cross the joins: second
+    differences of z (the grid is a height field), below 1e-3 of the largest ignored.
+    Each line runs through two patches (patch 3 has u along y)."""
+    t = np.linspace(0.0, 1.0, samples)
+    count = 0
+    for c in (0.2, 0.45, 0.7, 0.9):
+        s0, s1, s2, s3 = surfaces
+        lines = (
+            (s0.evaluate_grid(t, [c])[:, 0], s1.evaluate_grid(t[::-1], [c])[:, 0]),
+            (s2.evaluate_grid(t, [c])[:, 0], s3.evaluate_grid([c], t)[0]),
+            (s0.evaluate_grid([c], t)[0], s2.evaluate_grid([c], t)[0]),
+            (s1.evaluate_grid([1 - c], t)[0], s3.evaluate_grid(t, [c])[:, 0]))
+        for first, second in lines:
+            d2 = np.diff(np.concatenate([first, second[1:]])[:, 2], 2)
+            signs = np.sign(d2[np.abs(d2) > 1e-3 * np.abs(d2).max()])
+            count += int(np.count_nonzero(signs[1:] != signs[:-1]))
+    return count
 
 
 def synthetic():
     grid = patch_grid()
-    print("| grid, targets | max gap | max normal angle (deg) | deviation |")
-    print("|---|---|---|---|")
+    print("| grid, targets | max gap | max normal angle (deg) | deviation | "
+          "curvature sign changes |")
+    print("|---|---|---|---|---|")
     print(grid_row("source (12 x 12 each)", grid.patches, grid))
     for n in (4, 6):
         target = SplineSpace.quasi_uniform(n, 3)
@@ -86,6 +113,9 @@ def synthetic():
             print(grid_row(f"{n + 3} x {n + 3}, {continuity}", result.surfaces, grid))
         print(grid_row(f"{2 * n + 3} x {2 * n + 3} merged, cut into 4", _merged(grid, 2 * n),
                        grid))
+    for tol in (0.005, 0.01):
+        network = fair_network(grid.patches, grid.joins, tol)
+        print(grid_row(f"12 x 12, network by energy, tol {tol:g}", network.surfaces, grid))
 
 
 def _merged(grid, n):

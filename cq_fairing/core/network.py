@@ -54,7 +54,7 @@ HELD = -1            # the class of every kept pole in the constraints' union-fi
 ANGLE_SLACK = 0.05   # degrees a smooth join may turn beyond the sources' angle
 ANGLE_SAMPLES = 33   # samples along a join for that check
 LAMBDA_RANGE = (1e-8, 1e4)
-BISECTIONS = 16
+BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
 
 
