@@ -17,6 +17,11 @@ Subcommands
     (default ``auto``: pinned where that gives fewer poles).
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
     up on a face after S seconds (reported failed, kept unchanged).
+``batch INPUTS... -o OUT_DIR [--tol T | --rel-tol R] [fair's fairing options]
+[--scheduler tcp://HOST:PORT | --workers N] [--resume] [--force] [--quiet]``
+    Fair many models on a Dask cluster (:mod:`cq_fairing.cli_batch`,
+    ``pip install "cq-fairing[dask]"``): per model the faired file and its report, and
+    a summary over all of them.
 ``inspect IN``
     One line per face: type, degrees, poles, rational, periodic, trimmed, in a solid.
 ``points IN.xyz -o OUT.step [--tol T] [--grid NU NV | --resample NU NV | --curve]``
@@ -132,6 +137,37 @@ def _face_list(text):
     return sorted(set(indices))
 
 
+def _add_fairing_options(parser):
+    """How the faces are faired: the options ``fair`` and ``batch`` share."""
+    parser.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
+                        help="wavelet: uniform targets (default); adaptive: targets whose "
+                             "knots follow the error, fewer poles (needs --tol or its "
+                             "default, not --target)")
+    parser.add_argument("--objective", choices=("compact", "faithful", "fair"),
+                        help="with --method adaptive: compact = fewest poles within --tol "
+                             "(default), faithful = stop at the estimated noise level, "
+                             "fair = the fairest of the fewest poles and up to two more "
+                             "spans per direction (slower)")
+    parser.add_argument("--borders", choices=("auto", "free", "pinned"),
+                        help="with --method adaptive: the target's border rows; auto = "
+                             "pinned (corners kept) where that gives fewer poles (default), "
+                             "free = plain projection (often faster), pinned = always")
+    parser.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
+                        help="smooth = faces that meet along whole borders are faired together, "
+                             "joins closed and tangent where the source was (default); closed = "
+                             "closed only; free = each face alone")
+    parser.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
+                        help="a join whose source normals differ by less is smooth, else a "
+                             "crease (default 1 degree)")
+    parser.add_argument("--target-degree", type=_degree, nargs="+", metavar="P",
+                        help="degree of the faired surfaces, one for both directions or "
+                             "P_U P_V (default: each face's own, at most 3)")
+    parser.add_argument("--boundary", choices=("free", "fixed"), default="free",
+                        help="keep the face borders fixed or let them move within --tol")
+    parser.add_argument("--convert", action="store_true",
+                        help="convert non-B-spline faces to B-splines and fair them too")
+
+
 def build_parser():
     """The argparse parser of ``cq-fairing`` (exit codes in the epilog)."""
     epilog = __doc__[__doc__.index("Exit codes"):__doc__.index("Every file")]
@@ -151,33 +187,7 @@ def build_parser():
     fair.add_argument("--target", type=int, nargs=2, metavar=("NU", "NV"),
                       help="explicit target poles per direction instead of --tol")
     fair.add_argument("--faces", type=_face_list, help="faces to fair, 1-based (default: all)")
-    fair.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
-                      help="wavelet: uniform targets (default); adaptive: targets whose "
-                           "knots follow the error, fewer poles (needs --tol or its "
-                           "default, not --target)")
-    fair.add_argument("--objective", choices=("compact", "faithful", "fair"),
-                      help="with --method adaptive: compact = fewest poles within --tol "
-                           "(default), faithful = stop at the estimated noise level, "
-                           "fair = the fairest of the fewest poles and up to two more "
-                           "spans per direction (slower)")
-    fair.add_argument("--borders", choices=("auto", "free", "pinned"),
-                      help="with --method adaptive: the target's border rows; auto = "
-                           "pinned (corners kept) where that gives fewer poles (default), "
-                           "free = plain projection (often faster), pinned = always")
-    fair.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
-                      help="smooth = faces that meet along whole borders are faired together, "
-                           "joins closed and tangent where the source was (default); closed = "
-                           "closed only; free = each face alone")
-    fair.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
-                      help="a join whose source normals differ by less is smooth, else a "
-                           "crease (default 1 degree)")
-    fair.add_argument("--target-degree", type=_degree, nargs="+", metavar="P",
-                      help="degree of the faired surfaces, one for both directions or "
-                           "P_U P_V (default: each face's own, at most 3)")
-    fair.add_argument("--boundary", choices=("free", "fixed"), default="free",
-                      help="keep the face borders fixed or let them move within --tol")
-    fair.add_argument("--convert", action="store_true",
-                      help="convert non-B-spline faces to B-splines and fair them too")
+    _add_fairing_options(fair)
     fair.add_argument("--report", type=_file_name, help="report file: .json or .html")
     fair.add_argument("--deviation-map", type=_file_name, help="deviation map: .png or .vtp")
     fair.add_argument("--curvature-map", type=_file_name,
@@ -216,6 +226,9 @@ def build_parser():
                         default="uniform")
     points.add_argument("--force", action="store_true")
     points.set_defaults(handler=command_points)
+
+    from .cli_batch import add_batch_command
+    add_batch_command(sub)
     return parser
 
 

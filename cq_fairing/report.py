@@ -37,7 +37,8 @@ from .errors import OutputPathError
 
 __all__ = ["atomic_output", "check_output_path", "build_report", "write_json", "write_html",
            "write_report", "face_entry", "summary_table", "folder_error", "temporary_beside",
-           "publish", "remove_stale_temporaries", "TEMP_PREFIX", "STALE_SECONDS"]
+           "publish", "remove_stale_temporaries", "TEMP_PREFIX", "STALE_SECONDS", "model_row",
+           "batch_summary", "batch_table", "render_batch_html", "write_batch_summary"]
 
 #: Name prefix of every temporary file the writers create next to their target.
 TEMP_PREFIX = ".cq_fairing_"
@@ -497,3 +498,145 @@ def write_report(report, path, *, force=False):
     if suffix in (".html", ".htm"):
         return write_html(report, path, force=force)
     raise OutputPathError(f"a report must end in .json or .html, got {str(path)!r}.")
+
+
+# -- a batch of models ----------------------------------------------------------------------
+#: Model statuses of a batch: faired now, its earlier output kept (``--resume``), failed.
+MODEL_STATUSES = ("done", "resumed", "failed")
+
+
+def model_row(report=None, *, input_path, status, message="", output_path=None,
+              report_path=None, seconds=None, retries=0):
+    """One model of a batch summary, from its report (:func:`build_report`; ``None`` for
+    a model that failed before one was made).
+
+    Returns
+    -------
+    dict
+        ``input``, ``output``, ``report``, ``status`` (one of :data:`MODEL_STATUSES`),
+        ``message``, the report's face counts, poles, worst deviation, tolerance,
+        largest gap opened and validity, ``joins`` (its one line), ``joins_total`` and
+        ``joins_held``, ``seconds`` and ``retries`` (task runs lost with a worker).
+    """
+    s = (report or {}).get("summary") or {}
+    joins = (report or {}).get("joins") or {}
+    counts = joins.get("summary") or {}
+    return _clean({
+        "input": _str(input_path), "output": _str(output_path), "report": _str(report_path),
+        "status": status, "message": message,
+        **{key: s.get(key) for key in ("faces_total", "faces_faired", "faces_unchanged",
+                                      "faces_tolerance_not_met", "faces_skipped",
+                                      "faces_failed", "poles_before", "poles_after",
+                                      "worst_deviation", "max_gap", "valid")},
+        "tolerance": (report or {}).get("tolerance"), "joins": joins.get("line"),
+        "joins_total": counts.get("joins"), "joins_held": counts.get("held"),
+        "seconds": seconds, "retries": retries,
+    })
+
+
+def batch_summary(rows, *, command=None, output_dir=None, settings=None, engine=None,
+                  seconds=None):
+    """The summary of a batch: its settings, one row per model (:func:`model_row`) and
+    totals over the models faired or resumed (``models``, ``models_done``,
+    ``models_resumed``, ``models_failed``, face counts, poles before/after,
+    ``worst_deviation_over_tolerance``: the largest of a model's worst deviation over
+    its tolerance, joins and joins held, ``retries``, ``seconds``: the batch's wall time)."""
+    from . import __version__
+
+    rows = list(rows)
+    handled = [r for r in rows if r["status"] != "failed"]
+
+    def total(key):
+        return sum(r[key] or 0 for r in handled)
+
+    ratios = [r["worst_deviation"] / r["tolerance"] for r in handled
+              if r["worst_deviation"] is not None and r["tolerance"]]
+    summary = {"models": len(rows), **{f"models_{status}": sum(r["status"] == status
+                                                              for r in rows)
+                                       for status in MODEL_STATUSES},
+               **{key: total(key) for key in ("faces_total", "faces_faired",
+                                              "faces_unchanged", "faces_tolerance_not_met",
+                                              "faces_skipped", "faces_failed",
+                                              "poles_before", "poles_after", "joins_total",
+                                              "joins_held")},
+               "worst_deviation_over_tolerance": max(ratios) if ratios else None,
+               "retries": sum(r["retries"] or 0 for r in rows), "seconds": seconds}
+    return _clean({
+        "tool": f"cq-fairing {__version__}",
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": command, "output_dir": _str(output_dir), "settings": settings,
+        "engine": engine, "models": rows, "summary": summary,
+    })
+
+
+BATCH_COLUMNS = ("model", "status", "faces ok/total", "failed", "poles", "worst dev", "tol",
+                 "joins held", "time s", "retries")
+
+
+def _batch_row(row):
+    ok = (row["faces_faired"] or 0) + (row["faces_unchanged"] or 0)
+    failed = (row["faces_failed"] or 0) + (row["faces_tolerance_not_met"] or 0)
+    done = row["status"] != "failed"
+    return (Path(row["input"]).name, row["status"],
+            f"{ok}/{row['faces_total']}" if done else "-", str(failed) if done else "-",
+            f"{row['poles_before']} -> {row['poles_after']}" if done else "-",
+            _fmt(row["worst_deviation"]), _fmt(row["tolerance"]),
+            f"{row['joins_held']}/{row['joins_total']}" if row["joins_total"] else "-",
+            _fmt(row["seconds"], 3), str(row["retries"]))
+
+
+def _batch_line(summary):
+    s = summary["summary"]
+    return (f"{s['models_done'] + s['models_resumed']}/{s['models']} models faired "
+            f"({s['models_resumed']} resumed), {s['models_failed']} failed; faces "
+            f"{s['faces_faired']} faired, {s['faces_unchanged']} unchanged, "
+            f"{s['faces_tolerance_not_met']} over tolerance, {s['faces_failed']} failed; "
+            f"poles {s['poles_before']} -> {s['poles_after']}; worst deviation "
+            f"{_fmt(s['worst_deviation_over_tolerance'])} x tol; joins held "
+            f"{s['joins_held']}/{s['joins_total']}; {s['retries']} retries; "
+            f"{_fmt(s['seconds'], 3)} s")
+
+
+def batch_table(summary):
+    """A fixed-width text table of the models, their failures and a totals line."""
+    rows = [BATCH_COLUMNS] + [_batch_row(r) for r in summary["models"]]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(BATCH_COLUMNS))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    lines += [f"{Path(r['input']).name}: {r['message']}" for r in summary["models"]
+              if r["status"] == "failed"]
+    lines.append(_batch_line(summary))
+    return "\n".join(lines)
+
+
+def render_batch_html(summary):
+    """The batch summary as one self-contained HTML page."""
+    esc = html.escape
+    cls = {"done": "ok", "resumed": "ok", "failed": "bad"}
+    head = "".join(f"<th>{esc(c)}</th>" for c in BATCH_COLUMNS + ("joins", "message"))
+    body = []
+    for row in summary["models"]:
+        cells = _batch_row(row)
+        tds = "".join(f"<td class='l'>{esc(c)}</td>" if i < 2 else f"<td>{esc(c)}</td>"
+                      for i, c in enumerate(cells))
+        tds += (f"<td class='l'>{esc(row['joins'] or '-')}</td>"
+                f"<td class='l'>{esc(row['message'] or '')}</td>")
+        body.append(f"<tr class='{cls[row['status']]}'>{tds}</tr>")
+    settings = [("command", summary["command"]), ("output folder", summary["output_dir"]),
+                ("engine", summary["engine"]), ("created", summary["created"]),
+                ("tool", summary["tool"])] + sorted((summary["settings"] or {}).items())
+    rows = "".join(f"<tr><th>{esc(str(k))}</th><td class='l'>{esc(_fmt(v))}</td></tr>"
+                   for k, v in settings)
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>cq-fairing batch"
+            f"</title><style>{_CSS}</style></head><body><h1>Batch fairing summary</h1>"
+            f"<h2>Settings</h2><table>{rows}</table><h2>Summary</h2>"
+            f"<p>{esc(_batch_line(summary))}</p><h2>Models</h2>"
+            f"<p>worst dev: the model's largest face deviation, against its tolerance; "
+            f"retries: task runs lost with a worker that died.</p>"
+            f"<table><tr>{head}</tr>{''.join(body)}</table></body></html>\n")
+
+
+def write_batch_summary(summary, json_path, html_path, *, force=False):
+    """Write the batch summary as JSON and HTML, each atomically."""
+    write_json(summary, json_path, force=force)
+    _write_text(html_path, render_batch_html(summary), force)

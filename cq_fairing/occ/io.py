@@ -41,7 +41,8 @@ from ..report import atomic_output, folder_error
 from .convert import as_shape, indexed_faces
 from .document import Model, document_step_bytes, read_step_model, written_step
 
-__all__ = ["read_shape", "read_model", "write_shape", "write_model", "step_length_unit",
+__all__ = ["read_shape", "read_model", "write_shape", "write_model", "model_bytes",
+           "write_model_bytes", "step_length_unit",
            "quiet_occt", "READ_SUFFIXES", "WRITE_SUFFIXES"]
 
 READ_SUFFIXES = {".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges",
@@ -298,14 +299,41 @@ def write_model(model, path, *, force=False, input_path=None, unit=None):
             f"refusing to write over the input file '{path}'; choose another output name."
         )
     kind = _check_output(path, force)
-    n_faces = len(indexed_faces(model.shape))
+    write_model_bytes(model_bytes(model, kind, unit), path, len(indexed_faces(model.shape)),
+                      force=force)
+
+
+def model_bytes(model, kind, unit=None):
+    """The file of a :class:`~cq_fairing.occ.document.Model` as bytes, in memory.
+
+    Parameters
+    ----------
+    model : Model
+    kind : {"step", "brep"}
+        A STEP file keeps the model's document (products, names, colours, layers).
+    unit : str, optional
+        STEP length unit, as in :func:`write_shape`.
+    """
     with quiet_occt(), _step_unit(unit):
         if kind == "brep":
-            data = _brep_bytes(model.shape)
-        elif model.document is not None:
-            data = document_step_bytes(model.document)
-        else:
-            data = _step_bytes(model.shape)
+            return _brep_bytes(model.shape)
+        if model.document is not None:
+            return document_step_bytes(model.document)
+        return _step_bytes(model.shape)
+
+
+def write_model_bytes(data, path, n_faces, *, force=False):
+    """Write a model file's ``data`` (:func:`model_bytes`) to ``path`` atomically: to a
+    temporary beside it, read back and checked (``BRepCheck_Analyzer``, ``n_faces``
+    faces), then renamed into place.
+
+    Raises
+    ------
+    OutputPathError, FileFormatError
+        As :func:`write_shape`.
+    """
+    path = Path(path)
+    _check_output(path, force)
     with atomic_output(path, force=force) as tmp:
         _write_bytes(tmp, data, path)
         _verify_written(tmp, n_faces)

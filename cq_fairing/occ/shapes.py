@@ -49,7 +49,7 @@ from .convert import (as_shape, face_info, finish_edges, indexed_faces, is_occt_
                       replace_surface, settle_tolerances, surface_to_face, to_geom_surface)
 from .faces import FaceFairReport, check_options, default_tolerance, fair_face
 from .congruence import compose, congruence_classes, inverse
-from .parallel import FacePool
+from .engine import ProcessFaces
 from .adjacency import find_joins, measure_joins
 from .joint import JOINS, JoinReport, fair_joined
 
@@ -129,7 +129,7 @@ def _selection(faces, count):
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
                convert=False, progress=None, boundary="free", target_degree=None,
                density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
-               borders="auto", in_place=False, joins="smooth", angle_tol=1.0):
+               borders="auto", in_place=False, joins="smooth", angle_tol=1.0, engine=None):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -164,7 +164,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         ``'unchanged'``, the message says why).  Not applied with explicit ``n``.
     jobs : int, optional
         Faces faired at once, each in its own worker process
-        (:mod:`cq_fairing.occ.parallel`); the result is the same as with ``jobs=1``.
+        (:class:`~cq_fairing.occ.engine.ProcessFaces`); the result is the same as with
+        ``jobs=1``.
     face_timeout : float, optional
         Seconds one face may take (each attempt, in a worker process even with
         ``jobs=1``); a face over the limit is reported ``'failed'`` ("time limit S s
@@ -185,6 +186,14 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     angle_tol : float, optional
         Degrees: a join whose source normals differ by less along its whole length is
         smooth, else a crease (default 1).
+    engine : object, optional
+        Where the faces are fitted instead (each face alone: the first pass and the
+        fits again that close gaps; ``jobs`` and ``face_timeout`` then do not apply;
+        faces solved together along their joins stay here): an object with ``run(tasks, done)`` and ``close()`` as
+        :class:`~cq_fairing.occ.engine.ProcessFaces`, e.g.
+        :class:`cq_fairing.batch.DaskFaces` for a Dask cluster.  Faces cross to it as
+        bytes and come back as plain data, so the result is the same as in one
+        process.  Not closed here.
     in_place : bool, optional
         Fair on a copy as usual, then put the final surfaces into ``shape``'s own faces
         and return ``shape`` itself: whatever shares those faces sees the faired
@@ -222,15 +231,21 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         check_options(max_gap, None, method, boundary, objective, borders)
     max_gap = tol if max_gap is None else float(max_gap)
     _check_workers(jobs, face_timeout)
+    if engine is not None and not all(callable(getattr(engine, name, None))
+                                      for name in ("run", "close")):
+        raise InvalidInputError(
+            f"engine must have run(tasks, done) and close(), as "
+            f"cq_fairing.occ.engine.ProcessFaces has, got {engine!r}; or pass engine=None.")
     free_before = free_edge_count(shape)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
     options = dict(method=method, objective=objective, borders=borders, boundary=boundary,
                    target_degree=target_degree, density=density, details=details)
-    pool = None if jobs == 1 and face_timeout is None else FacePool(jobs, face_timeout)
+    pool = None if engine is not None or jobs == 1 and face_timeout is None else \
+        ProcessFaces(jobs, face_timeout)
     try:
-        job = _Job(source, originals, options, pool)
+        job = _Job(source, originals, options, engine or pool)
         job.fair_first(selected, tol, n, progress)
         adjacency = find_joins(source, angle_tol=angle_tol)
         if joins != "free" and tol is not None:
@@ -281,13 +296,14 @@ class _Job:
     """The faces of the source, what was done to each, and the rebuilt copy.
 
     Every build starts from a fresh ``BRepBuilderAPI_Copy`` of the source and puts each
-    faired surface in once, so a face faired again never stacks replacements.  With a
-    :class:`~cq_fairing.occ.parallel.FacePool` the faces are faired in its workers.
+    faired surface in once, so a face faired again never stacks replacements.  With an
+    engine (:class:`~cq_fairing.occ.engine.ProcessFaces`) the faces are faired in its
+    workers.
     """
 
-    def __init__(self, source, originals, options, pool=None):
+    def __init__(self, source, originals, options, engine=None):
         self.source, self.originals, self.options = source, originals, options
-        self.pool = pool
+        self.engine = engine
         self.reports = [None] * len(originals)
         self.tol = {}
         self.face_class, self.motion = congruence_classes(originals)
@@ -316,7 +332,7 @@ class _Job:
         self.fair([i for i in range(total) if i in selected], tol, n, report)
 
     def fair(self, indices, tol, n, report=None):
-        """Fair the faces ``indices`` (serially, or in the pool's workers).
+        """Fair the faces ``indices`` (serially, or in the engine's workers).
 
         A face congruent to a face already in ``indices`` (one part placed several
         times in an assembly, the same ``TShape`` at another location, or a mirror
@@ -331,11 +347,11 @@ class _Job:
             first.setdefault(self.face_class[index], index)
         leaders = [index for index in indices if first[self.face_class[index]] == index]
         options = dict(self.options, tol=tol, n=n)
-        if self.pool is None:
+        if self.engine is None:
             for index in leaders:
                 report(index, fair_one_face(index, self.originals[index], options))
         else:
-            self.pool.run([(index, self.originals[index], options) for index in leaders],
+            self.engine.run([(index, self.originals[index], options) for index in leaders],
                           lambda index, outcome: report(index, self._from_worker(index, outcome)))
         for index in indices:
             leader = first[self.face_class[index]]

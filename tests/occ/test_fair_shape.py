@@ -174,12 +174,52 @@ def test_a_face_over_the_time_limit_is_kept_and_its_worker_killed(real):
     assert multiprocessing.active_children() == []
 
 
+def test_a_face_whose_worker_dies_twice_is_kept_and_reported(real):
+    """The terrain face (far longer than 5 s) in a worker process: the worker is killed
+    5 s after it started, the face runs again in a fresh one, which is killed too.  The
+    face is reported failed and kept, the shape stays valid, no worker is left."""
+    import multiprocessing
+    import threading
+    import time
+
+    from cq_fairing.occ.convert import indexed_faces
+
+    terrain = indexed_faces(real("terrain.brep"))[0]
+    shape = compound(terrain, _wiggly(0))
+    killed = []
+
+    def kill_twice():
+        while len(killed) < 2:
+            workers = [p for p in multiprocessing.active_children() if p.pid not in killed]
+            if workers:
+                time.sleep(5.0)
+                workers[0].kill()
+                killed.append(workers[0].pid)
+            time.sleep(0.05)
+
+    killer = threading.Thread(target=kill_twice, daemon=True)
+    killer.start()
+    result = fair_shape(shape, tol=2.0, jobs=2, faces=[0])
+    killer.join(timeout=60)
+    slow = result.faces[0]
+    assert len(killed) == 2
+    assert slow.status == "failed"
+    assert slow.message == "the worker process fairing this face died 2 times; kept the original"
+    assert slow.face.IsSame(terrain) and result.valid
+    assert multiprocessing.active_children() == []
+
+
 @pytest.mark.parametrize("options", [dict(jobs=0), dict(jobs=1.5), dict(jobs=True),
                                      dict(face_timeout=0), dict(face_timeout=float("nan")),
                                      dict(face_timeout="10")])
 def test_bad_jobs_and_time_limits_are_refused(options):
     with pytest.raises(InvalidInputError, match="jobs|face_timeout"):
         fair_shape(_wiggly(0), **options)
+
+
+def test_an_engine_without_run_and_close_is_refused():
+    with pytest.raises(InvalidInputError, match="engine must have run"):
+        fair_shape(_wiggly(0), engine=object())
 
 
 def test_faired_shell_survives_a_brep_text_round_trip(real, tmp_path):
