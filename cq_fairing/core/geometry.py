@@ -134,6 +134,15 @@ class BSplineCurve:
 DEGENERATE = 1e-2   # a normal shorter than this x the longest on the grid is undefined
 
 
+def folded(normals, reference):
+    r"""True where ``normals`` turn by more than 90 degrees from ``reference`` (arrays of
+    unnormalised normals, same shape), where both are defined: longer than
+    :data:`DEGENERATE` times the longest of their array."""
+    lengths = [np.linalg.norm(n, axis=-1) for n in (normals, reference)]
+    defined = np.logical_and(*(n > DEGENERATE * max(n.max(), 1e-300) for n in lengths))
+    return defined & (np.einsum("...i,...i->...", normals, reference) < 0.0)
+
+
 @dataclass(frozen=True, eq=False)
 class BSplineSurface:
     """A clamped (optionally rational) tensor-product B-spline surface.
@@ -210,11 +219,8 @@ class BSplineSurface:
         :data:`DEGENERATE` times their largest: a collapsed border has none).  A faired
         surface that folds back over itself keeps its distance to the source small but
         reverses its normal there."""
-        normals = [np.cross(s.evaluate_grid(u, v, 1, 0), s.evaluate_grid(u, v, 0, 1))
-                   for s in (self, reference)]
-        lengths = [np.linalg.norm(n, axis=-1) for n in normals]
-        defined = np.logical_and(*(n > DEGENERATE * max(n.max(), 1e-300) for n in lengths))
-        return defined & (np.einsum("...i,...i->...", *normals) < 0.0)
+        return folded(*(np.cross(s.evaluate_grid(u, v, 1, 0), s.evaluate_grid(u, v, 0, 1))
+                        for s in (self, reference)))
 
     def grid_blocks(self, u, v, step):
         """:class:`GridBlocks` of this surface on the grid ``u x v``, ``step`` rows per block."""

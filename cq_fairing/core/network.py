@@ -42,7 +42,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError
-from .geometry import BSplineSurface
+from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
 from .patch_grid import insert_knot
 
@@ -130,7 +130,7 @@ def fair_network(patches, joins, tol, *, kept=(), continuity="G1"):
     """
     sources, joins, tols = _checked(patches, joins, tol, continuity)
     patches = [_refined(p) for p in sources]
-    samples = [_sampler(p) for p in sources]
+    samples = [_Probe(s, p) for s, p in zip(sources, patches)]
     kept = set(kept)
     for _ in range(len(patches)):
         result = _smoothest(patches, sources, samples, joins, tols, kept, continuity)
@@ -223,8 +223,8 @@ def _solver(system, constraints, patches, samples, kept):
     """``solve(lam) -> (surfaces, deviation per patch)``."""
     def solve(lam):
         surfaces = system.surfaces(system.solve(lam, constraints))
-        deviation = np.array([0.0 if f in kept else _distance(samples[f], surfaces[f], p)
-                              for f, p in enumerate(patches)])
+        deviation = np.array([0.0 if f in kept else samples[f].distance(surfaces[f])
+                              for f in range(len(patches))])
         return surfaces, deviation
     return solve
 
@@ -394,20 +394,33 @@ def _ratio(a, b, ra, rb):
     return float(np.exp(np.mean(np.log(np.maximum(ratio, 1e-300)))))
 
 
-def _sampler(patch):
-    """Parameters (at least :data:`SAMPLES`, two per span and more per direction) and
-    the patch's points on them."""
-    axes = [np.unique(np.concatenate([np.linspace(a, b, 3) for a, b in
-                                      zip(space.breakpoints[:-1], space.breakpoints[1:])]
-                                     + [np.linspace(*space.domain, SAMPLES)]))
-            for space in (patch.u_space, patch.v_space)]
-    return axes[0], axes[1], patch.evaluate_grid(*axes)
+class _Probe:
+    """A patch's samples (at least :data:`SAMPLES` per direction, three per span), its
+    source's points and normals there, and the refined spaces' basis values, so that a
+    candidate net costs a few small products."""
 
+    def __init__(self, source, refined):
+        self.u, self.v = (np.unique(np.concatenate(
+            [np.linspace(a, b, 3) for a, b in zip(space.breakpoints[:-1],
+                                                   space.breakpoints[1:])]
+            + [np.linspace(*space.domain, SAMPLES)]))
+            for space in (source.u_space, source.v_space))
+        self.bases = [[space.collocation(x, nu).toarray() for nu in (0, 1)]
+                      for space, x in ((refined.u_space, self.u), (refined.v_space, self.v))]
+        self.points, self.normal = self._evaluate(refined.poles)
 
-def _distance(sampler, surface, source):
-    """Largest same-parameter distance on the samples; infinite where the surface folds
-    over (:meth:`~cq_fairing.core.geometry.BSplineSurface.folds_against`)."""
-    u, v, exact = sampler
-    if surface.folds_against(source, u, v).any():
-        return np.inf
-    return float(np.linalg.norm(surface.evaluate_grid(u, v) - exact, axis=-1).max())
+    def _evaluate(self, poles):
+        (bu, du), (bv, dv) = self.bases
+        along_u = np.tensordot(bu, poles, axes=(1, 0))
+        points = np.einsum("ijd,kj->ikd", along_u, bv)
+        su = np.einsum("ia,abd,jb->ijd", du, poles, bv)
+        sv = np.einsum("ijd,kj->ikd", along_u, dv)
+        return points, np.cross(su, sv)
+
+    def distance(self, surface):
+        """Largest same-parameter distance from the source; infinite where the surface
+        folds over (:func:`~cq_fairing.core.geometry.folded`)."""
+        points, normal = self._evaluate(surface.poles)
+        if folded(normal, self.normal).any():
+            return np.inf
+        return float(np.linalg.norm(points - self.points, axis=-1).max())
