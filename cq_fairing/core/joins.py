@@ -65,11 +65,14 @@ from .geometry import BSplineSurface
 from .gram import gram_matrix
 from .spaces import SplineSpace
 
-__all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "SIDES"]
+__all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
+           "turned_patches", "SIDES", "ANGLE_SLACK"]
 
 SIDES = ("u0", "u1", "v0", "v1")
 SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
 KKT_EPS = 1e-12    # regularisation of the joint system's constraint block (relative)
+ANGLE_SLACK = 0.05  # degrees a smooth join may turn beyond the source's angle
+ANGLE_SAMPLES = 33  # samples along a join for that check
 
 
 @dataclass(frozen=True)
@@ -179,6 +182,39 @@ def fair_patches(patches, joins, *, continuity="G1"):
         c, d = _mirror_rows(work, joins, chords, surfaces)
         surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
     return JointResult(surfaces, joins, dropped, rows)
+
+
+def join_angles(surfaces, join, t):
+    """Angle (degrees) between the two patches' normals at the normalised parameters
+    ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count)."""
+    normals = []
+    for index, side, along in ((join.a, join.side_a, t),
+                               (join.b, join.side_b, 1.0 - t if join.reversed else t)):
+        surface = surfaces[index]
+        (u0, u1), (v0, v1) = surface.domain
+        if side[0] == "u":
+            u, v = [u0 if side[1] == "0" else u1], v0 + (v1 - v0) * along
+        else:
+            u, v = u0 + (u1 - u0) * along, [v0 if side[1] == "0" else v1]
+        n = np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
+        n = n.reshape(-1, 3)
+        normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300))
+    cos = np.clip(np.abs(np.sum(normals[0] * normals[1], axis=1)), 0.0, 1.0)
+    return np.degrees(np.arccos(cos))
+
+
+def turned_patches(surfaces, sources, joins, moved):
+    """The patches of ``moved`` on a smooth join of ``joins`` whose normals turn,
+    somewhere along it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle
+    at the same place (:data:`ANGLE_SAMPLES` samples)."""
+    out = set()
+    t = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
+    for join in joins:
+        mine = {join.a, join.b} & set(moved)
+        if join.smooth and mine and np.max(join_angles(surfaces, join, t)
+                                           - join_angles(sources, join, t)) > ANGLE_SLACK:
+            out |= mine
+    return out
 
 
 # -- input ---------------------------------------------------------------------------------

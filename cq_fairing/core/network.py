@@ -44,6 +44,7 @@ import scipy.sparse.linalg as spla
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
+from .joins import turned_patches
 from .patch_grid import insert_knot
 
 __all__ = ["NetworkResult", "fair_network", "network_joinable"]
@@ -51,8 +52,6 @@ __all__ = ["NetworkResult", "fair_network", "network_joinable"]
 SAMPLES = 9          # same-parameter samples per patch and direction
 KKT_EPS = 1e-12      # regularisation of the constraint block (relative)
 HELD = -1            # the class of every kept pole in the constraints' union-find
-ANGLE_SLACK = 0.05   # degrees a smooth join may turn beyond the sources' angle
-ANGLE_SAMPLES = 33   # samples along a join for that check
 LAMBDA_RANGE = (1e-8, 1e4)
 BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
@@ -134,7 +133,9 @@ def fair_network(patches, joins, tol, *, kept=(), continuity="G1"):
     kept = set(kept)
     for _ in range(len(patches)):
         result = _smoothest(patches, sources, samples, joins, tols, kept, continuity)
-        turned = _turned(result, sources, joins) if continuity == "G1" else set()
+        moved = set(range(len(patches))) - result.kept
+        turned = (turned_patches(result.surfaces, sources, joins, moved)
+                  if continuity == "G1" else set())
         if not turned:
             return result
         kept |= turned   # their joins would turn more than the source's: keep them
@@ -166,39 +167,6 @@ def _smoothest(patches, sources, samples, joins, tols, kept, continuity):
             hi = mid
     surfaces = [sources[f] if f in kept else s for f, s in enumerate(best[0])]
     return NetworkResult(surfaces, lam, best[1], g1_rows, kept)
-
-
-def _turned(result, sources, joins):
-    """The moved patches of the smooth joins whose normals turn, somewhere along the
-    join, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle there."""
-    out = set()
-    t = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
-    for join in joins:
-        moved = {join.a, join.b} - result.kept
-        if join.smooth and moved:
-            before = _join_angles(sources, join, t)
-            after = _join_angles(result.surfaces, join, t)
-            if np.max(after - before) > ANGLE_SLACK:
-                out |= moved
-    return out
-
-
-def _join_angles(surfaces, join, t):
-    """Angle (degrees) between the two patches' normals at ``t`` along the join."""
-    normals = []
-    for index, side, along in ((join.a, join.side_a, t),
-                               (join.b, join.side_b, 1.0 - t if join.reversed else t)):
-        surface = surfaces[index]
-        (u0, u1), (v0, v1) = surface.domain
-        if side[0] == "u":
-            u, v = [u0 if side[1] == "0" else u1], v0 + (v1 - v0) * along
-        else:
-            u, v = u0 + (u1 - u0) * along, [v0 if side[1] == "0" else v1]
-        n = np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
-        n = n.reshape(-1, 3)
-        normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300))
-    cos = np.clip(np.abs(np.sum(normals[0] * normals[1], axis=1)), 0.0, 1.0)
-    return np.degrees(np.arccos(cos))
 
 
 def _refined(patch):
