@@ -1,7 +1,6 @@
 """fair_shape fairs faces that meet along whole borders together: real models, measured by
 the joins' own projection (cq_fairing.occ.adjacency) and by OCCT's checks."""
 
-import numpy as np
 import pytest
 
 from cq_fairing.errors import InvalidInputError
