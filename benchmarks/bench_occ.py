@@ -12,8 +12,7 @@ import argparse
 import time
 from pathlib import Path
 
-from cq_fairing.occ import face_to_surface, fair_face, read_shape, sample_face_deviation
-from cq_fairing.occ import search
+from cq_fairing.occ import face_to_surface, fair_face, read_shape, sample_face_deviation, search
 from cq_fairing.occ.convert import indexed_faces
 
 REPO = Path(__file__).resolve().parents[1]

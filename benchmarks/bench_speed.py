@@ -31,8 +31,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_peers import (DATA, REPO, _impeller_blade, _impeller_fillet, _longest,  # noqa: E402
-                         seed_case)
+from bench_peers import DATA, REPO, _impeller_blade, _impeller_fillet, _longest, seed_case  # noqa: E402
 from peers.fitters import METHODS, Case  # noqa: E402
 
 SLOW = 10.0  # s: a peer slower than this gets a third of the rounds (at least 3)
@@ -90,7 +89,7 @@ def alternate(runs, rounds):
     """Per-round wall times of ``runs`` (``{name: callable}``, the peer first), each run
     once untimed first; fewer rounds when the first is slow."""
     first = None
-    for name, run in runs.items():
+    for run in runs.values():
         start = time.perf_counter()
         run()
         first = first or time.perf_counter() - start

@@ -9,16 +9,25 @@ layer (:mod:`cq_fairing.occ`), the viewers (:mod:`cq_fairing.viz`) and the comma
 
 import importlib
 
-from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidOutputError,
-                     InvalidTargetError, InvalidToleranceError, NumericalError,
-                     OutputPathError, ToleranceNotMetError, UnsupportedGeometryError)
+from .errors import (
+    FairingError,
+    FileFormatError,
+    InvalidInputError,
+    InvalidOutputError,
+    InvalidTargetError,
+    InvalidToleranceError,
+    NumericalError,
+    OutputPathError,
+    ToleranceNotMetError,
+    UnsupportedGeometryError,
+)
 
 __version__ = "0.1.0"
 
 # public name -> the core module that defines it
 _LAZY = {
-    **dict.fromkeys(("FairResult", "SurfaceDetails", "SurfaceFairResult", "fair_curve",
-                     "fair_surface"), ".core.fairing"),
+    **dict.fromkeys(("fair_curve", "fair_surface"), ".core.fairing"),
+    **dict.fromkeys(("FairResult", "SurfaceDetails", "SurfaceFairResult"), ".core.results"),
     **dict.fromkeys(("BSplineCurve", "BSplineSurface", "make_curve", "make_surface"),
                     ".core.geometry"),
     **dict.fromkeys(("classify_points", "resample_height_field"), ".core.clouds"),

@@ -10,15 +10,10 @@ Two kinds of map show what fairing did to a surface:
   :math:`K` of the surface before and after fairing, side by side with one colour
   range, so a calmer colour field shows the surface got fairer.
 
-With the first fundamental form :math:`E = S_u\cdot S_u`, :math:`F = S_u\cdot S_v`,
-:math:`G = S_v\cdot S_v`, the unit normal :math:`n = S_u\times S_v/|S_u\times S_v|`
-and the second fundamental form :math:`L = S_{uu}\cdot n`, :math:`M = S_{uv}\cdot n`,
-:math:`N = S_{vv}\cdot n`,
-
-.. math::
-    K = \frac{LN - M^2}{EG - F^2}, \qquad H = \frac{EN - 2FM + GL}{2(EG - F^2)}.
-
-The numbers (:func:`surface_curvature`, :func:`fairness_measures`) need numpy only;
+The numbers come from the core's one curvature implementation
+(:func:`~cq_fairing.core.fairness.curvatures_from_derivatives`):
+:func:`surface_curvature` is :func:`~cq_fairing.core.fairness.grid_curvatures` and
+:func:`fairness_measures` is :func:`~cq_fairing.core.fairness.box_fairness`;
 pyvista is imported inside the functions that build meshes or render.  Rendering is
 off-screen (``Plotter(off_screen=True)``), which works without a display through
 the EGL (or OSMesa) render window of the vtk wheel.  Every file is written to a
@@ -30,6 +25,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from .core.fairness import box_fairness as fairness_measures
+from .core.fairness import grid_curvatures as surface_curvature
 from .errors import InvalidInputError, OutputPathError
 from .report import atomic_output
 
@@ -46,45 +43,6 @@ CURVATURE_COLORS = ((40, 70, 200), (245, 245, 245), (200, 30, 30))
 
 
 # -- numbers ------------------------------------------------------------------------------
-def surface_curvature(surface, u, v):
-    r"""Mean and Gaussian curvature of a surface on the grid ``u x v``.
-
-    Parameters
-    ----------
-    surface : BSplineSurface
-        Any object with ``evaluate_grid(u, v, nu, nv) -> (len(u), len(v), 3)``.
-    u, v : array_like, shape (n_u,), (n_v,)
-        Parameters inside the surface's domain.
-
-    Returns
-    -------
-    dict
-        ``points`` (n_u, n_v, 3); ``mean`` and ``gaussian`` (n_u, n_v) as in the module
-        docstring (the sign of ``mean`` follows the normal :math:`S_u \times S_v`);
-        ``area_element`` (n_u, n_v) :math:`\sqrt{EG - F^2}`.  Where the surface is
-        singular (:math:`EG - F^2 = 0`) the curvatures are NaN.
-    """
-    def d(a, b):
-        return surface.evaluate_grid(u, v, a, b)
-
-    su, sv, suu, suv, svv = d(1, 0), d(0, 1), d(2, 0), d(1, 1), d(0, 2)
-    cross = np.cross(su, sv)
-    g = np.einsum("...i,...i", su, su) * np.einsum("...i,...i", sv, sv) \
-        - np.einsum("...i,...i", su, sv) ** 2
-    norm = np.linalg.norm(cross, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        n = cross / norm[..., None]
-        e_, f_, g_ = (np.einsum("...i,...i", a, b) for a, b in ((su, su), (su, sv), (sv, sv)))
-        l_, m_, n_ = (np.einsum("...i,...i", a, n) for a in (suu, suv, svv))
-        gaussian = (l_ * n_ - m_ ** 2) / g
-        mean = (e_ * n_ - 2 * f_ * m_ + g_ * l_) / (2 * g)
-    singular = norm <= 1e-14 * max(1.0, float(np.nanmax(norm, initial=0.0)))
-    mean[singular] = np.nan
-    gaussian[singular] = np.nan
-    return {"points": d(0, 0), "mean": mean, "gaussian": gaussian,
-            "area_element": np.sqrt(np.maximum(g, 0.0))}
-
-
 def uv_grid(box, density):
     """Uniform parameters over a UV box ``((u0, u1), (v0, v1))``, ``density`` per side."""
     (u0, u1), (v0, v1) = box
@@ -92,72 +50,6 @@ def uv_grid(box, density):
     if count < 3:
         raise InvalidInputError(f"density must be at least 3 samples per side, got {density!r}.")
     return np.linspace(u0, u1, count), np.linspace(v0, v1, count)
-
-
-def fairness_measures(surface, box=None, density=60):
-    r"""Fairness of a surface over a UV box: bending energy, curvature range, wiggles.
-
-    * ``bending_energy``: the thin-plate energy
-      :math:`\iint |S_{uu}|^2 + 2|S_{uv}|^2 + |S_{vv}|^2 \,du\,dv` by the midpoint
-      rule on a ``density x density`` grid (a parametric measure; compare a face
-      with itself before and after).
-    * ``mean_curvature_range``, ``gaussian_curvature_range``: ``(min, max)`` of
-      :math:`H` and :math:`K` on the grid.
-    * ``wiggles``: sign changes of :math:`H` along the iso-lines of both directions,
-      averaged per iso-line (a calm surface has few; noise adds many).
-
-    Parameters
-    ----------
-    surface : BSplineSurface
-    box : ((u0, u1), (v0, v1)), optional
-        Defaults to the surface's domain (pass a trimmed face's UV bounds).
-    density : int
-        Samples per side.
-
-    Returns
-    -------
-    dict of float / (float, float)
-    """
-    box = surface.domain if box is None else box
-    (u0, u1), (v0, v1) = box
-    # midpoints keep away from the boundary, where curvature of noisy data is wildest
-    u = u0 + (np.arange(density) + 0.5) * (u1 - u0) / density
-    v = v0 + (np.arange(density) + 0.5) * (v1 - v0) / density
-    second = [surface.evaluate_grid(u, v, a, b) for a, b in ((2, 0), (1, 1), (0, 2))]
-    density_sq = sum(w * np.einsum("...i,...i", s, s) for w, s in zip((1, 2, 1), second))
-    energy = float(density_sq.mean() * (u1 - u0) * (v1 - v0))
-    curv = surface_curvature(surface, u, v)
-    mean, gauss = curv["mean"], curv["gaussian"]
-    return {
-        "bending_energy": energy,
-        "mean_curvature_range": _finite_range(mean),
-        "gaussian_curvature_range": _finite_range(gauss),
-        "wiggles": _wiggles(mean),
-    }
-
-
-def _finite_range(values):
-    finite = values[np.isfinite(values)]
-    if finite.size == 0:
-        return (float("nan"), float("nan"))
-    return (float(finite.min()), float(finite.max()))
-
-
-def _wiggles(mean, rel=1e-6):
-    """Average count of sign changes of ``mean`` per iso-line (both directions).
-
-    Values below ``rel`` times the largest ``|H|`` count as zero (no sign), so flat
-    regions and round-off do not add spurious changes.
-    """
-    scale = np.nanmax(np.abs(mean), initial=0.0)
-    sign = np.sign(np.where(np.abs(mean) > rel * scale, mean, 0.0))
-    sign = np.nan_to_num(sign)
-    counts = []
-    for lines in (sign, sign.T):
-        for line in lines:
-            s = line[line != 0]
-            counts.append(int(np.count_nonzero(s[1:] != s[:-1])))
-    return float(np.mean(counts)) if counts else 0.0
 
 
 def deviation_statistics(distance):

@@ -11,7 +11,6 @@ import cq_fairing as cf
 from cq_fairing import InvalidInputError, InvalidToleranceError, UnsupportedGeometryError
 from cq_fairing.core.geometry import BSplineSurface, make_surface
 from cq_fairing.core.patch_grid import insert_knot, merge_grid, oriented, split_grid
-
 from tests.core.naive import basis_matrix
 
 seeds = st.integers(0, 2**31 - 1)

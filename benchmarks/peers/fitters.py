@@ -72,8 +72,8 @@ def _occ_surface(s):
 
 
 def _occ_points(case):
-    from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
     from OCP.gp import gp_Pnt
+    from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
 
     if case.kind == "curve":
         arr = TColgp_Array1OfPnt(1, len(case.points))

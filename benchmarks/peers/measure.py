@@ -9,9 +9,15 @@ figures are geometric (arc length, area), so they do not depend on parametrisati
 import numpy as np
 from scipy.spatial import cKDTree
 
-from cq_fairing.core.measures import (closest_points_curve, closest_points_surface,
-                                      count_extrema, curve_curvature, curve_derivatives,
-                                      surface_curvatures, surface_derivatives)
+from cq_fairing.core.measures import (
+    closest_points_curve,
+    closest_points_surface,
+    count_extrema,
+    curve_curvature,
+    curve_derivatives,
+    surface_curvatures,
+    surface_derivatives,
+)
 
 
 def curve_samples(curve, count):

@@ -10,12 +10,27 @@ decomposition  one ARWFA/DWFA step: projection, details, exact reconstruction
 schedule       direct, dyadic and hybrid schedules
 geometry       immutable curve and surface objects
 taylor         spline pieces in Taylor form: fast evaluation at scattered parameters
-fairing        fair_curve / fair_surface and their results
+results        FairResult / SurfaceFairResult: faired geometry, details, reconstruction
+plans          target spaces and the plans of spaces a projection visits
+projection     the wavelet projection onto a target space
+options        method options of fair_curve / fair_surface, validated once
+fairing        fair_curve / fair_surface: validation and dispatch to one method
 interpolation  data points to control points
-measures       deviation (true closest-point distance) and fairness measures
+evaluation     sample parameters and derivatives of curves and surfaces
+closest_points closest points on curves and surfaces (damped Newton)
+probes         a source sampled once, measured against many candidates
+deviations     deviation (true closest-point distance) and deviation maps
+fairness       curvature (one implementation), energies, wiggles, fairness summaries
+measures       the public names of evaluation, closest_points, probes, deviations, fairness
 regions        where a trimmed face lies on a parameter grid (trim polygon, exact near it)
 accuracy       accuracy control: the fewest poles within a tolerance
-adaptive       adaptive (non-uniform) targets, energy polish and constrained stages
+adaptive       adaptive (non-uniform) targets: the method and its public names
+adaptive_knots knot families equidistributing an error density
+adaptive_counts searches for the smallest passing count of spans
+polish         the energy polish and its constrained stages
+adaptive_curve fair_curve_adaptive
+surface_fit    one adaptive surface fit and its checks
+adaptive_surface fair_surface_adaptive
 weighted       span-weighted L2 projections
 fidelity       noise level and the discrepancy principle
 energy         Eck-Hadenfeld energy fairing

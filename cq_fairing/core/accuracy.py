@@ -43,17 +43,18 @@ search can only certify what it has measured.  Three strategies:
 Surfaces minimise the total pole count :math:`(n_u + p_u)(n_v + p_v)`.  ``"guaranteed"``
 finds :math:`u_{lo}` (the fewest u-spans with v untouched) and :math:`v_{lo}`, takes a
 first answer by bisection on the segment from :math:`(u_{lo}, v_{lo})` to the largest net,
-then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots` (in steps of
-:math:`\lfloor (n_{u,\max} - u_{lo})/32 \rfloor` first, then by one around the best): for each it tests the largest :math:`n_v` that would
-beat the best total so far and, if that passes, bisects down to the smallest passing
-:math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed :math:`n_u`); the walk stops
-when even :math:`n_v = 1` could not improve (not :math:`v_{lo}`: between non-nested spaces a
-smaller :math:`n_u` can pass where the source's :math:`n_u` fails).  The answer is measured within ``tol``
-and scanned like the curve case in both directions.  A closed direction (end rows that
-coincide) counts scales below :func:`~cq_fairing.core.geometry.fewest_spans` as
-inadmissible, so the coarsest answer still closes as a valid face.  ``"linear"`` and ``"polyfit"``
-apply the seed's methods along the equal-ratio diagonal
-:math:`(n_u, n_v) \approx s\,(n_{u,\max}, n_{v,\max})`.
+then walks :math:`n_u = u_{lo}, u_{lo}+1, \dots` (in steps of :math:`\lfloor (n_{u,\max} -
+u_{lo})/32 \rfloor` first, then by one around the best): for each it tests the largest
+:math:`n_v` that would beat the best total so far and, if that passes, bisects down to the
+smallest passing :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed
+:math:`n_u`); the walk stops when even :math:`n_v = 1` could not improve (not
+:math:`v_{lo}`: between non-nested spaces a smaller :math:`n_u` can pass where the
+source's :math:`n_u` fails).  The answer is measured within ``tol`` and scanned like the
+curve case in both directions.  A closed direction (end rows that coincide) counts scales
+below :func:`~cq_fairing.core.geometry.fewest_spans` as inadmissible, so the coarsest
+answer still closes as a valid face.  ``"linear"`` and ``"polyfit"`` apply the seed's
+methods along the equal-ratio diagonal :math:`(n_u, n_v) \approx s\,(n_{u,\max},
+n_{v,\max})`.
 
 Only coarse projections :math:`C_n = G_{nn}^{-1}E\,C_S` are computed during the search
 (operators cached per pair of spaces); the wavelet details are computed once, for the
@@ -66,10 +67,12 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
 from .decomposition import decomposition
-from .fairing import (_cartesian, _coefficients, largest_resolved_scale, project_curve,
-                      project_surface, resolved_plan)
+from .evaluation import sample_parameters, within_box
 from .geometry import BSplineCurve, BSplineSurface, fewest_spans
-from .measures import CurveProbe, SurfaceProbe, sample_parameters, within_box
+from .plans import largest_resolved_scale, resolved_plan
+from .probes import CurveProbe, SurfaceProbe
+from .projection import project_curve, project_surface
+from .results import cartesian_poles, homogeneous_coefficients
 from .spaces import SplineSpace
 
 __all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
@@ -152,7 +155,7 @@ class _Chain:
     """Coarse coefficients of one direction per target scale, cached along the schedule.
 
     Admissible scales are those the source resolves
-    (:func:`~cq_fairing.core.fairing.resolved_plan`); ``n_max`` is the largest of them.
+    (:func:`~cq_fairing.core.plans.resolved_plan`); ``n_max`` is the largest of them.
     """
 
     def __init__(self, space, degree, schedule):
@@ -226,13 +229,13 @@ def _curve_error(curve, degree, schedule, deviation):
     chain = _Chain(curve.space, degree, schedule)
     probe = CurveProbe(curve, method=deviation, u=sample_parameters(curve.space))
     strict = CurveProbe(curve, method=deviation, per_span=STRICT_PER_SPAN)
-    coefficients = _coefficients(curve)
+    coefficients = homogeneous_coefficients(curve)
 
     def geometry(n):
         coarse = chain.coarse(coefficients, n)
         if coarse is None:
             return None
-        poles, weights = _cartesian(coarse, curve.is_rational)
+        poles, weights = cartesian_poles(coarse, curve.is_rational)
         return BSplineCurve(poles, chain.target(n).knots, degree, weights)
 
     def measure(n, tol):
@@ -469,7 +472,7 @@ def _surface_error(surface, degrees, schedule, deviation, window=None):
                          uv=within_box(sample_parameters(surface.u_space),
                                        sample_parameters(surface.v_space), bounds))
     strict = SurfaceProbe(surface, method=deviation, hold_grid=False, bounds=bounds)
-    net = _coefficients(surface)
+    net = homogeneous_coefficients(surface)
     lowest = [min(n, chain.n_max) for n, chain in zip(fewest_spans(surface), (chain_u, chain_v))]
 
     def geometry(nu, nv):
@@ -481,7 +484,7 @@ def _surface_error(surface, degrees, schedule, deviation, window=None):
         coarse = chain_v.coarse(np.swapaxes(upper, 0, 1), nv, key=("v", nu))
         if coarse is None:
             return None
-        poles, weights = _cartesian(np.swapaxes(coarse, 0, 1), surface.is_rational)
+        poles, weights = cartesian_poles(np.swapaxes(coarse, 0, 1), surface.is_rational)
         return BSplineSurface(poles, chain_u.target(nu).knots, chain_v.target(nv).knots,
                               degrees[0], degrees[1], weights)
 

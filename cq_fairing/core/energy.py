@@ -46,8 +46,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError, UnsupportedGeometryError
+from .accuracy import check_tolerance
 from .gram import gram_matrix
-from .measures import CurveProbe, SurfaceProbe
+from .probes import CurveProbe, SurfaceProbe
+from .results import FairResult, SurfaceFairResult
 
 __all__ = ["energy_weights", "energy_matrix", "fair_curve_energy", "fair_surface_energy"]
 
@@ -128,9 +130,6 @@ def fair_curve_energy(curve, tol, *, l=3, rtol=1e-6, max_steps=None, fixed=1):
     ------
     InvalidToleranceError, UnsupportedGeometryError (rational curves), InvalidInputError
     """
-    from .accuracy import check_tolerance
-    from .fairing import FairResult
-
     tol = check_tolerance(tol)
     if curve.is_rational:
         raise UnsupportedGeometryError(
@@ -223,9 +222,6 @@ def fair_surface_energy(surface, tol, *, rtol=1e-6, max_sweeps=200):
     SurfaceFairResult
         Same net size and knots, ``details`` empty, ``n`` the source spans.
     """
-    from .accuracy import check_tolerance
-    from .fairing import SurfaceFairResult
-
     tol = check_tolerance(tol)
     if surface.is_rational:
         raise UnsupportedGeometryError(
@@ -249,7 +245,7 @@ def fair_surface_energy(surface, tol, *, rtol=1e-6, max_sweeps=200):
                for a in range(cu) for b in range(cv)]
     energy = float(np.sum(poles * (K @ poles)))
     sweeps = 0
-    for sweeps in range(1, max_sweeps + 1):
+    for sweeps in range(1, max_sweeps + 1):  # noqa: B007 (the count is reported after the loop)
         before = energy
         for idx in classes:
             if idx.size == 0:

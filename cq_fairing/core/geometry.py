@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InvalidInputError
 from .spaces import SplineSpace, basis_functions, find_spans, real_array
@@ -467,7 +468,8 @@ def _default_knots(k, degree, what="curve"):
     return SplineSpace.quasi_uniform(k - degree, degree).knots
 
 
-def make_curve(poles, knots=None, degree=None, weights=None):
+def make_curve(poles: ArrayLike, knots: ArrayLike | None = None, degree: int | None = None,
+               weights: ArrayLike | None = None) -> BSplineCurve:
     """Validated :class:`BSplineCurve`; without knots, quasi-uniform of degree 3.
 
     Raises
@@ -489,7 +491,10 @@ def make_curve(poles, knots=None, degree=None, weights=None):
     return BSplineCurve(P, space.knots, space.degree, _as_weights(weights, P.shape[:1]))
 
 
-def make_surface(poles, u_knots=None, v_knots=None, degree=None, weights=None):
+def make_surface(poles: ArrayLike, u_knots: ArrayLike | None = None,
+                 v_knots: ArrayLike | None = None,
+                 degree: int | tuple[int, int] | None = None,
+                 weights: ArrayLike | None = None) -> BSplineSurface:
     """Validated :class:`BSplineSurface`; ``degree`` is an int or ``(u_degree, v_degree)``.
 
     Raises

@@ -28,6 +28,7 @@ the cost of one classifier call per sample along the trim instead of one per sam
 """
 
 import numpy as np
+
 from ..errors import InvalidInputError
 
 __all__ = ["TrimRegion"]

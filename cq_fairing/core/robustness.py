@@ -44,6 +44,7 @@ import scipy.linalg as la
 from ..errors import InvalidInputError
 from .decomposition import decomposition
 from .gram import gram_matrix
+from .plans import checked_plan
 
 __all__ = ["StepConditioning", "step_conditioning", "plan_conditioning",
            "banded_condition", "LocalFrame", "DENSE_LIMIT"]
@@ -131,8 +132,6 @@ def plan_conditioning(source, target, schedule="auto"):
     -------
     list of StepConditioning
     """
-    from .fairing import checked_plan
-
     spaces = checked_plan(source, target, schedule)
     return [step_conditioning(a, b) for a, b in zip(spaces[:-1], spaces[1:])
             if not a.same_as(b)]

@@ -33,7 +33,7 @@ This module imports numpy only.
 """
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from math import factorial
 
 import numpy as np
@@ -118,7 +118,7 @@ class SpanTaylor:
         return plain[:, exponents] * falling * inverse[:, :, None]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _falling_table(degree, order):
     """Exponents ``max(k - d, 0)`` and falling factorials ``k! / (k - d)!`` (zero for
     ``k < d``), shape (order + 1, degree + 1): the ``d``-th derivative of ``r^k`` is

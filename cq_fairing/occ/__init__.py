@@ -7,8 +7,8 @@ sees it.  ``import cq_fairing`` does not import this package.
 
 from .convert import FaceInfo, face_info, face_to_surface, list_faces, surface_to_face
 from .deviation import sample_face_deviation
-from .faces import FaceFairReport, default_tolerance, fair_face
 from .document import Model
+from .faces import FaceFairReport, default_tolerance, fair_face
 from .io import read_model, read_shape, write_model, write_shape
 from .shapes import ShapeFairResult, fair_shape
 

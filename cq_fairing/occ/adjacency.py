@@ -31,8 +31,6 @@ can be compared with :attr:`Join.source_angles` point by point.
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
@@ -40,12 +38,13 @@ from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepTools import BRepTools
 from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve
+from OCP.gp import gp_Pnt, gp_Vec
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_VERTEX
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
-from OCP.gp import gp_Pnt, gp_Vec
+from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
 from .convert import as_shape, indexed_faces
@@ -661,7 +660,7 @@ def _match_free_edges(model, free, coincidence):
                     if distance is not None:
                         candidates.append((distance, i, j, opposed))
     taken, pairs = set(), []
-    for distance, i, j, opposed in sorted(set(candidates)):
+    for _distance, i, j, opposed in sorted(set(candidates)):
         if i in taken or j in taken:
             continue
         taken.update((i, j))

@@ -14,14 +14,13 @@ class's first face.
 """
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from OCP.BRep import BRep_Tool
 from OCP.TopAbs import TopAbs_EDGE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedMapOfShape
+from scipy.spatial import cKDTree
 
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error

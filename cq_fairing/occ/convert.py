@@ -13,7 +13,6 @@ unclamped representation of the same geometry, and ``Segment`` over the domain c
 from dataclasses import dataclass
 
 import numpy as np
-
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
@@ -21,19 +20,26 @@ from OCP.BRepLib import BRepLib
 from OCP.BRepTools import BRepTools
 from OCP.Geom import Geom_BSplineSurface
 from OCP.GeomAbs import GeomAbs_SurfaceType
+from OCP.gp import gp_Pnt
 from OCP.ShapeBuild import ShapeBuild_Edge
 from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_SHELL, TopAbs_SOLID, TopAbs_WIRE
+from OCP.TopAbs import (
+    TopAbs_EDGE,
+    TopAbs_FACE,
+    TopAbs_FORWARD,
+    TopAbs_SHELL,
+    TopAbs_SOLID,
+    TopAbs_WIRE,
+)
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
+from OCP.TopoDS import TopoDS, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
-from OCP.gp import gp_Pnt
 
-from .pcurves import projected_pcurve
 from ..core.geometry import BSplineSurface, make_surface
 from ..errors import InvalidInputError, UnsupportedGeometryError
+from .pcurves import projected_pcurve
 
 __all__ = ["FaceInfo", "list_faces", "face_info", "face_to_surface", "surface_to_face",
            "to_geom_surface", "indexed_faces", "as_face", "as_shape", "is_occt_error"]

@@ -44,7 +44,6 @@ orientation applied).
 """
 
 import numpy as np
-
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepLProp import BRepLProp_SLProps
@@ -52,10 +51,11 @@ from OCP.BRepTools import BRepTools
 from OCP.Extrema import Extrema_GenLocateExtPS
 from OCP.GeomAdaptor import GeomAdaptor_Surface
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
-from OCP.TopAbs import TopAbs_REVERSED
 from OCP.gp import gp_Pnt
+from OCP.TopAbs import TopAbs_REVERSED
 
-from ..core.measures import closest_points_surface_restarted, surface_derivatives
+from ..core.closest_points import closest_points_surface_restarted
+from ..core.evaluation import surface_derivatives
 from ..errors import InvalidInputError, UnsupportedGeometryError
 from .convert import as_face, face_to_surface
 from .trims import face_region

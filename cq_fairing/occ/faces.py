@@ -29,26 +29,36 @@ Special cases handled, not refused:
 
 import time
 from dataclasses import dataclass, field, replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
 import numpy as np
-
+from OCP.Bnd import Bnd_Box
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-from OCP.Bnd import Bnd_Box
-from OCP.TopoDS import TopoDS
+from OCP.TopoDS import TopoDS, TopoDS_Face
 
-from ..core.adaptive import BORDERS, fair_surface_adaptive
-from ..core.fairing import SurfaceFairResult, check_search_options, fair_surface, target_space
+from ..core.adaptive_surface import fair_surface_adaptive
+from ..core.fairing import fair_surface
 from ..core.geometry import COINCIDENT, BSplineSurface, closed_axes, extent
+from ..core.options import BORDERS, check_search_options
+from ..core.plans import target_space
+from ..core.results import SurfaceFairResult
 from ..core.spaces import SplineSpace
-from ..errors import (InvalidInputError, InvalidToleranceError, NumericalError,
-                      ToleranceNotMetError, UnsupportedGeometryError)
+from ..errors import (
+    InvalidInputError,
+    InvalidToleranceError,
+    NumericalError,
+    ToleranceNotMetError,
+    UnsupportedGeometryError,
+)
 from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, face_uv_grid, reference_samples
 from .search import max_scales, search_scales
 from .trims import face_region
+
+if TYPE_CHECKING:
+    import cadquery
 
 __all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
            "check_options", "collapsed_kept"]
@@ -136,7 +146,7 @@ def check_options(tol, n, method, boundary, objective="compact", borders="auto",
     net: both need ``tol`` (or the default tolerance, ``n`` and ``tol`` both ``None``)
     and refuse ``n``; ``objective`` and ``borders`` apply to the adaptive method only;
     ``search`` belongs to the tolerance search and is refused with ``n`` (as the core's
-    search options are, :func:`~cq_fairing.core.fairing.check_search_options`).
+    search options are, :func:`~cq_fairing.core.options.check_search_options`).
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -169,9 +179,15 @@ def check_options(tol, n, method, boundary, objective="compact", borders="auto",
     check_search_options(n, tol, (("search", search, "local"),))
 
 
-def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact", convert=False,
-              boundary="free", target_degree=None, density=None, details=True,
-              search="local", borders="auto"):
+def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
+              n: tuple[int | None, int | None] | None = None,
+              method: Literal["wavelet", "adaptive", "energy"] = "wavelet",
+              objective: Literal["compact", "faithful", "fair"] = "compact",
+              convert: bool = False, boundary: Literal["free", "fixed"] = "free",
+              target_degree: int | tuple[int, int] | None = None,
+              density: int | tuple[int, int] | None = None, details: bool = True,
+              search: Literal["local", "core"] = "local",
+              borders: Literal["auto", "free", "pinned"] = "auto") -> FaceFairReport:
     r"""Fair one face and put the result under the face's own trim.
 
     Parameters

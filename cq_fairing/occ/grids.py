@@ -32,10 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FairingError, ToleranceNotMetError
 from ..core.joins import BorderJoin
 from ..core.patch_grid import merge_grid, split_grid
 from ..core.patch_layout import find_grids
+from ..errors import FairingError, ToleranceNotMetError
 from .convert import surface_to_face
 from .deviation import sample_face_deviation
 from .faces import FaceFairReport, _Sampler, collapsed_kept, target_degrees

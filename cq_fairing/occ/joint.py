@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import FairingError
 from ..core.joins import BorderJoin, JointPatch, fair_patches, turned_patches
 from ..core.spaces import SplineSpace
+from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error, surface_to_face
 from .deviation import sample_face_deviation
 from .faces import collapsed_kept

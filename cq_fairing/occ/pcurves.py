@@ -15,14 +15,13 @@ ran 0.081 from the 3-D curve where the closest points are 0.0062 away.
 """
 
 import numpy as np
-
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Geom2dAPI import Geom2dAPI_Interpolate
+from OCP.gp import gp_Pnt2d
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from OCP.TColgp import TColgp_HArray1OfPnt2d
 from OCP.TColStd import TColStd_HArray1OfReal
-from OCP.gp import gp_Pnt2d
 
 SAMPLES_PER_SPAN = 8  # closest points per knot span of the new surface (both directions)
 INTERPOLATION_TOLERANCE = 1e-12  # UV distance below which two samples coincide

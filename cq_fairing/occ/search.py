@@ -27,9 +27,10 @@ import math
 import numpy as np
 
 from ..core.banded import BandedSPD
-from ..core.fairing import _cartesian, _coefficients, target_space
 from ..core.geometry import BSplineSurface, fewest_spans
 from ..core.gram import gram_matrix
+from ..core.plans import target_space
+from ..core.results import cartesian_poles, homogeneous_coefficients
 from ..errors import ToleranceNotMetError
 
 __all__ = ["project", "search_scales", "max_scales"]
@@ -62,7 +63,7 @@ def project(surface, target_u, target_v, along_u=None):
     av = _operator(surface.v_space, target_v)
     if av is not None:
         net = np.matmul(av, net)
-    poles, weights = _cartesian(net, surface.is_rational)
+    poles, weights = cartesian_poles(net, surface.is_rational)
     tu = surface.u_space if target_u is None else target_u
     tv = surface.v_space if target_v is None else target_v
     return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
@@ -70,7 +71,7 @@ def project(surface, target_u, target_v, along_u=None):
 
 def project_u(surface, target_u):
     """Homogeneous (or Cartesian) net projected along u only, shape (k_tu, k_v, d')."""
-    net = _coefficients(surface)
+    net = homogeneous_coefficients(surface)
     au = _operator(surface.u_space, target_u)
     return net if au is None else np.tensordot(au, net, axes=(1, 0))
 

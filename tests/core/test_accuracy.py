@@ -2,13 +2,15 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import cq_fairing as cf
 from cq_fairing.core import measures as M
 from cq_fairing.core.accuracy import STRICT_PER_SPAN, dyadic_table, polyfit_scale
 from cq_fairing.core.examples import blade_surface, seed_curve
-from cq_fairing.core.fairing import project_curve, project_surface, target_space
+from cq_fairing.core.plans import target_space
+from cq_fairing.core.projection import project_curve, project_surface
 
 
 @pytest.fixture(scope="module")

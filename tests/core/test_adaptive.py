@@ -5,22 +5,32 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
-from hypothesis import given, strategies as st
 
 import cq_fairing as cf
 from cq_fairing.core import examples
-from scipy.interpolate import BSpline
-
-from cq_fairing.core.adaptive import (_SurfaceFit, _bisect_count, _constrained_stages,
-                                      _doubling, _gallop_down, _interpolated_count,
-                                      _net_solve, _polish, _source_density,
-                                      equidistributed_space, fair_curve_adaptive,
-                                      fair_surface_adaptive, net_lengths,
-                                      variation_energy_matrix)
+from cq_fairing.core.adaptive_counts import (
+    _bisect_count,
+    _doubling,
+    _gallop_down,
+    _interpolated_count,
+)
+from cq_fairing.core.adaptive_curve import fair_curve_adaptive
+from cq_fairing.core.adaptive_knots import _source_density, equidistributed_space
+from cq_fairing.core.adaptive_surface import fair_surface_adaptive
 from cq_fairing.core.energy import fair_surface_energy
 from cq_fairing.core.gram import gram_matrix
 from cq_fairing.core.measures import deviation
+from cq_fairing.core.polish import (
+    _constrained_stages,
+    _polish,
+    net_lengths,
+    variation_energy_matrix,
+)
+from cq_fairing.core.surface_fit import _net_solve, _SurfaceFit
 from cq_fairing.errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
 from tests.reliability.independent import distance_to_surface, surface_points
 
@@ -299,7 +309,7 @@ def test_surface_polish_lowers_the_variation_energy_within_tol(blade):
 def test_starts_on_one_net_are_reduced_once(monkeypatch):
     """A strip with 3 spans across: both axis starts keep u at the source and land on one
     net, which is reduced once; every distinct start is reduced."""
-    import cq_fairing.core.adaptive as adaptive
+    import cq_fairing.core.adaptive_surface as adaptive
 
     rng = np.random.default_rng(3)
     u, v = np.linspace(0, 1, 4)[:, None], np.linspace(0, 1, 40)[None, :]
@@ -336,7 +346,7 @@ def test_a_reduction_from_far_above_strides_down_in_half_the_trials(blade, tol, 
     at most 60 % of the trials of the one-span walk (``GALLOP_BELOW = 0``), to a net
     within tol and at most 5 % larger (measured: 21-24 against 48-54 trials, nets of 110
     against 108 poles at 0.2, smaller at 0.05 and 0.5)."""
-    import cq_fairing.core.adaptive as adaptive
+    import cq_fairing.core.adaptive_surface as adaptive
 
     def reduced():
         fit = _SurfaceFit(blade, tol, (3, 3), 4, 100_000)
@@ -778,7 +788,7 @@ def test_fair_objective_leaves_pinned_borders_only_for_half_the_energy(blade, mo
     (``FAIR_SWITCH = inf``), or by default the free one only if its curvature-variation
     energy (independent quadrature) is below half the pinned one's; every answer within
     tol."""
-    import cq_fairing.core.adaptive as adaptive
+    import cq_fairing.core.adaptive_surface as adaptive
 
     lengths = net_lengths(blade.poles)
 

@@ -7,12 +7,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cq_fairing import SplineSpace
+from cq_fairing.core.decomposition import Decomposition, is_subspace, refinement_matrix
 from cq_fairing.errors import NumericalError
-from cq_fairing.core.decomposition import (Decomposition, is_subspace,
-                                           refinement_matrix)
 
-from .naive import (basis_matrix, dense_coarse, dense_gram, quasi_uniform_knots,
-                    random_clamped_knots)
+from .naive import basis_matrix, dense_coarse, dense_gram, quasi_uniform_knots, random_clamped_knots
 
 
 @pytest.mark.parametrize("m, n", [(117, 27), (1299, 78), (117, 7), (10, 5), (64, 16), (256, 128)])

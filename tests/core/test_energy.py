@@ -2,13 +2,18 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.interpolate import BSpline
 
 import cq_fairing as cf
 from cq_fairing.core import measures as M
-from cq_fairing.core.energy import (energy_matrix, energy_weights, fair_curve_energy,
-                                    fair_surface_energy, surface_energy_matrix)
+from cq_fairing.core.energy import (
+    energy_matrix,
+    energy_weights,
+    fair_curve_energy,
+    surface_energy_matrix,
+)
 from cq_fairing.core.examples import blade_surface, seed_curve
 
 

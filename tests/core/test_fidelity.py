@@ -10,12 +10,16 @@ from scipy.interpolate import BSpline
 
 import cq_fairing as cf
 from cq_fairing.core import examples
-from cq_fairing.core.adaptive import (_SurfaceFit, equidistributed_space, fair_curve_adaptive,
-                                      fair_surface_adaptive)
+from cq_fairing.core.adaptive import (
+    equidistributed_space,
+    fair_curve_adaptive,
+    fair_surface_adaptive,
+)
 from cq_fairing.core.decomposition import refinement_matrix
 from cq_fairing.core.fidelity import DISCREPANCY
 from cq_fairing.core.measures import deviation
 from cq_fairing.core.spaces import SplineSpace
+from cq_fairing.core.surface_fit import _SurfaceFit
 from cq_fairing.errors import InvalidInputError
 
 from .naive import dense_coarse, random_clamped_knots

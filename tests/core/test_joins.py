@@ -5,7 +5,8 @@ transposed (cq_fairing.core.examples.patch_grid).  Points and normals are evalua
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches

@@ -4,13 +4,18 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
 import cq_fairing as cf
 from cq_fairing.core import measures as M
-from cq_fairing.core.fairing import project_curve, project_surface, target_space
+from cq_fairing.core import probes
+from cq_fairing.core.closest_points import _distance
+from cq_fairing.core.plans import target_space
+from cq_fairing.core.probes import _FlatBound, _RowBound, box_region
+from cq_fairing.core.projection import project_curve, project_surface
 
 S2 = np.sqrt(0.5)
 
@@ -132,7 +137,7 @@ def test_a_probe_without_its_grid_measures_what_one_holding_it_does(seed, block)
     _, bound = held.bound(fair.surface)
     value, at = held.max_deviation(fair.surface)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(M, "BLOCK_SAMPLES", block)
+        patch.setattr(probes, "BLOCK_SAMPLES", block)
         assert np.allclose(lazy.bound(fair.surface)[1], bound, rtol=1e-12, atol=1e-15)
         assert lazy.max_deviation(fair.surface) == (pytest.approx(value, rel=1e-10), at)
         assert lazy.max_deviation(fair.surface, 0.9 * value)[0] > 0.9 * value
@@ -158,12 +163,12 @@ def test_a_probe_keeping_collocations_evaluates_as_the_surface_does(seed, kept):
                   for a, b in rng.integers(2, 5, size=(6, 2))]
     probe = M.SurfaceProbe(source)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(M, "COLLOCATIONS", kept)
+        patch.setattr(probes, "COLLOCATIONS", kept)
         for c in candidates + candidates[::-1]:
             other, bound = probe.bound(c)
             expected = c.evaluate_grid(probe.u, probe.v)
             assert np.array_equal(other, expected)
-            assert np.array_equal(bound, M._distance(expected, probe.points))
+            assert np.array_equal(bound, _distance(expected, probe.points))
             assert len(probe._collocations) <= kept
 
 
@@ -196,10 +201,10 @@ def test_a_bound_kept_by_rows_answers_as_the_whole_array(seed, shape, step, leve
     rng = np.random.default_rng(seed)
     values = rng.integers(0, levels, size=shape) / levels
     tol = float(rng.choice(values.ravel()))
-    flat = M._FlatBound(values.ravel())
+    flat = _FlatBound(values.ravel())
     for kept in (None, tol):
         blocks = _ArrayBlocks(values, step)
-        by_rows = M._RowBound(blocks, shape[1], kept)
+        by_rows = _RowBound(blocks, shape[1], kept)
         assert blocks.asked == blocks.n_blocks
         assert by_rows.argmax() == flat.argmax()
         for threshold in (tol, 0.5 * tol, tol + 0.25, -1.0):
@@ -491,7 +496,7 @@ def test_a_region_excludes_whole_rows_from_the_maximum():
     bumped_poles = flat.poles.copy()
     bumped_poles[0, 0, 2] = 0.5          # a bump at the corner u = v = 0
     bumped = cf.make_surface(bumped_poles)
-    region = M.box_region((0.5, 1.0, 0.0, 1.0))
+    region = box_region((0.5, 1.0, 0.0, 1.0))
     probe = M.SurfaceProbe(flat, per_span=4, region=region, hold_grid=False)
     assert probe.u.size < 64
     value, _ = probe.max_deviation(bumped)

@@ -2,8 +2,10 @@
 
 import numpy as np
 
-from cq_fairing.core.adaptive import _polish, _SurfaceFit, _constrained_stages, fair_surface_adaptive
-from cq_fairing.core.measures import extent
+from cq_fairing.core.adaptive import fair_surface_adaptive
+from cq_fairing.core.geometry import extent
+from cq_fairing.core.polish import _constrained_stages, _polish
+from cq_fairing.core.surface_fit import _SurfaceFit
 from cq_fairing.occ import face_to_surface
 from cq_fairing.occ.convert import indexed_faces
 

@@ -6,15 +6,19 @@ import math
 import numpy as np
 import pytest
 from OCP.BRep import BRep_Tool
-from OCP.BRepBuilderAPI import (BRepBuilderAPI_Copy, BRepBuilderAPI_MakeEdge,
-                                BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeVertex,
-                                BRepBuilderAPI_MakeWire)
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_Copy,
+    BRepBuilderAPI_MakeEdge,
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_MakeVertex,
+    BRepBuilderAPI_MakeWire,
+)
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
-from OCP.gp import gp_Pnt, gp_Vec
 
 from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ.adjacency import Join, find_joins, measure_joins

@@ -138,8 +138,13 @@ def test_core_surfaces_that_are_not_the_faces_fall_back_to_occt(real):
     from dataclasses import replace
 
     from cq_fairing.occ import face_to_surface
-    from cq_fairing.occ.deviation import (_by_occt, _points_and_normals, deviation_on_grid,
-                                          face_uv_grid, reference_samples)
+    from cq_fairing.occ.deviation import (
+        _by_occt,
+        _points_and_normals,
+        deviation_on_grid,
+        face_uv_grid,
+        reference_samples,
+    )
 
     name, pick, tol = REAL_FACES["IEA main face"]
     face, report = _real_faired(real, name, pick, tol)

@@ -12,6 +12,7 @@ import re
 import numpy as np
 import pytest
 from OCP.BRep import BRep_Tool
+from OCP.gp import gp, gp_Pnt, gp_Trsf, gp_Vec
 from OCP.Quantity import Quantity_Color, Quantity_TOC_RGB
 from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
@@ -21,8 +22,12 @@ from OCP.TDF import TDF_LabelSequence
 from OCP.TDocStd import TDocStd_Document
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
-from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType, XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
-from OCP.gp import gp, gp_Pnt, gp_Trsf, gp_Vec
+from OCP.XCAFDoc import (
+    XCAFDoc_ColorTool,
+    XCAFDoc_ColorType,
+    XCAFDoc_DocumentTool,
+    XCAFDoc_ShapeTool,
+)
 
 from cq_fairing.cli import main
 from cq_fairing.errors import InvalidInputError

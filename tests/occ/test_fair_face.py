@@ -6,8 +6,12 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 
 import cq_fairing as cf
-from cq_fairing.errors import (InvalidInputError, InvalidTargetError, InvalidToleranceError,
-                               ToleranceNotMetError)
+from cq_fairing.errors import (
+    InvalidInputError,
+    InvalidTargetError,
+    InvalidToleranceError,
+    ToleranceNotMetError,
+)
 from cq_fairing.occ import face_to_surface, fair_face, list_faces, sample_face_deviation
 from tests.occ.helpers import area, faces_of, global_distance, occ_points, uv_box_grid
 
@@ -20,8 +24,8 @@ def check_within(report, original, tol, n_check=12):
     u, v = uv_box_grid(original, n_check, n_check)
     points = occ_points(original, u, v).reshape(-1, 3)
     from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
-    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
     from OCP.gp import gp_Pnt2d
+    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
 
     cls = BRepTopAdaptor_FClass2d(original, 1e-9)
     inside = np.array([cls.Perform(gp_Pnt2d(float(a), float(b))) in (TopAbs_IN, TopAbs_ON)
@@ -148,7 +152,7 @@ def test_impeller_representative_faces(real):
     chosen = impeller_sample(real("impeller.igs"))
     assert len(chosen) >= 8
     faired = 0
-    for face, info in chosen:
+    for face, _info in chosen:
         tol = 0.05
         report = fair_face(face, tol=tol, details=False)
         if report.status == "unchanged":
@@ -268,7 +272,7 @@ def test_rational_fallback_when_weights_go_non_positive():
     # the deviation is measured against the original rational face
     check = sample_face_deviation(face, report.face, density=15)
     assert check["max"] == pytest.approx(report.max_deviation, rel=0.5)
-    from cq_fairing.core.fairing import target_space
+    from cq_fairing.core.plans import target_space
     from cq_fairing.errors import NumericalError
     from cq_fairing.occ.search import project
 

@@ -301,11 +301,11 @@ def _with_loose_edge(shape, faces, offset):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
     from OCP.BRepLib import BRepLib
     from OCP.GeomLProp import GeomLProp_SLProps
+    from OCP.gp import gp_Vec
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
     from OCP.TopExp import TopExp
     from OCP.TopoDS import TopoDS
     from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
-    from OCP.gp import gp_Vec
 
     copy = BRepBuilderAPI_Copy(shape, True, False).Shape()
     targets = indexed_faces(copy)

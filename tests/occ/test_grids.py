@@ -15,7 +15,7 @@ from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.occ.shapes import fair_shape
 
-from .helpers import faces_of, global_distance, uv_box_grid, occ_points
+from .helpers import faces_of, global_distance, occ_points, uv_box_grid
 
 TOL = 0.01
 ANGLE_TOL = 20.0   # the noisy joins turn by up to 16 deg: smooth ones, for this model

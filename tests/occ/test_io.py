@@ -44,8 +44,8 @@ def test_missing_empty_corrupt_truncated_and_unknown_files(tmp_path):
 
 def test_step_without_faces_is_refused(tmp_path):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
-    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
     from OCP.gp import gp_Pnt
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
     writer = STEPControl_Writer()
     writer.Transfer(BRepBuilderAPI_MakeVertex(gp_Pnt(1, 2, 3)).Vertex(), STEPControl_AsIs)
@@ -88,8 +88,8 @@ def test_write_refuses_bad_outputs_and_never_touches_the_input(real, tmp_path):
 
 
 def test_invalid_shape_is_not_written(tmp_path):
-    from OCP.TopoDS import TopoDS_Compound
     from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
 
     compound = TopoDS_Compound()
     BRep_Builder().MakeCompound(compound)

@@ -2,13 +2,11 @@
 4 x 4 patches of shell_patches.brep, measured by OCCT, against the same shell faired
 face by face (which leaves every patch as it is)."""
 
-import numpy as np
 import pytest
 from OCP.BRepCheck import BRepCheck_Analyzer
 
 from cq_fairing.occ.io import read_shape
 from cq_fairing.occ.shapes import fair_shape
-
 from tests.conftest import data_path
 
 TOL = 0.083   # the model's default tolerance (1e-3 of its diagonal)

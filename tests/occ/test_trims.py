@@ -11,7 +11,7 @@ import pytest
 from OCP.BRepTools import BRepTools
 
 from cq_fairing.core.adaptive import fair_surface_adaptive
-from cq_fairing.occ import default_tolerance, fair_face, face_to_surface, list_faces
+from cq_fairing.occ import default_tolerance, face_to_surface, fair_face, list_faces
 from cq_fairing.occ.convert import indexed_faces
 from cq_fairing.occ.deviation import sample_face_deviation
 from cq_fairing.occ.trims import SMALL_GRID, classify, face_region, trim_region

@@ -15,9 +15,15 @@ import numpy as np
 import pytest
 
 import cq_fairing as cf
-from cq_fairing.errors import (FairingError, InvalidInputError, InvalidTargetError,
-                               InvalidToleranceError, NumericalError, ToleranceNotMetError,
-                               UnsupportedGeometryError)
+from cq_fairing.errors import (
+    FairingError,
+    InvalidInputError,
+    InvalidTargetError,
+    InvalidToleranceError,
+    NumericalError,
+    ToleranceNotMetError,
+    UnsupportedGeometryError,
+)
 
 RNG = np.random.default_rng(7)
 P = RNG.normal(size=(20, 3))            # 20 poles, cubic: n in 1..17

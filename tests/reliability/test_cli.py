@@ -173,7 +173,7 @@ def test_cli_jobs_and_a_per_face_time_limit(slow_and_quick, tmp_path):
     from OCP.BRepCheck import BRepCheck_Analyzer
 
     from cq_fairing.occ import read_shape
-    from cq_fairing.occ.convert import indexed_faces, face_to_surface
+    from cq_fairing.occ.convert import face_to_surface, indexed_faces
 
     out, report = tmp_path / "out.step", tmp_path / "r.json"
     before = sha256(slow_and_quick)

@@ -15,8 +15,12 @@ import scipy.linalg as la
 
 import cq_fairing as cf
 from cq_fairing.core.gram import gram_matrix
-from cq_fairing.core.robustness import (LocalFrame, banded_condition, plan_conditioning,
-                                        step_conditioning)
+from cq_fairing.core.robustness import (
+    LocalFrame,
+    banded_condition,
+    plan_conditioning,
+    step_conditioning,
+)
 from cq_fairing.errors import InvalidInputError
 
 EPS = np.finfo(float).eps

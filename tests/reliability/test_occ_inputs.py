@@ -11,14 +11,24 @@ import pytest
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeSphere
-from OCP.Geom import (Geom_BSplineCurve, Geom_BSplineSurface, Geom_CylindricalSurface,
-                      Geom_OffsetSurface, Geom_Plane, Geom_SurfaceOfRevolution)
+from OCP.Geom import (
+    Geom_BSplineCurve,
+    Geom_BSplineSurface,
+    Geom_CylindricalSurface,
+    Geom_OffsetSurface,
+    Geom_Plane,
+    Geom_SurfaceOfRevolution,
+)
 from OCP.gp import gp, gp_Ax1, gp_Ax3, gp_Dir, gp_Pnt
 from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 
-from cq_fairing.errors import (FairingError, FileFormatError, OutputPathError,
-                               UnsupportedGeometryError)
+from cq_fairing.errors import (
+    FairingError,
+    FileFormatError,
+    OutputPathError,
+    UnsupportedGeometryError,
+)
 from cq_fairing.occ import face_to_surface, fair_face, fair_shape, read_shape, write_shape
 from cq_fairing.occ.convert import indexed_faces
 
@@ -378,8 +388,8 @@ def test_writing_over_the_input_is_refused(tmp_path, small_shape):
 
 def test_failed_validation_leaves_no_file(tmp_path, small_shape):
     """The read-back check refuses a file that does not round-trip; nothing is left."""
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.TopoDS import TopoDS_Compound
 
     compound = TopoDS_Compound()

@@ -1,0 +1,129 @@
+r"""Target spaces and the plans of spaces a projection visits, checked for resolution.
+
+A plan is the list of spaces from the source to the target that a schedule visits
+(:mod:`cq_fairing.core.schedule`).  A step is resolved when
+:math:`\langle\Phi_n|\Phi_S\rangle` has full row rank, so that the details and the exact
+reconstruction exist (:mod:`cq_fairing.core.decomposition`).
+"""
+
+import numpy as np
+
+from ..errors import InvalidInputError, InvalidTargetError
+from .decomposition import decomposition
+from .schedule import plan_spaces
+from .spaces import SplineSpace
+
+__all__ = ["target_space", "direction_target", "resolved_plan", "checked_plan",
+           "largest_resolved_scale"]
+
+
+def _default_target_degree(source_degree):
+    return min(3, source_degree)
+
+
+def target_space(source, n, degree=None):
+    """The quasi-uniform target ``V_n`` on the source's domain, validated.
+
+    Raises
+    ------
+    InvalidTargetError
+        If ``n`` is not an integer, below 1, or gives at least as many poles as the
+        source has.
+    """
+    if degree is None:
+        degree = _default_target_degree(source.degree)
+    elif isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
+        raise InvalidInputError(
+            f"target_degree must be an integer >= 1, got {degree!r}; e.g. target_degree=3.")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise InvalidTargetError(f"target scale n must be an integer, got {n!r}.")
+    k = source.dimension
+    if n < 1 or n + degree > k:
+        raise InvalidTargetError(
+            f"target scale n must be between 1 and {k - degree} (n + {degree} poles, at "
+            f"most the source's {k}), got n={n}."
+        )
+    return SplineSpace.quasi_uniform(int(n), degree, source.domain)
+
+
+def resolved_plan(source, target, schedule):
+    """:func:`plan_spaces`, dropping top ladder levels the source cannot resolve.
+
+    A non-uniform source can be locally coarser than the first uniform level of the
+    ladder (its ``<Phi|Phi_S>`` is then rank deficient); the next lower level is tried,
+    down to the direct step.
+
+    Returns
+    -------
+    list of SplineSpace or None
+        ``None`` when some step, even the direct one, is not resolved.
+    """
+    spaces = _reduced_plan(source, target, schedule)
+    return None if _unresolved_step(spaces) else spaces
+
+
+def checked_plan(source, target, schedule):
+    """:func:`resolved_plan`, refusing a target the source does not resolve.
+
+    Raises
+    ------
+    InvalidTargetError
+        If ``<Phi_n|Phi_S>`` of a step lacks full row rank (the target is locally finer
+        than the source, e.g. at clustered or repeated source knots): no details or
+        exact reconstruction exist for it.
+    """
+    spaces = _reduced_plan(source, target, schedule)
+    step = _unresolved_step(spaces)
+    if step:
+        raise InvalidTargetError(_unresolved_message(source, target, schedule, step))
+    return spaces
+
+
+def _reduced_plan(source, target, schedule):
+    spaces = plan_spaces(source, target, schedule)
+    while len(spaces) > 2 and not _resolves(spaces[0], spaces[1]):
+        spaces = [spaces[0]] + spaces[2:]
+    return spaces
+
+
+def largest_resolved_scale(source, degree, schedule, below):
+    """Largest ``n <= below`` whose ``V_n`` (of ``degree``) the source resolves; 0 if none."""
+    for n in range(int(below), 0, -1):
+        target = SplineSpace.quasi_uniform(n, degree, source.domain)
+        if resolved_plan(source, target, schedule) is not None:
+            return n
+    return 0
+
+
+def _resolves(source, target):
+    return source.same_as(target) or decomposition(source, target).resolves_target
+
+
+def _unresolved_step(spaces):
+    """The first step ``(a, b)`` of a plan whose ``a`` does not resolve ``b``, else None."""
+    for a, b in zip(spaces[:-1], spaces[1:]):
+        if not _resolves(a, b):
+            return a, b
+    return None
+
+
+def _unresolved_message(source, target, schedule, step):
+    rank = decomposition(*step).matched_rank
+    n = target.n_spans
+    best = largest_resolved_scale(source, target.degree, schedule, n - 1)
+    advice = (f"choose n <= {best}, the largest below {n} it resolves" if best else
+              "no smaller target is resolved either")
+    return (f"target n={n} ({target.dimension} poles of degree {target.degree}) is not "
+            f"resolved by the source ({source.dimension} poles of degree {source.degree}): "
+            f"<Phi|Phi_S> of the step to {step[1].n_spans} spans has rank {rank} < "
+            f"{step[1].dimension} because the source's knots "
+            "are locally sparser than the target's (clustered or repeated knots), so no "
+            f"details or exact reconstruction exist; {advice}, or pass tol= to let accuracy "
+            "control choose.")
+
+
+def direction_target(space, n, degree):
+    """Target space of one direction; ``None`` keeps the source space."""
+    if n is None:
+        return space
+    return target_space(space, n, degree)
