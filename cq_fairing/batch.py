@@ -33,7 +33,6 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import SimpleNamespace
 
 import dask
 from dask.base import tokenize
@@ -42,6 +41,7 @@ from distributed.scheduler import KilledWorker
 
 from .errors import FileFormatError, InvalidInputError
 from .occ.engine import ATTEMPTS, face_to_bytes, fair_face_task
+from .shape_report import shape_report
 
 __all__ = ["Settings", "DaskFaces", "fair_model", "fair_model_task", "open_cluster",
            "run_models", "sha256", "PROGRESS_TOPIC"]
@@ -174,7 +174,6 @@ def fair_model(name, data, settings, output_name, engine=None, progress=None):
     FileFormatError
         ``data`` does not read as a model (the message names ``name``).
     """
-    from .cli import _build_report
     from .occ import fair_shape
     from .occ.convert import indexed_faces
     from .occ.faces import default_tolerance
@@ -193,10 +192,11 @@ def fair_model(name, data, settings, output_name, engine=None, progress=None):
                         engine=engine)
     kind = WRITE_SUFFIXES[Path(output_name).suffix.lower()]
     output = model_bytes(model, kind)
-    options = SimpleNamespace(input=name, output=output_name, method=settings.method,
-                              objective=settings.objective, borders=settings.borders)
-    report = _build_report(options, result, tol, time.perf_counter() - started,
-                           model.contents() if kind == "step" else None, model.face_parts())
+    report = shape_report(result, tol, time.perf_counter() - started,
+                          kept=model.contents() if kind == "step" else None,
+                          parts=model.face_parts(), input_path=name, output_path=output_name,
+                          method=settings.method, objective=settings.objective,
+                          borders=settings.borders, command="cq-fairing batch")
     return dict(output=output, faces=len(indexed_faces(model.shape)), report=report,
                 retries=getattr(engine, "retries", 0))
 

@@ -50,46 +50,43 @@ then renamed into place; the input file is never modified.
 
 import argparse
 import os
-import re
 import sys
 import time
 from pathlib import Path
 
-from .errors import (FairingError, FileFormatError, InvalidInputError, InvalidOutputError,
-                     OutputPathError, ToleranceNotMetError)
-
-EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
-EXIT_INVALID_OUTPUT = 6
-EXIT_INTERRUPTED = 130
-EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a writer whose reader left
+from .cli_options import (
+    EXIT_BROKEN_PIPE,
+    EXIT_INPUT,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_INVALID_OUTPUT,
+    EXIT_OK,
+    EXIT_OUTPUT,
+    EXIT_TOLERANCE,
+    EXIT_USAGE,
+    Parser,
+    add_fairing_options,
+    check_method,
+    integer_at_least,
+    positive_float,
+    target_degree_option,
+)
+from .errors import (
+    FairingError,
+    FileFormatError,
+    InvalidInputError,
+    InvalidOutputError,
+    OutputPathError,
+    ToleranceNotMetError,
+)
+from .shape_report import faired_reports, shape_report, source_and_box
 
 __all__ = ["main", "build_parser"]
 
 
 # -- argument parsing --------------------------------------------------------------------
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line usage errors: the problem and where to read more (exit 2)."""
-
-    def error(self, message):
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}; see {self.prog} --help\n")
-
-
-def _integer_at_least(minimum, what):
-    """An argparse type: an integer ``>= minimum``, else "expected ``what`` >= minimum"."""
-    def parse(text):
-        try:
-            value = int(text)
-        except ValueError:
-            value = minimum - 1
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected {what} >= {minimum}, got {text!r}")
-        return value
-    return parse
-
-
-_jobs = _integer_at_least(1, "a number of worker processes")
-_degree = _integer_at_least(1, "a degree")
-_point_count = _integer_at_least(2, "a number of points")
+_jobs = integer_at_least(1, "a number of worker processes")
+_point_count = integer_at_least(2, "a number of points")
 
 
 def _seconds(text):
@@ -102,16 +99,6 @@ def _seconds(text):
     return value
 
 
-
-
-def _positive_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive length, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive finite length, got {text!r}")
-    return value
 
 
 def _file_name(text):
@@ -137,41 +124,10 @@ def _face_list(text):
     return sorted(set(indices))
 
 
-def _add_fairing_options(parser):
-    """How the faces are faired: the options ``fair`` and ``batch`` share."""
-    parser.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
-                        help="wavelet: uniform targets (default); adaptive: targets whose "
-                             "knots follow the error, fewer poles (needs --tol or its "
-                             "default, not --target)")
-    parser.add_argument("--objective", choices=("compact", "faithful", "fair"),
-                        help="with --method adaptive: compact = fewest poles within --tol "
-                             "(default), faithful = stop at the estimated noise level, "
-                             "fair = the fairest of the fewest poles and up to two more "
-                             "spans per direction (slower)")
-    parser.add_argument("--borders", choices=("auto", "free", "pinned"),
-                        help="with --method adaptive: the target's border rows; auto = "
-                             "pinned (corners kept) where that gives fewer poles (default), "
-                             "free = plain projection (often faster), pinned = always")
-    parser.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
-                        help="smooth = faces that meet along whole borders are faired together, "
-                             "joins closed and tangent where the source was (default); closed = "
-                             "closed only; free = each face alone")
-    parser.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
-                        help="a join whose source normals differ by less is smooth, else a "
-                             "crease (default 1 degree)")
-    parser.add_argument("--target-degree", type=_degree, nargs="+", metavar="P",
-                        help="degree of the faired surfaces, one for both directions or "
-                             "P_U P_V (default: each face's own, at most 3)")
-    parser.add_argument("--boundary", choices=("free", "fixed"), default="free",
-                        help="keep the face borders fixed or let them move within --tol")
-    parser.add_argument("--convert", action="store_true",
-                        help="convert non-B-spline faces to B-splines and fair them too")
-
-
 def build_parser():
     """The argparse parser of ``cq-fairing`` (exit codes in the epilog)."""
     epilog = __doc__[__doc__.index("Exit codes"):__doc__.index("Every file")]
-    parser = _Parser(
+    parser = Parser(
         prog="cq-fairing", description="Multiresolution (wavelet) and energy fairing of "
         "B-spline curves and surfaces.", epilog=epilog,
         formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -181,13 +137,13 @@ def build_parser():
     fair = sub.add_parser("fair", help="fair the B-spline faces of a STEP/IGES/BREP model")
     fair.add_argument("input", type=Path)
     fair.add_argument("-o", "--output", type=_file_name, required=True, help=".step/.stp or .brep")
-    fair.add_argument("--tol", type=_positive_float,
+    fair.add_argument("--tol", type=positive_float,
                       help="largest allowed deviation in model units "
                            "(default 1e-3 of the model's bounding-box diagonal)")
     fair.add_argument("--target", type=int, nargs=2, metavar=("NU", "NV"),
                       help="explicit target poles per direction instead of --tol")
     fair.add_argument("--faces", type=_face_list, help="faces to fair, 1-based (default: all)")
-    _add_fairing_options(fair)
+    add_fairing_options(fair)
     fair.add_argument("--report", type=_file_name, help="report file: .json or .html")
     fair.add_argument("--deviation-map", type=_file_name, help="deviation map: .png or .vtp")
     fair.add_argument("--curvature-map", type=_file_name,
@@ -211,7 +167,7 @@ def build_parser():
     points.add_argument("input", type=Path)
     points.add_argument("-o", "--output", type=_file_name, required=True,
                         help=".step/.stp or .brep")
-    points.add_argument("--tol", type=_positive_float,
+    points.add_argument("--tol", type=positive_float,
                         help="largest allowed deviation (default 1e-3 of the points' extent)")
     points.add_argument("--grid", type=_point_count, nargs=2, metavar=("NU", "NV"),
                         help="the points form NU rows of NV points: fit a surface (rows "
@@ -261,8 +217,8 @@ def command_fair(args):
 
     outputs = [p for p in (args.output, args.report, args.deviation_map, args.curvature_map) if p]
     _check_suffixes(args)
-    _check_method(args)
-    target_degree = _target_degree(args.target_degree)
+    check_method(args)
+    target_degree = target_degree_option(args.target_degree)
     for path in outputs:
         check_output_path(path, force=args.force, inputs=(args.input,))
     if args.tol is not None and args.target is not None:
@@ -290,8 +246,11 @@ def command_fair(args):
                         joins=args.joins, angle_tol=args.angle_tol)
     write_model(model, args.output, force=args.force, input_path=args.input)
     kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
-    report = _build_report(args, result, tol, time.perf_counter() - started, kept or None,
-                           model.face_parts())
+    report = shape_report(result, tol, time.perf_counter() - started, kept=kept or None,
+                          parts=model.face_parts(), input_path=args.input,
+                          output_path=args.output, method=args.method,
+                          objective=args.objective, borders=args.borders,
+                          command="cq-fairing " + " ".join(sys.argv[1:]))
     _write_maps(args, result, tol, report)
     _note_nothing_faired(args, result)
     if args.report:
@@ -321,37 +280,12 @@ def _check_suffix(path, suffixes, option):
         raise OutputPathError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
 
 
-def _check_method(args):
-    """--objective and --borders need --method adaptive; adaptive chooses its own target
-    (no --target)."""
-    for option, value in (("--objective", args.objective), ("--borders", args.borders)):
-        if value is not None and args.method != "adaptive":
-            raise InvalidInputError(
-                f"{option} {value} applies to --method adaptive only, got --method "
-                f"{args.method}; add --method adaptive or drop {option}.")
-    if args.method == "adaptive" and args.target is not None:
-        raise InvalidInputError("--method adaptive chooses the target itself; give --tol "
-                                "instead of --target, or use --method wavelet.")
-
-
 def _objective(args):
     return args.objective or "compact"
 
 
 def _borders(args):
     return args.borders or "auto"
-
-
-def _target_degree(values):
-    """--target-degree P or P_U P_V as ``fair_shape``'s ``target_degree`` (``None``: each
-    face's own, at most 3)."""
-    if values is None:
-        return None
-    if len(values) > 2:
-        raise InvalidInputError(
-            f"--target-degree takes one degree or two (u and v), got {len(values)}: "
-            f"{' '.join(map(str, values))}.")
-    return (values[0], values[-1])
 
 
 def _target_scales(target, infos, target_degree=None):
@@ -415,80 +349,10 @@ def _all_requested_met(args, result):
     return True
 
 
-_STATUS = {"faired": "ok", "unchanged": "unchanged", "tolerance-not-met": "tolerance-not-met",
-           "failed": "failed"}
-
-
-def _source_and_box(face):
-    """The original face's core surface and its UV box (for before/after measures)."""
-    from .occ import face_to_surface
-    from .occ.builders import face_uv_box
-
-    return face_to_surface(face.original)[0], face_uv_box(face.original)
-
-
-def _faired(result):
-    return [f for f in result.faces
-            if f.status == "faired" and f.surface is not None and f.original is not None]
-
-
-def _build_report(args, result, tol, seconds, kept=None, parts=None):
-    from .report import build_report, face_entry
-    from .viz import fairness_measures
-
-    entries = []
-    for index, face in enumerate(result.faces):
-        before = after = None
-        if face in _faired(result):
-            source, box = _source_and_box(face)
-            before = fairness_measures(source, box)
-            after = fairness_measures(face.surface, box)
-        deviation = face.deviation
-        stats = None if not deviation else {k: deviation.get(k) for k in ("max", "mean", "rms")}
-        entries.append(face_entry(
-            index + 1, surface_type=face.info.surface_type if face.info else None,
-            status=_STATUS.get(face.status, "skipped"), message=_in_options(face.message),
-            poles_before=face.poles_before, poles_after=face.poles_after,
-            max_deviation=face.max_deviation, tolerance=face.tolerance,
-            fairness_before=before, fairness_after=after, seconds=face.seconds,
-            deviation=stats, part=parts[index] if parts else None,
-            degree_before=_degrees(face.info),
-            degree_after=_degrees(face.info if face.status == "unchanged" else face.surface),
-            rational=face.info.rational if face.info and face.info.is_bspline else None))
-    return build_report(entries, input_path=args.input, output_path=args.output,
-                        tolerance=tol, method=args.method,
-                        objective=_objective(args) if args.method == "adaptive" else None,
-                        borders=_borders(args) if args.method == "adaptive" else None,
-                        max_gap=result.max_gap, joins=_joins_entry(result.joins),
-                        valid=result.valid, seconds=seconds, kept=kept,
-                        command="cq-fairing " + " ".join(sys.argv[1:]), units="model units")
-
-
-def _joins_entry(joins):
-    """The report's ``joins``: one line, the summary and a row per join."""
-    return dict(line=joins.line(), summary=joins.summary(), rows=joins.rows())
-
-
-def _degrees(geometry):
-    """``(u_degree, v_degree)`` of a surface or of a B-spline face's info, else ``None``."""
-    if geometry is None or not getattr(geometry, "u_degree", None):
-        return None
-    return geometry.u_degree, geometry.v_degree
-
-
-def _in_options(message):
-    """A face message in the command's terms (the API's ``convert=True`` is ``--convert``,
-    ``target_degree=(p, q)`` is ``--target-degree p q``)."""
-    if not message:
-        return message
-    message = message.replace("pass convert=True", "pass --convert")
-    return re.sub(r"target_degree=\((\d+), (\d+)\)", r"--target-degree \1 \2", message)
-
-
 def _note_nothing_faired(args, result):
     """One note on stderr when no face was faired: the faces' statuses, the maps not
     written, and ``--convert`` where faces were skipped for not being B-splines."""
-    if _faired(result):
+    if faired_reports(result):
         return
     counts = {}
     for face in result.faces:
@@ -507,7 +371,7 @@ def _note_nothing_faired(args, result):
 
 
 def _write_maps(args, result, tol, report):
-    faired = _faired(result)
+    faired = faired_reports(result)
     maps = {}
     if args.deviation_map and faired:
         maps["deviation"] = str(_deviation_map(args, faired, tol))
@@ -515,7 +379,7 @@ def _write_maps(args, result, tol, report):
         from .viz import render_curvature_maps
 
         worst = max(faired, key=lambda f: f.max_deviation or 0.0)
-        source, box = _source_and_box(worst)
+        source, box = source_and_box(worst)
         render_curvature_maps(source, worst.surface, args.curvature_map, box=box,
                               force=args.force, title=f"face {result.faces.index(worst) + 1}")
         maps["curvature"] = str(args.curvature_map)

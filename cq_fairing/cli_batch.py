@@ -33,7 +33,7 @@ _WRITTEN_AS = {".igs": ".step", ".iges": ".step"}
 
 def add_batch_command(sub):
     """Register ``batch`` on the ``cq-fairing`` subparsers ``sub``."""
-    from .cli import _add_fairing_options, _integer_at_least, _positive_float
+    from .cli_options import add_fairing_options, integer_at_least, positive_float
 
     batch = sub.add_parser(
         "batch", help="fair many models on a Dask cluster",
@@ -47,15 +47,15 @@ def add_batch_command(sub):
                        help="model files, folders of model files, or glob patterns")
     batch.add_argument("-o", "--output-dir", type=Path, required=True, metavar="OUT_DIR")
     tol = batch.add_mutually_exclusive_group()
-    tol.add_argument("--tol", type=_positive_float,
+    tol.add_argument("--tol", type=positive_float,
                      help="largest allowed deviation in model units, for every model")
-    tol.add_argument("--rel-tol", type=_positive_float, default=1e-3, metavar="R",
+    tol.add_argument("--rel-tol", type=positive_float, default=1e-3, metavar="R",
                      help="largest allowed deviation as a fraction of each model's "
                           "bounding-box diagonal (default 1e-3)")
-    _add_fairing_options(batch)
+    add_fairing_options(batch)
     batch.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                        help="run on this Dask scheduler's workers (default: a local cluster)")
-    batch.add_argument("--workers", type=_integer_at_least(1, "a number of workers"),
+    batch.add_argument("--workers", type=integer_at_least(1, "a number of workers"),
                        metavar="N", help="worker processes of the local cluster "
                                          f"(default: the cores, {os.cpu_count()})")
     batch.add_argument("--resume", action="store_true",
@@ -68,10 +68,10 @@ def add_batch_command(sub):
 
 def command_batch(args):
     """Run ``cq-fairing batch``; returns the exit code."""
-    from .cli import _check_method, _target_degree
+    from .cli_options import check_method, target_degree_option
     from .report import batch_summary, batch_table, write_batch_summary
 
-    _check_method(args)
+    check_method(args)
     if args.scheduler and args.workers:
         raise InvalidInputError("give --scheduler or --workers, not both: the workers of "
                                 "a scheduler of your own are started with it.")
@@ -83,7 +83,7 @@ def command_batch(args):
     settings = batch.Settings(
         tol=args.tol, rel_tol=None if args.tol else args.rel_tol, method=args.method,
         objective=args.objective, borders=args.borders, joins=args.joins,
-        angle_tol=args.angle_tol, target_degree=_target_degree(args.target_degree),
+        angle_tol=args.angle_tol, target_degree=target_degree_option(args.target_degree),
         boundary=args.boundary, convert=args.convert)
     models = _models(args.inputs)
     folder = _output_dir(args.output_dir)
@@ -105,7 +105,7 @@ def command_batch(args):
 def _exit_code(run):
     """5 when a model failed but for an unreadable input, else 3 when an input was
     unreadable, else 1 when a face failed or missed its tolerance, else 0."""
-    from .cli import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_TOLERANCE
+    from .cli_options import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_TOLERANCE
 
     rows = run.rows.values()
     failed = sum(r["status"] == "failed" for r in rows)

@@ -45,6 +45,7 @@ from OCP.BinTools import BinTools
 from OCP.TopoDS import TopoDS, TopoDS_Shape
 
 from ..errors import FairingError
+from .face_tasks import fair_one_face
 
 __all__ = ["fair_face_task", "face_to_bytes", "face_from_bytes", "ProcessFaces", "ATTEMPTS"]
 
@@ -76,13 +77,11 @@ def fair_face_task(index, data, options, tag=None):
     dict
         The fields of its :class:`~cq_fairing.occ.FaceFairReport` but ``face`` and
         ``original`` (OCCT objects stay in the process that owns the shape).  Per-face
-        failures are in the status (see :func:`~cq_fairing.occ.shapes.fair_one_face`);
+        failures are in the status (see :func:`~cq_fairing.occ.face_tasks.fair_one_face`);
         any other exception is a bug and propagates to the caller.
     """
     if _starts is not None:
         _starts.put((tag, os.getpid()))
-    from .shapes import fair_one_face
-
     report = fair_one_face(index, face_from_bytes(data), options)
     return {f.name: getattr(report, f.name) for f in fields(report)
             if f.name not in _LOCAL_FIELDS}

@@ -35,7 +35,6 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_NurbsConvert
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -44,13 +43,21 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
-from ..errors import FairingError, InvalidInputError, ToleranceNotMetError
-from .convert import (as_shape, face_info, finish_edges, indexed_faces, is_occt_error,
-                      replace_surface, settle_tolerances, surface_to_face, to_geom_surface)
-from .faces import FaceFairReport, check_options, default_tolerance, fair_face
-from .congruence import compose, congruence_classes, inverse
-from .engine import ProcessFaces
+from ..errors import InvalidInputError
 from .adjacency import find_joins, measure_joins
+from .congruence import compose, congruence_classes, inverse
+from .convert import (
+    as_shape,
+    finish_edges,
+    indexed_faces,
+    replace_surface,
+    settle_tolerances,
+    surface_to_face,
+    to_geom_surface,
+)
+from .engine import ProcessFaces
+from .face_tasks import fair_one_face, kept_face_report
+from .faces import FaceFairReport, check_options, default_tolerance
 from .joint import JOINS, JoinReport, fair_joined
 
 __all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
@@ -558,60 +565,6 @@ def _moved_samples(deviation, matrix, side):
                  signed=side * deviation["signed"])
     moved["normals"] = side * deviation["normals"] @ matrix[:, :3].T
     return moved
-
-
-def fair_one_face(index, face, options):
-    """``fair_face(face, **options)`` with the face's failures turned into its report.
-
-    A :class:`~cq_fairing.errors.FairingError`, an OCCT exception
-    (``Standard_Failure`` and its kinds, see :func:`is_occt_error`) or a
-    ``numpy.linalg.LinAlgError`` gives status ``'tolerance-not-met'`` (for
-    :class:`~cq_fairing.errors.ToleranceNotMetError`) or ``'failed'`` with a one-line
-    message; the face is kept, and its report keeps the face's type, its poles (before and
-    after alike: the output holds the original) and the time spent.  Any other exception
-    is a bug and propagates.
-    """
-    start = time.perf_counter()
-    try:
-        report = fair_face(face, **options)
-    except Exception as exc:
-        if not isinstance(exc, (FairingError, np.linalg.LinAlgError)) and not is_occt_error(exc):
-            raise
-        status = "tolerance-not-met" if isinstance(exc, ToleranceNotMetError) else "failed"
-        report = kept_face_report(face, status, _one_line(exc), tolerance=options.get("tol"),
-                                  seconds=time.perf_counter() - start)
-    report.index = index
-    return report
-
-
-def kept_face_report(original, status, message, index=None, tolerance=None, seconds=0.0):
-    """:class:`FaceFairReport` of a face kept as it was (refused, failed, or restored):
-    its type, its poles (before and after alike: the output holds the original) and the
-    time spent on it."""
-    info = _info_if_readable(original)
-    poles = (info.n_poles_u, info.n_poles_v) if info and info.n_poles_u else None
-    return FaceFairReport(original, status, message, original=original, info=info,
-                          poles_before=poles, poles_after=poles, tolerance=tolerance,
-                          seconds=seconds, index=index)
-
-
-def _info_if_readable(face):
-    """:func:`~cq_fairing.occ.face_info` of a face whose fairing failed, ``None`` when
-    OCCT cannot read it either."""
-    try:
-        return face_info(face)
-    except Exception as exc:
-        if not is_occt_error(exc):
-            raise
-        return None
-
-
-def _one_line(exc):
-    text = " ".join(str(exc).split())
-    if isinstance(exc, FairingError):
-        return text
-    where = "OCCT" if is_occt_error(exc) else "linear algebra"
-    return f"{where} error {type(exc).__name__} ({text or 'no message'}); kept the original"
 
 
 def _single_face(faces):

@@ -1,0 +1,101 @@
+"""What the ``cq-fairing`` commands share: exit codes, the argument parser's one-line
+errors, argument types and the fairing options of ``fair`` and ``batch``."""
+
+import argparse
+
+from .errors import InvalidInputError
+
+EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
+EXIT_INVALID_OUTPUT = 6
+EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a writer whose reader left
+
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line usage errors: the problem and where to read more (exit 2)."""
+
+    def error(self, message):
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
+def integer_at_least(minimum, what):
+    """An argparse type: an integer ``>= minimum``, else "expected ``what`` >= minimum"."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected {what} >= {minimum}, got {text!r}")
+        return value
+    return parse
+
+
+degree = integer_at_least(1, "a degree")
+
+
+def positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive length, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive finite length, got {text!r}")
+    return value
+
+
+def add_fairing_options(parser):
+    """How the faces are faired: the options ``fair`` and ``batch`` share."""
+    parser.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
+                        help="wavelet: uniform targets (default); adaptive: targets whose "
+                             "knots follow the error, fewer poles (needs --tol or its "
+                             "default, not --target)")
+    parser.add_argument("--objective", choices=("compact", "faithful", "fair"),
+                        help="with --method adaptive: compact = fewest poles within --tol "
+                             "(default), faithful = stop at the estimated noise level, "
+                             "fair = the fairest of the fewest poles and up to two more "
+                             "spans per direction (slower)")
+    parser.add_argument("--borders", choices=("auto", "free", "pinned"),
+                        help="with --method adaptive: the target's border rows; auto = "
+                             "pinned (corners kept) where that gives fewer poles (default), "
+                             "free = plain projection (often faster), pinned = always")
+    parser.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
+                        help="smooth = faces that meet along whole borders are faired together, "
+                             "joins closed and tangent where the source was (default); closed = "
+                             "closed only; free = each face alone")
+    parser.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
+                        help="a join whose source normals differ by less is smooth, else a "
+                             "crease (default 1 degree)")
+    parser.add_argument("--target-degree", type=degree, nargs="+", metavar="P",
+                        help="degree of the faired surfaces, one for both directions or "
+                             "P_U P_V (default: each face's own, at most 3)")
+    parser.add_argument("--boundary", choices=("free", "fixed"), default="free",
+                        help="keep the face borders fixed or let them move within --tol")
+    parser.add_argument("--convert", action="store_true",
+                        help="convert non-B-spline faces to B-splines and fair them too")
+
+
+def check_method(args):
+    """--objective and --borders need --method adaptive; adaptive chooses its own target
+    (no --target)."""
+    for option, value in (("--objective", args.objective), ("--borders", args.borders)):
+        if value is not None and args.method != "adaptive":
+            raise InvalidInputError(
+                f"{option} {value} applies to --method adaptive only, got --method "
+                f"{args.method}; add --method adaptive or drop {option}.")
+    if args.method == "adaptive" and args.target is not None:
+        raise InvalidInputError("--method adaptive chooses the target itself; give --tol "
+                                "instead of --target, or use --method wavelet.")
+
+
+def target_degree_option(values):
+    """--target-degree P or P_U P_V as ``fair_shape``'s ``target_degree`` (``None``: each
+    face's own, at most 3)."""
+    if values is None:
+        return None
+    if len(values) > 2:
+        raise InvalidInputError(
+            f"--target-degree takes one degree or two (u and v), got {len(values)}: "
+            f"{' '.join(map(str, values))}.")
+    return (values[0], values[-1])
