@@ -8,9 +8,9 @@ recording replays it.
 import FreeCAD
 import FreeCADGui
 import cq_fairing as cf
-from PySide2 import QtWidgets
 
-from . import deviation_map, feature, icon_path, preferences, task_panel
+from . import deviation_map, feature, icon_path, make, preferences, task_panel, undo
+from .qt import QtWidgets
 
 __all__ = ["register", "TOOLBAR", "MENU", "COMMANDS"]
 
@@ -79,24 +79,29 @@ class _MapCommand(_Command):
 
     @staticmethod
     def toggle(fairing, maps):
-        """Show/hide existing maps with their legends (view only, no transaction)."""
+        """Show/hide existing maps with their legends (view only, no transaction); shown,
+        they hide the shapes under them (``ViewProviderMap``), hidden, the fairing shows
+        again."""
         visible = not maps[0].ViewObject.Visibility
         for m in maps:
             m.ViewObject.Visibility = visible
-        fairing.ViewObject.Visibility = not visible
+        if not visible:
+            fairing.ViewObject.Visibility = True
 
     def create(self, fairing):
-        doc = fairing.Document
-        doc.openTransaction(self.menu)
-        FreeCADGui.doCommand("import fairing_wb.deviation_map")
-        FreeCADGui.doCommand(f"fairing = App.ActiveDocument.getObject({fairing.Name!r})")
-        FreeCADGui.doCommand(self.call)
-        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
-        if self.kind != "Deviation":
-            FreeCADGui.doCommand("fairing_wb.deviation_map.share_range(maps)")
-            FreeCADGui.doCommand("App.ActiveDocument.recompute()")
-        doc.commitTransaction()
-        fairing.ViewObject.Visibility = False
+        """New map(s) in one undo step; a failed map undoes the step and says why."""
+        try:
+            with undo.transaction(fairing.Document, self.menu):
+                FreeCADGui.doCommand("import fairing_wb.deviation_map")
+                FreeCADGui.doCommand(f"fairing = App.ActiveDocument.getObject({fairing.Name!r})")
+                FreeCADGui.doCommand(self.call)
+                FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+                undo.require_valid(deviation_map.find_maps(fairing))
+                if self.kind != "Deviation":
+                    FreeCADGui.doCommand("fairing_wb.deviation_map.share_range(maps)")
+                    FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+        except Exception as error:  # a command: anything uncaught would be lost
+            QtWidgets.QMessageBox.warning(None, self.menu, make.error_sentence(error))
 
 
 class DeviationMap(_MapCommand):
@@ -171,12 +176,16 @@ class PointsToSurface(_Command):
                 return None
             resample = (n, n)
         doc = FreeCAD.ActiveDocument or FreeCAD.newDocument("Points")
-        doc.openTransaction("Points to surface")
-        FreeCADGui.doCommand("import fairing_wb.points")
-        FreeCADGui.doCommand(f"obj, message = fairing_wb.points.make_points_shape({path!r}, "
-                             f"resample={resample!r})")
-        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
-        doc.commitTransaction()
+        try:
+            with undo.transaction(doc, "Points to surface"):
+                FreeCADGui.doCommand("import fairing_wb.points")
+                FreeCADGui.doCommand(f"obj, message = fairing_wb.points.make_points_shape("
+                                     f"{path!r}, resample={resample!r})")
+                FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+                undo.require_valid(doc.Objects[-1:])
+        except Exception as error:  # a command: anything uncaught would be lost
+            QtWidgets.QMessageBox.warning(None, "Points to surface", make.error_sentence(error))
+            return None
         return doc.Objects[-1]
 
 

@@ -13,9 +13,10 @@ import FreeCAD
 import Mesh
 import cq_fairing as cf
 
-from . import analysis, conversion, preferences
+from . import analysis, conversion, feature, preferences
 
-__all__ = ["AnalysisMap", "make_map", "KINDS", "ramp", "find_maps"]
+__all__ = ["AnalysisMap", "make_map", "KINDS", "ramp", "find_maps", "covered",
+           "maps_on"]
 
 KINDS = ("Deviation", "MeanCurvature", "GaussianCurvature")
 WHICH = ("Faired", "Source")
@@ -170,6 +171,34 @@ class AnalysisMap:
 
     dumps = __getstate__
     loads = __setstate__
+
+
+def _on_faces(link, source, subs):
+    """Whether a ``(object, [sub names])`` link names one of the faces ``subs`` of
+    ``source``."""
+    return bool(link) and link[0].Name == source.Name and bool(set(link[1]) & set(subs))
+
+
+def covered(obj):
+    """Objects whose faces lie where the map ``obj`` is drawn (hidden while it shows, or
+    their faces would show through it in patches): its fairing, the fairing's source and
+    every other fairing of one of the same faces.  None for a map moved aside
+    (``Offset``)."""
+    if obj.Offset.Length > 0 or obj.Fairing is None or not obj.Fairing.Source:
+        return []
+    source, subs = obj.Fairing.Source
+    return [source] + [o for o in obj.Document.Objects
+                       if getattr(getattr(o, "Proxy", None), "Type", None) == feature.TYPE
+                       and _on_faces(o.Source, source, subs)]
+
+
+def maps_on(source, subs):
+    """Maps drawn on the faces ``subs`` of ``source``: those of any fairing of one of
+    them, except maps moved aside (``Offset``)."""
+    return [m for m in source.Document.Objects
+            if getattr(getattr(m, "Proxy", None), "Type", None) == TYPE
+            and m.Offset.Length == 0 and m.Fairing is not None
+            and _on_faces(m.Fairing.Source, source, subs)]
 
 
 def find_maps(fairing, kind=None):

@@ -25,7 +25,8 @@ from cq_fairing.core.fairing import largest_resolved_scale
 
 from . import analysis, conversion
 
-__all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "error_sentence",
+__all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
+           "fair_shapes", "error_sentence",
            "FairedShape", "MODES", "METHODS",
            "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES"]
 
@@ -436,28 +437,57 @@ def fair_elements(obj, subs, settings, face_settings):
     Returns
     -------
     list of FairedShape
-        One per element, in the order of ``subs``.  With several faces in target mode,
-        each face is clamped to its own control-point counts; with several faces in
-        tolerance mode, a face with no coarser net within the tolerance is kept as it is
-        (:func:`_kept`) instead of failing the others.
+        One per element, in the order of ``subs`` (see :func:`fair_shapes`).
+    """
+    return fair_shapes(named_elements(obj, subs), settings, face_settings)
+
+
+def named_elements(obj, subs):
+    """``[(sub, Part.Face or Part.Edge)]`` of ``obj``, checked (:func:`_element`); read in
+    the thread that owns the document, before :func:`fair_shapes` runs elsewhere."""
+    return [(sub, _element(obj, sub)) for sub in subs]
+
+
+def fair_shapes(named, settings, face_settings, progress=None):
+    """Fair the shapes ``named`` (``[(sub, face or edge)]``, from :func:`named_elements`); no
+    document access, so it may run in a worker thread.
+
+    With several faces in target mode, each face is clamped to its own control-point
+    counts; with several faces in tolerance mode, a face with no coarser net within the
+    tolerance is kept as it is (:func:`_kept`) instead of failing the others.  ``settings``
+    and ``face_settings`` as in :func:`fair_elements`.
+
+    Parameters
+    ----------
+    progress : callable, optional
+        ``progress(done, total)`` before each element and after the last; an exception it
+        raises stops the fairing there (an element being faired runs to its end).
+
+    Returns
+    -------
+    list of FairedShape
+        One per element, in the order of ``named``.
     """
     target = settings["target"]
     results = []
-    for sub in subs:
-        element = _element(obj, sub)
+    for done, (sub, element) in enumerate(named):
+        if progress is not None:
+            progress(done, len(named))
         if sub.startswith("Face"):
-            own = target if target is None or len(subs) == 1 else _clamped_target(target,
-                                                                                  element)
+            own = target if target is None or len(named) == 1 else _clamped_target(target,
+                                                                                   element)
             try:
                 results.append(fair_face(element, **face_settings,
                                          **{**settings, "target": own}))
             except cf.ToleranceNotMetError as error:
-                if len(subs) == 1:
+                if len(named) == 1:
                     raise
                 results.append(_kept(element, sub, error))
         else:
             own = None if target is None else target[0]
             results.append(fair_edge(element, **{**settings, "target": own}))
+    if progress is not None:
+        progress(len(named), len(named))
     return results
 
 

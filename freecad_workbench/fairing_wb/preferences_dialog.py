@@ -1,9 +1,9 @@
 """Preferences dialog of the workbench (GUI only); values live in :mod:`preferences`."""
 
 import FreeCADGui
-from PySide2 import QtGui, QtWidgets
 
 from . import preferences
+from .qt import QtGui, QtWidgets
 
 __all__ = ["PreferencesDialog"]
 

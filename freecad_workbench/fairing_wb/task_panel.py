@@ -2,19 +2,27 @@
 
 Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_target_u``,
 ``fairing_target_v``, ``fairing_method``, ``fairing_objective``, ``fairing_borders``,
-``fairing_boundary``,
-``fairing_search``, ``fairing_measure``, ``fairing_preview``,
-``fairing_figures``, ``fairing_error``, ``fairing_faces``, ``fairing_level``) so scripts and
-GUI tests can find them with ``Gui.getMainWindow().findChild``.
+``fairing_boundary``, ``fairing_search``, ``fairing_measure``, ``fairing_preview``,
+``fairing_progress``, ``fairing_cancel``, ``fairing_figures``, ``fairing_error``,
+``fairing_faces``, ``fairing_level``) so scripts and GUI tests can find them with
+``Gui.getMainWindow().findChild``.
+
+Preview fairs in a worker thread (:class:`PreviewJob`): the GUI stays live, a busy bar
+and "Cancel preview" show until the figures come.  OK fairs in the GUI thread, since it
+changes the document.
 """
+
+import threading
 
 import FreeCADGui
 import Part
-from PySide2 import QtCore, QtWidgets
 
-from . import icon_path, make, preferences
+from . import deviation_map, icon_path, make, preferences, undo
+from .qt import QtCore, QtGui, QtWidgets
 
-__all__ = ["FairSurfacePanel", "LevelsPanel", "selection_link", "make_call"]
+__all__ = ["FairSurfacePanel", "LevelsPanel", "PreviewJob", "selection_link", "make_call"]
+
+POLL_MS = 50  # how often the panel looks whether a preview has finished
 
 
 def selection_link(kind="Face"):
@@ -50,6 +58,41 @@ def make_call(link, settings, face):
     return f"fairing_wb.make.make_fairing({', '.join(args)})"
 
 
+class PreviewJob:
+    """:func:`make.fair_shapes` in a worker thread, stoppable between elements.
+
+    The elements are read from the document before (in the GUI thread); the worker only
+    computes.  ``results`` or ``error`` hold the outcome once ``thread`` has ended.
+    """
+
+    def __init__(self, named, settings, face_settings):
+        self.stop = threading.Event()
+        self.results = self.error = None
+        self.done, self.total = 0, len(named)
+        self.thread = threading.Thread(target=self._run, args=(named, settings, face_settings),
+                                       daemon=True)
+        self.thread.start()
+
+    def _run(self, named, settings, face_settings):
+        try:
+            self.results = make.fair_shapes(named, settings, face_settings, self._step)
+        except Exception as error:  # reported by the panel
+            self.error = error
+
+    def _step(self, done, total):
+        if self.stop.is_set():
+            raise PreviewCancelled(f"preview cancelled after {done} of {total} elements")
+        self.done = done
+
+    def stage(self):
+        """Progress text: which element is being faired."""
+        return f"fairing {min(self.done + 1, self.total)} of {self.total}..."
+
+
+class PreviewCancelled(Exception):
+    """Raised in the worker thread when Cancel stopped a preview."""
+
+
 def _row(layout, text, widget, name):
     widget.setObjectName(name)
     layout.addRow(text, widget)
@@ -76,7 +119,7 @@ class FairSurfacePanel:
         form = QtWidgets.QWidget()
         form.setObjectName("FairingTaskPanel")
         form.setWindowTitle("Fair curve" if self.kind == "Edge" else "Fair surface")
-        form.setWindowIcon(QtGui_icon(icon_path(
+        form.setWindowIcon(QtGui.QIcon(icon_path(
             "Fairing_FairCurve" if self.kind == "Edge" else "Fairing_FairSurface")))
         layout = QtWidgets.QFormLayout(form)
         self.faces = _row(layout, "Source:", QtWidgets.QListWidget(), "fairing_faces")
@@ -122,6 +165,17 @@ class FairSurfacePanel:
         self.measure.addItems(list(make.MEASURES))
         self.preview = _row(layout, "", QtWidgets.QPushButton("Preview"), "fairing_preview")
         self.preview.clicked.connect(self.on_preview)
+        self.progress = _row(layout, "", QtWidgets.QProgressBar(), "fairing_progress")
+        self.progress.setRange(0, 0)  # busy: one element's time is not known ahead
+        self.progress.setTextVisible(True)
+        self.cancel = _row(layout, "", QtWidgets.QPushButton("Cancel preview"),
+                           "fairing_cancel")
+        self.cancel.clicked.connect(self.on_cancel)
+        self.timer = QtCore.QTimer(form)
+        self.timer.setInterval(POLL_MS)
+        self.timer.timeout.connect(self._poll)
+        self.job = None
+        self._busy(False)
         self.figures = _row(layout, "", QtWidgets.QLabel("Press Preview for figures."),
                             "fairing_figures")
         self.figures.setWordWrap(True)
@@ -195,37 +249,102 @@ class FairSurfacePanel:
         return make.fair_elements(obj, subs, self.settings(), self.face_settings())
 
     def on_preview(self):
-        """Recompute the figures: poles before -> after, max deviation, time."""
+        """Start fairing in a worker thread (the GUI stays live; a busy bar and Cancel
+        show); the figures appear when it ends (:meth:`_poll`)."""
+        if self.job is not None:
+            return
+        self.error.setText("")
+        try:
+            named = make.named_elements(*self.link)
+        except Exception as error:  # a slot: anything uncaught would be lost
+            self._show_error(error)
+            return
+        self.job = PreviewJob(named, self.settings(), self.face_settings())
+        self.figures.setText("")
+        self._busy(True)
+        self.timer.start()
+
+    def _poll(self):
+        """Show the finished job's figures or error (timer slot)."""
+        job = self.job
+        if job is None:
+            return
+        if job.thread.is_alive():
+            self.progress.setFormat(job.stage())
+            return
+        self._end_job()
+        if job.error is not None:
+            self._show_error(job.error)
+        else:
+            self._show(job.results)
+
+    def on_cancel(self):
+        """Stop the preview: its result is dropped; the worker stops before the next
+        element (one being faired runs to its end in the background)."""
+        if self.job is not None:
+            self.job.stop.set()
+            self._end_job()
+            self.figures.setText("Preview cancelled.")
+
+    def _end_job(self):
+        self.timer.stop()
+        self.job = None
+        self._busy(False)
+
+    def _busy(self, busy):
+        self.progress.setVisible(busy)
+        self.cancel.setVisible(busy)
+        self.preview.setEnabled(not busy)
+
+    def preview_now(self):
+        """Fair in this thread (OK needs the result before it changes the document);
+        shows and returns the results, or None after showing the error."""
+        self.on_cancel()
         self.error.setText("")
         try:
             results = self.run()
-        except Exception as error:  # a slot: anything uncaught would be lost
-            self.figures.setText("")
-            self.error.setText(make.error_sentence(error))
+        except Exception as error:  # called from a slot: anything uncaught would be lost
+            self._show_error(error)
             return None
+        self._show(results)
+        return results
+
+    def _show(self, results):
         lines = [f"{' x '.join(map(str, r.poles_before))} -> "
                  f"{' x '.join(map(str, r.poles_after))} control points\n"
                  f"max deviation {r.max_deviation:.4g} mm, time {1000 * r.seconds:.0f} ms"
                  for r in results]
         self.figures.setText("\n".join(lines))
-        return results
+
+    def _show_error(self, error):
+        self.figures.setText("")
+        self.error.setText(make.error_sentence(error))
 
     # -- OK / Cancel ---------------------------------------------------------------------
     def accept(self):
-        if self.on_preview() is None:
+        """Create (or change) the feature in one undo step; on failure undo it, say why in
+        the panel and keep it open."""
+        if self.preview_now() is None:
             return False
         s, face = self.settings(), self.face_settings()
         doc = self.link[0].Document
-        if self.fairing is None:
-            doc.openTransaction("Fair surface")
-            FreeCADGui.doCommand("import fairing_wb.make")
-            FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, face)}")
-        else:
-            doc.openTransaction("Edit fairing")
-            FreeCADGui.doCommand(f"fairing = App.ActiveDocument.getObject({self.fairing.Name!r})")
-            self._echo_properties(s, face)
-        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
-        doc.commitTransaction()
+        before = {o.Name for o in doc.Objects}
+        try:
+            with undo.transaction(doc, "Fair surface" if self.fairing is None else
+                                  "Edit fairing"):
+                if self.fairing is None:
+                    FreeCADGui.doCommand("import fairing_wb.make")
+                    FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, face)}")
+                else:
+                    FreeCADGui.doCommand(
+                        f"fairing = App.ActiveDocument.getObject({self.fairing.Name!r})")
+                    self._echo_properties(s, face)
+                FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+                made = [o for o in doc.Objects if o.Name not in before]
+                undo.require_valid(made or [self.fairing])
+        except Exception as error:  # a slot: anything uncaught would be lost
+            self.error.setText(make.error_sentence(error))
+            return False
         self._close()
         return True
 
@@ -242,6 +361,7 @@ class FairSurfacePanel:
             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
 
     def reject(self):
+        self.on_cancel()
         self._close()
         return True
 
@@ -253,12 +373,6 @@ class FairSurfacePanel:
 
     def getStandardButtons(self):
         return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
-
-
-def QtGui_icon(path):
-    from PySide2 import QtGui
-
-    return QtGui.QIcon(path)
 
 
 def level_targets(surface, count=8):
@@ -319,6 +433,8 @@ class LevelsPanel:
             self.preview = doc.addObject("Part::Feature", "FairingLevelPreview")
             self.preview.ViewObject.ShapeColor = (0.35, 0.6, 0.95)
             self.link[0].ViewObject.Visibility = False
+            for shown in deviation_map.maps_on(*self.link):  # drawn where the preview is
+                shown.ViewObject.Visibility = False
         self.preview.Shape = result.shape
         self.label.setText(f"level {index + 1}/{len(self.targets)}: "
                            f"{target[0]} x {target[1]} control points, "
@@ -335,15 +451,20 @@ class LevelsPanel:
         target = self.targets[self.slider.value()]
         self._remove_preview()
         doc = self.link[0].Document
-        doc.openTransaction("Fairing level")
-        FreeCADGui.doCommand("import fairing_wb.make")
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
                                      "search": "linear", "measure": "parametric",
                                      "objective": "compact"},
                          {"boundary": "free", "borders": "auto"})
-        FreeCADGui.doCommand(f"fairing = {call}")
-        FreeCADGui.doCommand("App.ActiveDocument.recompute()")
-        doc.commitTransaction()
+        before = {o.Name for o in doc.Objects}
+        try:
+            with undo.transaction(doc, "Fairing level"):
+                FreeCADGui.doCommand("import fairing_wb.make")
+                FreeCADGui.doCommand(f"fairing = {call}")
+                FreeCADGui.doCommand("App.ActiveDocument.recompute()")
+                undo.require_valid([o for o in doc.Objects if o.Name not in before])
+        except Exception as error:  # a slot: anything uncaught would be lost
+            self.error.setText(make.error_sentence(error))
+            return False
         FreeCADGui.Control.closeDialog()
         return True
 

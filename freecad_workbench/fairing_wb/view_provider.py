@@ -35,6 +35,24 @@ class ViewProviderFairing:
         FreeCADGui.Control.closeDialog()
         return True
 
+    def updateData(self, obj, prop):
+        if prop == "Shape" and obj.ViewObject and obj.ViewObject.Visibility:
+            self._hide_maps_on(obj)
+
+    def onChanged(self, vobj, prop):
+        if prop == "Visibility" and vobj.Visibility:
+            self._hide_maps_on(vobj.Object)
+
+    @staticmethod
+    def _hide_maps_on(obj):
+        """A shown fairing hides the maps drawn on its source faces, the converse of
+        ``ViewProviderMap._show_alone``: whichever was shown last is seen alone."""
+        from . import deviation_map
+
+        if obj.Source and not obj.Document.Restoring:
+            for other in deviation_map.maps_on(*obj.Source):
+                other.ViewObject.Visibility = False
+
     def doubleClicked(self, vobj):
         FreeCADGui.ActiveDocument.setEdit(vobj.Object.Name)
         return True
@@ -83,10 +101,30 @@ class ViewProviderMap:
     def updateData(self, obj, prop):
         if prop in ("VertexColors", "Maximum", "Minimum", "Unit") and obj.ViewObject:
             self._refresh(obj.ViewObject)
+        if prop == "Mesh" and obj.ViewObject:
+            self._show_alone(obj.ViewObject)
 
     def onChanged(self, vobj, prop):
         if prop in ("Visibility", "ShowLegend"):
             self._refresh(vobj)
+        if prop == "Visibility":
+            self._show_alone(vobj)
+
+    @staticmethod
+    def _show_alone(vobj):
+        """A shown map hides the shapes it lies on (``deviation_map.covered``) and the other
+        maps drawn there: at the same place, within the tolerance, their faces would show
+        through the colours in patches."""
+        from . import deviation_map
+
+        obj = vobj.Object
+        if not vobj.Visibility or getattr(obj, "Fairing", None) is None \
+                or obj.Document.Restoring:
+            return
+        under = deviation_map.covered(obj)
+        others = deviation_map.maps_on(*obj.Fairing.Source) if under else []
+        for other in under + [m for m in others if m.Name != obj.Name]:
+            other.ViewObject.Visibility = False
 
     def _refresh(self, vobj):
         from . import deviation_map, preferences

@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.join(REPO, "tests", "freecad"))
 
 import FreeCAD  # noqa: E402
 import FreeCADGui as Gui  # noqa: E402
-from PySide2 import QtCore, QtGui, QtWidgets  # noqa: E402
+from fairing_wb.qt import QtCore, QtGui, QtWidgets  # noqa: E402
 
 RESULTS = []
 COMMANDS = ("Fairing_FairSurface", "Fairing_FairCurve", "Fairing_DeviationMap",
@@ -97,13 +97,18 @@ def press_task_cancel():
     return press_task_button(QtWidgets.QDialogButtonBox.Cancel, closes=True)
 
 
+def click_preview(seconds=120.0):
+    """Click Preview and wait until its worker has finished (the button is enabled again);
+    wall time in seconds."""
+    start = time.perf_counter()
+    find("fairing_preview").click()
+    wait_until(lambda: find("fairing_preview").isEnabled(), seconds)
+    return time.perf_counter() - start
+
+
 def timed_preview(repeat=3):
-    """Best wall time of clicking Preview (fairing + figures), seconds."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        find("fairing_preview").click()
-        times.append(time.perf_counter() - start)
+    """Best wall time of clicking Preview until the figures show, seconds."""
+    times = [click_preview() for _ in range(repeat)]
     pump(0.1)
     return min(times)
 
@@ -116,15 +121,68 @@ def grab_window(path):
 
 def preview_poles():
     """Click Preview once; ``(poles after, max deviation, seconds, figures text)``."""
-    start = time.perf_counter()
-    find("fairing_preview").click()
-    seconds = time.perf_counter() - start
+    seconds = click_preview()
     pump(0.1)
     figures = find("fairing_figures").text()
     found = re.search(r"-> (\d+) x (\d+) control points\nmax deviation ([0-9.e+-]+) mm", figures)
     if found is None:
         return None, None, seconds, figures + find("fairing_error").text()
     return int(found[1]) * int(found[2]), float(found[3]), seconds, figures
+
+
+def grey_share(path, width_share=0.7):
+    """Share of the drawn pixels of a 3D-view image (not the white background; the left
+    ``width_share`` of it, the legend is on the right) that are grey: a grey face showing
+    through a colour map.  Returns ``(share, drawn pixels)``."""
+    image = QtGui.QImage(path)
+    grey = drawn = 0
+    for x in range(0, int(image.width() * width_share), 3):
+        for y in range(0, image.height(), 3):
+            c = QtGui.QColor(image.pixel(x, y))
+            rgb = (c.red(), c.green(), c.blue())
+            if min(rgb) > 235:
+                continue
+            drawn += 1
+            grey += max(rgb) - min(rgb) < 24 and max(rgb) > 70  # not a black outline
+    return grey / max(drawn, 1), drawn
+
+
+def close_message_box(texts, tries=100):
+    """Record the text of the next modal message box (a command's error) and close it."""
+    box = QtWidgets.QApplication.activeModalWidget()
+    if box is None and tries:  # not shown yet
+        QtCore.QTimer.singleShot(100, lambda: close_message_box(texts, tries - 1))
+        return
+    texts.append(box.text() if isinstance(box, QtWidgets.QMessageBox) else repr(box))
+    if box is not None:
+        box.close()
+
+
+def check_failed_command_aborts(doc):
+    """A map of a fairing that failed fails in turn: the command says why and leaves no
+    object behind and no open undo step."""
+    import Part
+    import fixtures
+    from fairing_wb import make
+
+    box = fixtures.add_shape(doc, Part.makeBox(10, 10, 10), "Box")
+    broken = make.make_fairing((box, ["Face1"]), target=(4, 4))  # a plane: fails
+    doc.recompute()
+    names, steps = [o.Name for o in doc.Objects], doc.UndoCount
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(broken)
+    texts = []
+    QtCore.QTimer.singleShot(100, lambda: close_message_box(texts))
+    Gui.runCommand("Fairing_DeviationMap")
+    wait_until(lambda: texts)
+    pump()
+    check("a failing map command aborts its transaction and says why",
+          [o.Name for o in doc.Objects] == names and doc.UndoCount == steps
+          and not doc.HasPendingTransaction and texts and "Face1 of Box is a Plane" in texts[0],
+          (texts, steps, doc.UndoCount, [o.Name for o in doc.Objects if o.Name not in names]))
+    Gui.Selection.clearSelection()
+    for obj in (broken, box):
+        doc.removeObject(obj.Name)
 
 
 def console_text():
@@ -154,6 +212,8 @@ def check_adaptive_panel(doc, source):
     check("adaptive preview: fewer poles than wavelet within 0.05 mm",
           poles is not None and wavelet is not None and poles < wavelet and deviation <= 0.05,
           f"adaptive faithful {figures!r} in {seconds:.2f} s; wavelet {wavelet_text!r}")
+    check_preview_cancel()
+    click_preview()
     grab_window(os.path.join(ARTIFACTS, "fair_surface_panel_adaptive.png"))
     press_task_ok()
     pump()
@@ -168,6 +228,34 @@ def check_adaptive_panel(doc, source):
           bool(echo) and "method='adaptive'" in echo[-1] and "objective='faithful'" in echo[-1]
           and "borders='free'" in echo[-1],
           echo[-1:] or "no make_fairing line in the Python console")
+
+
+def check_preview_cancel(watch=0.4):
+    """A long Preview (adaptive, seconds) runs in the background: for ``watch`` seconds
+    the GUI keeps handling events (a 20 ms timer ticks) while a busy bar and Cancel show;
+    Cancel ends it at once and enables Preview again."""
+    ticks = []
+    timer = QtCore.QTimer()
+    timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
+    timer.start(20)
+    start = time.perf_counter()
+    find("fairing_preview").click()
+    clicked = time.perf_counter() - start
+    busy = find("fairing_progress").isVisible() and find("fairing_cancel").isVisible()
+    pump(watch)
+    timer.stop()
+    running = not find("fairing_preview").isEnabled()
+    grab_window(os.path.join(ARTIFACTS, "fair_surface_panel_preview_running.png"))
+    find("fairing_cancel").click()
+    pump(0.1)
+    gap = max((b - a for a, b in zip(ticks, ticks[1:])), default=float("inf"))
+    check("long preview: GUI live, busy bar and Cancel; Cancel stops it",
+          clicked < 0.2 and busy and running and len(ticks) >= 5 and gap < 0.25
+          and find("fairing_figures").text() == "Preview cancelled."
+          and find("fairing_preview").isEnabled() and not find("fairing_progress").isVisible(),
+          f"click returned in {clicked:.3f} s, busy {busy}, still running after {watch} s "
+          f"{running}, {len(ticks)} ticks, longest gap {gap:.3f} s, "
+          f"figures {find('fairing_figures').text()!r}")
 
 
 def check_real_models(doc):
@@ -206,7 +294,7 @@ def check_real_models(doc):
     Gui.Selection.addSelection(rods, "Face21")
     open_panel("Fairing_FairSurface")
     find("fairing_boundary").setCurrentText("edges")
-    find("fairing_preview").click()
+    click_preview()
     pump()
     error = find("fairing_error").text()
     made = len(doc.Objects)
@@ -229,7 +317,7 @@ def panel_ok(source, subs, what, settings, expected):
         Gui.Selection.addSelection(source, sub)
     open_panel("Fairing_FairSurface")
     settings()
-    find("fairing_preview").click()
+    click_preview()
     pump()
     figures, error = find("fairing_figures").text(), find("fairing_error").text()
     before = {o.Name for o in source.Document.Objects}
@@ -241,15 +329,31 @@ def panel_ok(source, subs, what, settings, expected):
           f"{figures!r} {error!r} {[(o.Name, getattr(o, 'Status', '')) for o in made]}")
 
 
+def check_installed_from(clone):
+    """With ``clone`` (the workbench cloned into Mod/ like the Addon Manager does), the
+    workbench and the core both come from that clone."""
+    if not clone:
+        return
+    import cq_fairing
+    import fairing_wb
+
+    clone = os.path.realpath(clone)
+    files = [os.path.realpath(m.__file__) for m in (fairing_wb, cq_fairing)]
+    check("workbench and core imported from the Addon-Manager clone",
+          files[0].startswith(os.path.join(clone, "freecad_workbench", ""))
+          and files[1].startswith(os.path.join(clone, "cq_fairing", "")), files)
+
+
 def run():
     import fixtures
 
     os.makedirs(ARTIFACTS, exist_ok=True)
+    check_installed_from(os.environ.get("FAIRING_ADDON"))
     mw = Gui.getMainWindow()
     mw.showMaximized()
-    for dock in mw.findChildren(QtWidgets.QDockWidget):
-        if dock.objectName() == "Combo View":
-            mw.resizeDocks([dock], [520], QtCore.Qt.Horizontal)
+    left = [dock for dock in mw.findChildren(QtWidgets.QDockWidget) if dock.isVisible()
+            and mw.dockWidgetArea(dock) == QtCore.Qt.LeftDockWidgetArea]  # Combo View (0.20),
+    mw.resizeDocks(left, [520] * len(left), QtCore.Qt.Horizontal)        # Model + Tasks (1.0)
     Gui.activateWorkbench("FairingWorkbench")
     pump()
     check("workbench activates", Gui.activeWorkbench().name() == "FairingWorkbench",
@@ -290,7 +394,7 @@ def run():
     # Error in plain words: a target bigger than the source.
     find("fairing_mode").setCurrentIndex(1)
     find("fairing_target_u").setValue(60)
-    find("fairing_preview").click()
+    click_preview()
     pump()
     error = find("fairing_error").text()
     check("error shown in the panel", "out of range" in error, error)
@@ -342,6 +446,7 @@ def run():
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(fairing)
     check("DeviationMap enabled with a fairing", is_active("Fairing_DeviationMap"))
+    source.ViewObject.Visibility = True  # shown, it would show through the map
     Gui.runCommand("Fairing_DeviationMap")
     pump()
     maps = [o for o in doc.Objects if o.TypeId == "Mesh::FeaturePython"]
@@ -359,10 +464,13 @@ def run():
     pump(0.5)
     Gui.activeDocument().activeView().saveImage(
         os.path.join(ARTIFACTS, "deviation_map.png"), 1200, 800, "White")
+    check("the map hides the source and the fairing it lies on",
+          not source.ViewObject.Visibility and not fairing.ViewObject.Visibility)
     grab_window(os.path.join(ARTIFACTS, "deviation_map_window.png"))
     Gui.runCommand("Fairing_DeviationMap")
     pump()
-    check("map toggles off with its legend", not dmap.ViewObject.Visibility and not legend.visible)
+    check("map toggles off with its legend, the fairing shows again",
+          not dmap.ViewObject.Visibility and not legend.visible and fairing.ViewObject.Visibility)
     Gui.runCommand("Fairing_DeviationMap")
     pump()
     check("map toggles on again", dmap.ViewObject.Visibility and legend.visible)
@@ -376,8 +484,11 @@ def run():
           and {m.Which for m in curv} == {"Faired", "Source"})
     check("curvature maps share one range",
           len(curv) == 2 and curv[0].RangeMin == curv[1].RangeMin and curv[0].RangeMax == curv[1].RangeMax)
+    check("the faired curvature map hides the deviation map drawn at its place",
+          not dmap.ViewObject.Visibility)
     for m in curv:
         m.ViewObject.Visibility = False
+    dmap.ViewObject.Visibility = True
 
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Face1")
@@ -395,6 +506,7 @@ def run():
     pump()
     check("levels OK creates a fairing", len([o for o in doc.Objects if o.Name.startswith("Fairing")]) == 2
           and doc.getObject("FairingLevelPreview") is None, [o.Name for o in doc.Objects])
+    check("the level preview hid the map drawn where it showed", not dmap.ViewObject.Visibility)
 
     # Fair Curve is enabled by an edge selection.
     Gui.Selection.clearSelection()
@@ -418,7 +530,23 @@ def run():
         check("DeviationMap disabled for an edge fairing", not is_active("Fairing_DeviationMap"))
         Gui.Selection.clearSelection()
 
+    from fairing_wb import deviation_map
+
+    dmap.ViewObject.Visibility = True
+    under = deviation_map.covered(dmap)
+    check("a shown map hides the source and every fairing of its face",
+          len(under) == 3 and not any(o.ViewObject.Visibility for o in under),
+          [(o.Name, o.ViewObject.Visibility) for o in under])
+    Gui.SendMsgToActiveView("ViewFit")
+    pump(0.5)
+    shot = os.path.join(ARTIFACTS, "deviation_map_over_fairings.png")
+    Gui.activeDocument().activeView().saveImage(shot, 1200, 800, "White")
+    share, drawn = grey_share(shot)
+    check("no grey face shows through the map (two fairings of its face exist)",
+          drawn > 1000 and share < 0.005, f"{100 * share:.2f} % grey of {drawn} drawn pixels")
     check_adaptive_panel(doc, source)
+    check("a new fairing of the face hides the map", not dmap.ViewObject.Visibility)
+    check_failed_command_aborts(doc)
     check_real_models(doc)
 
     # Points to surface on a grid file (the file dialog is the only part skipped).
