@@ -99,8 +99,7 @@ and ``reconstruct()`` returns the source plus the change of the coarse geometry.
 from .adaptive_curve import fair_curve_adaptive
 from .adaptive_knots import equidistributed_space, error_density
 from .adaptive_surface import fair_surface_adaptive
-from .options import BORDERS, OBJECTIVES
 from .polish import net_lengths, variation_energy_matrix
 
 __all__ = ["fair_curve_adaptive", "fair_surface_adaptive", "equidistributed_space",
-           "error_density", "net_lengths", "variation_energy_matrix", "BORDERS", "OBJECTIVES"]
+           "error_density", "net_lengths", "variation_energy_matrix"]

@@ -25,7 +25,7 @@ from .adaptive_surface import fair_surface_adaptive
 from .energy import fair_curve_energy, fair_surface_energy
 from .geometry import make_curve, make_surface, split_pair
 from .options import check_search_options, tolerance_method
-from .plans import direction_target, largest_resolved_scale, target_space
+from .plans import direction_target, target_space
 from .projection import project_curve, project_surface
 from .results import FairResult, SurfaceDetails, SurfaceFairResult
 
@@ -37,8 +37,7 @@ Strategy = Literal["guaranteed", "linear", "polyfit"]
 DeviationKind = Literal["geometric", "parametric"]
 IntPair = int | tuple[int, int]
 
-__all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult", "SurfaceDetails",
-           "largest_resolved_scale"]
+__all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult", "SurfaceDetails"]
 
 
 # -- public entry points -------------------------------------------------------------------

@@ -16,7 +16,7 @@ Curvatures follow from the fundamental forms: with :math:`E, F, G` and :math:`L,
 import numpy as np
 from scipy.spatial import cKDTree
 
-from cq_fairing.core.measures import closest_points_surface
+from cq_fairing.core.closest_points import closest_points_surface
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "curvature"]

@@ -20,8 +20,8 @@ import numpy as np
 import FreeCAD
 import Part
 import cq_fairing as cf
-from cq_fairing.core.adaptive import BORDERS  # "auto" first: the enumeration's default
-from cq_fairing.core.fairing import largest_resolved_scale
+from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
+from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
 
