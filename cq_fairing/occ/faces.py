@@ -342,7 +342,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
     if boundary == "fixed" and info.trimmed:
         notes.append("boundary='fixed' keeps the surface's border rows; this trimmed face's "
                      "edges lie inside the surface, so they may still move")
-    sampler = _Sampler(face_uv_grid(face, density, classify=info.trimmed), surface)
+    sampler = SurfaceSampler(face_uv_grid(face, density, classify=info.trimmed), surface)
     finish = _finisher(surface, info.unperiodized, boundary)
     scales = max_scales(surface, degree)
     if scales == (None, None) and n is None:
@@ -519,7 +519,7 @@ def _core_fair(source, target, degree):
                         weights=source.weights, target_degree=degree)
 
 
-class _Sampler:
+class SurfaceSampler:
     """Original points on a UV grid of the face (inside the trim), for the search.
 
     Collocation matrices are cached per spline space, so a candidate costs two small

@@ -38,7 +38,7 @@ from ..core.patch_layout import find_grids
 from ..errors import FairingError, ToleranceNotMetError
 from .convert import surface_to_face
 from .deviation import sample_face_deviation
-from .faces import FaceFairReport, _Sampler, collapsed_kept, target_degrees
+from .faces import FaceFairReport, SurfaceSampler, collapsed_kept, target_degrees
 from .search import search_scales
 
 __all__ = ["fair_grids", "GridFairing", "RETRIES", "SHRINK"]
@@ -179,7 +179,7 @@ def _fair_merged(merged, tol, target_degree):
     keep every kink of the source."""
     surface = merged.surface
     u, v = (_samples(breaks) for breaks in (merged.u_breaks, merged.v_breaks))
-    sampler = _Sampler((u, v, np.ones((u.size, v.size), dtype=bool)), surface)
+    sampler = SurfaceSampler((u, v, np.ones((u.size, v.size), dtype=bool)), surface)
     lines = [(merged.u_breaks, v), (u, merged.v_breaks)]
     on_lines = [surface.evaluate_grid(a, b) for a, b in lines]
 
