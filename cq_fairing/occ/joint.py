@@ -323,15 +323,20 @@ class JoinReport:
 
     def line(self):
         """The summary as one line, e.g. ``joins: 14 (12 held closed), max gap 2e-12;
-        12 smooth, max angle 0.01 deg (source 0); 2 creases``."""
+        12 smooth, max angle 0.01 deg (source 0); 2 creases``; edges of three or more
+        faces and faces that touch at a point only (never joined) are named after it."""
         s = self.summary()
-        if not s["joins"]:
-            return "joins: none"
-        return (f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}; "
-                f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
-                f"{s['source_max_smooth_angle']:.2g}); {s['creases']} creases"
-                + (f"; {len(s['grids'])} patch grids ({s['grid_faces']} faces) faired as one "
-                   "surface each" if s["grids"] else "")
-                + (f"; {s['network_faces']} faces at their coarsest faired together"
-                   if s["network_faces"] else "")
-                + (f"; {s['non_manifold']} non-manifold edges" if s["non_manifold"] else ""))
+        parts = [f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}",
+                 f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
+                 f"{s['source_max_smooth_angle']:.2g})", f"{s['creases']} creases"] \
+            if s["joins"] else ["joins: none"]
+        if s["grids"]:
+            parts.append(f"{len(s['grids'])} patch grids ({s['grid_faces']} faces) faired "
+                         "as one surface each")
+        if s["network_faces"]:
+            parts.append(f"{s['network_faces']} faces at their coarsest faired together")
+        if s["non_manifold"]:
+            parts.append(f"{s['non_manifold']} non-manifold edges (not joined)")
+        if s["point_contacts"]:
+            parts.append(f"{s['point_contacts']} point contacts (not joined)")
+        return "; ".join(parts)

@@ -75,3 +75,30 @@ def compound(*shapes):
     for shape in shapes:
         builder.Add(out, shape)
     return out
+
+
+def three_faces_on_one_edge():
+    """Three planar faces sharing one edge (0, 0, 0)-(1, 0, 0), at 0, 2 and 4 radians
+    around it: ``(faces, the shared edge)``."""
+    import math
+
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeEdge,
+        BRepBuilderAPI_MakeFace,
+        BRepBuilderAPI_MakeVertex,
+        BRepBuilderAPI_MakeWire,
+    )
+    from OCP.gp import gp_Pnt
+
+    v0, v1 = (BRepBuilderAPI_MakeVertex(gp_Pnt(x, 0, 0)).Vertex() for x in (0.0, 1.0))
+    spine = BRepBuilderAPI_MakeEdge(v0, v1).Edge()
+    faces = []
+    for angle in (0.0, 2.0, 4.0):
+        c, s = math.cos(angle), math.sin(angle)
+        w2, w3 = (BRepBuilderAPI_MakeVertex(p).Vertex() for p in (gp_Pnt(1, c, s), gp_Pnt(0, c, s)))
+        wire = BRepBuilderAPI_MakeWire()
+        for edge in (spine, BRepBuilderAPI_MakeEdge(v1, w2).Edge(),
+                     BRepBuilderAPI_MakeEdge(w2, w3).Edge(), BRepBuilderAPI_MakeEdge(w3, v0).Edge()):
+            wire.Add(edge)
+        faces.append(BRepBuilderAPI_MakeFace(wire.Wire(), True).Face())
+    return faces, spine

@@ -1,7 +1,6 @@
 """find_joins / measure_joins on real shells, a solid and loose IGES faces, checked against
 independent OCCT computations (ancestor maps, projections, BRepExtrema)."""
 
-import math
 
 import numpy as np
 import pytest
@@ -24,7 +23,7 @@ from cq_fairing.errors import InvalidInputError
 from cq_fairing.occ.adjacency import Join, find_joins, measure_joins
 from cq_fairing.occ.convert import indexed_faces, replace_surface
 from cq_fairing.occ.shapes import free_edge_count
-from tests.occ.helpers import compound, faces_of, global_distance
+from tests.occ.helpers import compound, faces_of, global_distance, three_faces_on_one_edge
 
 
 def edge_map(shape):
@@ -243,20 +242,7 @@ def test_squares_touching_at_a_corner_are_a_point_contact():
 
 
 def test_an_edge_of_three_faces_is_non_manifold():
-    v0, v1 = (BRepBuilderAPI_MakeVertex(gp_Pnt(x, 0, 0)).Vertex() for x in (0.0, 1.0))
-    spine = BRepBuilderAPI_MakeEdge(v0, v1).Edge()
-    faces = []
-    for angle in (0.0, 2.0, 4.0):
-        c, s = math.cos(angle), math.sin(angle)
-        p2, p3 = gp_Pnt(1, c, s), gp_Pnt(0, c, s)
-        wire = BRepBuilderAPI_MakeWire()
-        w2 = BRepBuilderAPI_MakeVertex(p2).Vertex()
-        w3 = BRepBuilderAPI_MakeVertex(p3).Vertex()
-        for edge in (spine, BRepBuilderAPI_MakeEdge(v1, w2).Edge(),
-                     BRepBuilderAPI_MakeEdge(w2, w3).Edge(),
-                     BRepBuilderAPI_MakeEdge(w3, v0).Edge()):
-            wire.Add(edge)
-        faces.append(BRepBuilderAPI_MakeFace(wire.Wire(), True).Face())
+    faces, spine = three_faces_on_one_edge()
     shape = compound(*faces)
     adjacency = find_joins(shape)
     emap = edge_map(shape)

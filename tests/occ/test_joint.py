@@ -72,3 +72,31 @@ def test_testtoler_opens_no_more_than_faired_alone(real):
 def test_bad_join_options_are_refused(fuselage, kwargs, match):
     with pytest.raises(InvalidInputError, match=match):
         fair_shape(fuselage, tol=2.5, **kwargs)
+
+
+def test_faces_touching_at_a_point_are_faired_alone_and_the_contact_is_reported():
+    """The diagonal patches of the noisy 2 x 2 example grid meet at one corner only."""
+    from cq_fairing.core.examples import patch_grid
+    from tests.occ.helpers import compound
+    from tests.occ.test_grids import _occ_face
+
+    patches = patch_grid().patches
+    shape = compound(_occ_face(patches[0]), _occ_face(patches[3]))
+    result = fair_shape(shape, tol=0.01)
+    summary = result.joins.summary()
+    assert summary["joins"] == 0 and summary["point_contacts"] == 1
+    assert result.joins.line() == "joins: none; 1 point contacts (not joined)"
+    assert result.n_faired == 2 and result.valid
+    assert all(r.max_deviation <= 0.01 for r in result.faces)
+
+
+def test_an_edge_of_three_faces_is_reported_and_its_faces_kept_whole():
+    """Three planes on one edge (a non-manifold join): nothing is joined, every face is
+    still there, and the summary names the edge."""
+    from tests.occ.helpers import compound, three_faces_on_one_edge
+
+    faces, _ = three_faces_on_one_edge()
+    result = fair_shape(compound(*faces), tol=0.01, convert=True)
+    assert len(result.faces) == 3 and result.valid
+    assert result.joins.summary()["non_manifold"] == 1
+    assert result.joins.line() == "joins: none; 1 non-manifold edges (not joined)"
