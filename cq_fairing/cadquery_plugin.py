@@ -11,6 +11,10 @@ Usage::
     one = part.faces(">Z").fair(n=(None, 12))    # selected faces, solid rebuilt
     lean = part.fair(tol=0.05, method="adaptive", objective="faithful", jobs=2)
 
+The options, their names, values and defaults are those of
+:mod:`cq_fairing.core.options`, checked there once (by :func:`cq_fairing.occ.fair_face`
+and :func:`cq_fairing.occ.fair_shape`); old spellings warn at the caller's line.
+
 Following CadQuery's plugin convention the method is a plain function attached to
 ``cq.Workplane``; it returns a new Workplane (``newObject``) and never changes the
 objects on the stack.  The numbers behind each result (deviation, poles before/after,
@@ -21,6 +25,7 @@ from collections import Counter
 
 import cadquery as cq
 
+from .core.options import renamed_value
 from .errors import InvalidInputError
 from .occ import fair_face as _fair_face
 from .occ import fair_shape as _fair_shape
@@ -44,6 +49,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact",
     """
     if not isinstance(face, cq.Face):
         raise InvalidInputError(f"face must be a cadquery Face, got {type(face).__name__}.")
+    _renamed_search(options, "cadquery_plugin.fair_face")
     report = _fair_face(face.wrapped, tol=tol, n=n, method=method, objective=objective,
                         **options)
     out = cq.Face(report.face) if report.faired else face
@@ -69,6 +75,13 @@ def fair_shape(shape, *, tol=None, n=None, method="wavelet", objective="compact"
                          face_timeout=face_timeout, **options)
     out = cq.Shape.cast(result.shape)
     return (out, result) if return_report else out
+
+
+def _renamed_search(options, function):
+    """Replace an old ``search`` value in ``options`` (in place), warning at the line that
+    called ``function``, the plugin's public function that called this."""
+    if "search" in options:
+        options["search"] = renamed_value(function, "search", options["search"], stacklevel=4)
 
 
 def _face_indices(shape, faces):
@@ -113,6 +126,7 @@ def fair(self, tol=None, n=None, method="wavelet", objective="compact", jobs=1,
     InvalidInputError
         An object on the stack holds no face, or bad options (see :func:`fair_shape`).
     """
+    _renamed_search(options, "Workplane.fair")
     objects = [o for o in self.objects if isinstance(o, cq.Shape)]
     if not objects:
         objects = [self.findSolid()]

@@ -67,6 +67,7 @@ from .cli_options import (
     Parser,
     add_fairing_options,
     check_method,
+    fairing_keywords,
     integer_at_least,
     positive_float,
     target_degree_option,
@@ -236,14 +237,9 @@ def command_fair(args):
                        target_degree)
     tol = None if args.target else (args.tol or default_tolerance(shape))
     progress = _Progress(args.progress or sys.stderr.isatty())
-    result = fair_shape(shape, tol=tol, n=n, faces=args.faces,
-                        method=args.method, objective=_objective(args),
-                        borders=_borders(args),
-                        progress=progress,
-                        boundary=args.boundary, target_degree=target_degree,
-                        details=False, jobs=args.jobs,
-                        face_timeout=args.face_timeout, in_place=True,
-                        joins=args.joins, angle_tol=args.angle_tol)
+    result = fair_shape(shape, tol=tol, n=n, faces=args.faces, progress=progress,
+                        details=False, jobs=args.jobs, face_timeout=args.face_timeout,
+                        in_place=True, **fairing_keywords(args))
     write_model(model, args.output, force=args.force, input_path=args.input)
     kept = model.contents() if WRITE_SUFFIXES[Path(args.output).suffix.lower()] == "step" else {}
     report = shape_report(result, tol, time.perf_counter() - started, kept=kept or None,
@@ -278,14 +274,6 @@ def _check_suffix(path, suffixes, option):
                               f"in {' or '.join(suffixes)}.")
     if path.suffix.lower() not in suffixes:
         raise OutputPathError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}.")
-
-
-def _objective(args):
-    return args.objective or "compact"
-
-
-def _borders(args):
-    return args.borders or "auto"
 
 
 def _target_scales(target, infos, target_degree=None):

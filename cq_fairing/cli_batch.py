@@ -69,6 +69,7 @@ def add_batch_command(sub):
 def command_batch(args):
     """Run ``cq-fairing batch``; returns the exit code."""
     from .cli_options import check_method, target_degree_option
+    from .core.options import DEFAULTS
     from .report import batch_summary, batch_table, write_batch_summary
 
     check_method(args)
@@ -84,7 +85,7 @@ def command_batch(args):
         tol=args.tol, rel_tol=None if args.tol else args.rel_tol, method=args.method,
         objective=args.objective, borders=args.borders, joins=args.joins,
         angle_tol=args.angle_tol, target_degree=target_degree_option(args.target_degree),
-        boundary=args.boundary, convert=args.convert)
+        boundary=args.boundary or DEFAULTS["boundary"], convert=args.convert)
     models = _models(args.inputs)
     folder = _output_dir(args.output_dir)
     summary_paths = folder / "summary.json", folder / "summary.html"

@@ -3,6 +3,7 @@ errors, argument types and the fairing options of ``fair`` and ``batch``."""
 
 import argparse
 
+from .core.options import APPLIES, BORDERS, BOUNDARIES, DEFAULTS, METHOD_DOES, METHODS, OBJECTIVES
 from .errors import InvalidInputError
 
 EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
@@ -47,16 +48,17 @@ def positive_float(text):
 
 def add_fairing_options(parser):
     """How the faces are faired: the options ``fair`` and ``batch`` share."""
-    parser.add_argument("--method", choices=("wavelet", "adaptive", "energy"), default="wavelet",
+    parser.add_argument("--method", choices=METHODS, default=DEFAULTS["method"],
                         help="wavelet: uniform targets (default); adaptive: targets whose "
-                             "knots follow the error, fewer poles (needs --tol or its "
-                             "default, not --target)")
-    parser.add_argument("--objective", choices=("compact", "faithful", "fair"),
+                             "knots follow the error, fewer poles; energy: keeps the "
+                             "poles, moves each within --tol (adaptive and energy need "
+                             "--tol or its default, not --target)")
+    parser.add_argument("--objective", choices=OBJECTIVES,
                         help="with --method adaptive: compact = fewest poles within --tol "
                              "(default), faithful = stop at the estimated noise level, "
                              "fair = the fairest of the fewest poles and up to two more "
                              "spans per direction (slower)")
-    parser.add_argument("--borders", choices=("auto", "free", "pinned"),
+    parser.add_argument("--borders", choices=BORDERS,
                         help="with --method adaptive: the target's border rows; auto = "
                              "pinned (corners kept) where that gives fewer poles (default), "
                              "free = plain projection (often faster), pinned = always")
@@ -69,24 +71,47 @@ def add_fairing_options(parser):
                              "crease (default 1 degree)")
     parser.add_argument("--target-degree", type=degree, nargs="+", metavar="P",
                         help="degree of the faired surfaces, one for both directions or "
-                             "P_U P_V (default: each face's own, at most 3)")
-    parser.add_argument("--boundary", choices=("free", "fixed"), default="free",
-                        help="keep the face borders fixed or let them move within --tol")
+                             "P_U P_V (default: each face's own, at most 3; not with "
+                             "--method energy, which keeps it)")
+    parser.add_argument("--boundary", choices=BOUNDARIES,
+                        help="free = the face borders may move within --tol (default); "
+                             "fixed = put the source's border rows of poles back (not with "
+                             "--method energy, which keeps them anyway)")
     parser.add_argument("--convert", action="store_true",
                         help="convert non-B-spline faces to B-splines and fair them too")
 
 
 def check_method(args):
-    """--objective and --borders need --method adaptive; adaptive chooses its own target
-    (no --target)."""
-    for option, value in (("--objective", args.objective), ("--borders", args.borders)):
-        if value is not None and args.method != "adaptive":
-            raise InvalidInputError(
-                f"{option} {value} applies to --method adaptive only, got --method "
-                f"{args.method}; add --method adaptive or drop {option}.")
-    if args.method == "adaptive" and args.target is not None:
-        raise InvalidInputError("--method adaptive chooses the target itself; give --tol "
-                                "instead of --target, or use --method wavelet.")
+    """Refuse the fairing options ``args.method`` does not use
+    (:data:`cq_fairing.core.options.APPLIES`: --objective and --borders need --method
+    adaptive, --target-degree and --boundary not energy) and --target with the methods
+    that choose their own net.  An option spelled out at its default is no request, as
+    in the API."""
+    for name in ("objective", "borders", "target_degree", "boundary"):
+        value, allowed = getattr(args, name), APPLIES[name]
+        if value in (None, DEFAULTS[name]) or args.method in allowed:
+            continue
+        option = "--" + name.replace("_", "-")
+        shown = " ".join(map(str, value)) if isinstance(value, list) else value
+        raise InvalidInputError(
+            f"{option} {shown} applies to --method {' or '.join(allowed)} only, got "
+            f"--method {args.method}, which {METHOD_DOES[args.method]}; add --method "
+            f"{allowed[-1]} or drop {option}.")
+    if args.method != "wavelet" and args.target is not None:
+        what = "keeps the control points" if args.method == "energy" else \
+            "chooses the target itself"
+        raise InvalidInputError(f"--method {args.method} {what}; give --tol instead of "
+                                "--target, or use --method wavelet.")
+
+
+def fairing_keywords(args):
+    """The fairing options of ``fair`` and ``batch`` as ``fair_shape``'s keywords, an
+    option not given at its default (:data:`cq_fairing.core.options.DEFAULTS`)."""
+    return dict(method=args.method, objective=args.objective or DEFAULTS["objective"],
+                borders=args.borders or DEFAULTS["borders"],
+                boundary=args.boundary or DEFAULTS["boundary"],
+                target_degree=target_degree_option(args.target_degree),
+                joins=args.joins, angle_tol=args.angle_tol)
 
 
 def target_degree_option(values):

@@ -69,6 +69,7 @@ from ..errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetEr
 from .decomposition import decomposition
 from .evaluation import sample_parameters, within_box
 from .geometry import BSplineCurve, BSplineSurface, fewest_spans
+from .options import SEARCHES, checked_choice, checked_order
 from .plans import largest_resolved_scale, resolved_plan
 from .probes import CurveProbe, SurfaceProbe
 from .projection import project_curve, project_surface
@@ -78,7 +79,7 @@ from .spaces import SplineSpace
 __all__ = ["fair_curve_to_tolerance", "fair_surface_to_tolerance", "ScaleError",
            "STRATEGIES", "SCAN_WINDOW", "check_tolerance", "dyadic_table"]
 
-STRATEGIES = ("guaranteed", "linear", "polyfit")
+STRATEGIES = SEARCHES  # the step rules of the search (``search`` of fair_curve/fair_surface)
 SCAN_WINDOW = 4
 """Consecutive failing scales below the answer that the guaranteed search measures."""
 STRICT_PER_SPAN = 16
@@ -133,13 +134,8 @@ def check_tolerance(tol):
 
 
 def _check_options(strategy, order):
-    if strategy not in STRATEGIES:
-        raise InvalidInputError(f"strategy must be one of {STRATEGIES}, got {strategy!r}.")
-    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 2 <= order <= 6:
-        raise InvalidInputError(
-            f"order (degree of the least-squares fit of strategy='polyfit') must be an "
-            f"integer from 2 to 6, got {order!r}."
-        )
+    checked_choice("strategy", strategy, STRATEGIES)
+    checked_order(order)
 
 
 def _check_degree(value, source_degree, name):

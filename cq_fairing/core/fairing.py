@@ -24,7 +24,16 @@ from .adaptive_curve import fair_curve_adaptive
 from .adaptive_surface import fair_surface_adaptive
 from .energy import fair_curve_energy, fair_surface_energy
 from .geometry import make_curve, make_surface, split_pair
-from .options import check_search_options, tolerance_method
+from .options import (
+    MEASURES,
+    SEARCHES,
+    check_applies,
+    check_order,
+    check_search_options,
+    checked_choice,
+    renamed_keywords,
+    tolerance_method,
+)
 from .plans import direction_target, target_space
 from .projection import project_curve, project_surface
 from .results import FairResult, SurfaceDetails, SurfaceFairResult
@@ -33,8 +42,8 @@ Method = Literal["wavelet", "adaptive", "energy"]
 Objective = Literal["compact", "faithful", "fair"]
 Borders = Literal["auto", "free", "pinned"]
 Schedule = Literal["auto", "direct", "hybrid"]
-Strategy = Literal["guaranteed", "linear", "polyfit"]
-DeviationKind = Literal["geometric", "parametric"]
+Search = Literal["guaranteed", "linear", "polyfit"]
+Measure = Literal["geometric", "parametric"]
 IntPair = int | tuple[int, int]
 
 __all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult", "SurfaceDetails"]
@@ -44,9 +53,9 @@ __all__ = ["fair_curve", "fair_surface", "FairResult", "SurfaceFairResult", "Sur
 def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = None,
                knots: ArrayLike | None = None, degree: int | None = None,
                weights: ArrayLike | None = None, target_degree: int | None = None,
-               schedule: Schedule = "auto", strategy: Strategy = "guaranteed", order: int = 6,
-               deviation: DeviationKind = "geometric", method: Method = "wavelet",
-               objective: Objective = "compact") -> FairResult:
+               schedule: Schedule = "auto", search: Search = "guaranteed", order: int = 6,
+               measure: Measure = "geometric", method: Method = "wavelet",
+               objective: Objective = "compact", **renamed: object) -> FairResult:
     r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
 
     The faired curve is the L2-best approximation of the source in the quasi-uniform
@@ -74,12 +83,23 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     weights : array_like, shape (k,), optional
         Positive weights of a rational source; fairing works on :math:`(w P, w)`.
     target_degree : int, optional
-        Degree of the faired curve; default ``min(degree, 3)``.
+        Degree of the faired curve; default ``min(degree, 3)``.  Refused with
+        ``method="energy"``, which keeps the degree.
     schedule : {"auto", "direct", "hybrid"}
-        Spaces visited, see :mod:`cq_fairing.core.schedule`.
-    strategy, order, deviation
-        Accuracy-control settings of the tolerance search (with ``tol``, see
-        :func:`~cq_fairing.core.accuracy.fair_curve_to_tolerance`); refused with ``n``.
+        Spaces visited, see :mod:`cq_fairing.core.schedule`; ``method="wavelet"`` only.
+    search : {"guaranteed", "linear", "polyfit"}
+        Step rule of the tolerance search (with ``tol``, see
+        :func:`~cq_fairing.core.accuracy.fair_curve_to_tolerance`).
+    order : int
+        Degree (2 .. 6) of the least-squares fit of ``search="polyfit"``; only with it.
+    measure : {"geometric", "parametric"}
+        The distance the tolerance search bounds: closest-point or same-parameter.
+        ``search``, ``order`` and ``measure`` belong to the tolerance search of
+        ``method="wavelet"``: refused with ``n`` and with the other methods.
+    **renamed
+        Old spellings, accepted for one release with a ``DeprecationWarning``:
+        ``strategy`` (now ``search``), ``deviation`` (now ``measure``); see
+        :mod:`cq_fairing.core.options`.
     method : {"wavelet", "adaptive", "energy"}
         ``"adaptive"``: the exact L2 projection onto a target whose knots follow the
         error (:mod:`cq_fairing.core.adaptive`), usually fewer poles than the
@@ -103,8 +123,10 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     Raises
     ------
     InvalidInputError
-        Bad poles, knots, weights or arguments; a tolerance-search option (``strategy``,
-        ``order``, ``deviation``) other than its default given with ``n`` instead of ``tol``.
+        Bad poles, knots, weights or arguments; an option the chosen method does not use
+        (:data:`~cq_fairing.core.options.APPLIES`), or a tolerance-search option
+        (``search``, ``order``, ``measure``) other than its default given with ``n``
+        instead of ``tol``.
     InvalidTargetError
         ``n`` out of range.
     InvalidToleranceError, ToleranceNotMetError
@@ -121,10 +143,15 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     >>> bool(np.allclose(result.reconstruct(), poles, atol=1e-10))
     True
     """
+    search, measure = _checked_search(
+        **renamed_keywords("fair_curve", renamed, method, search=search, measure=measure))
     curve = make_curve(poles, knots, degree, weights)
     method = tolerance_method(method, objective, n, tol)
-    check_search_options(n, tol, (("strategy", strategy, "guaranteed"), ("order", order, 6),
-                                  ("deviation", deviation, "geometric")))
+    check_applies(method, (("target_degree", target_degree), ("schedule", schedule),
+                           ("search", search), ("order", order), ("measure", measure)))
+    check_search_options(n, tol, (("search", search, "guaranteed"), ("order", order, 6),
+                                  ("measure", measure, "geometric")))
+    check_order(order, search)
     if method == "energy":
 
         if curve.degree < 2:
@@ -144,8 +171,8 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     if tol is not None:
 
         return fair_curve_to_tolerance(curve, tol, target_degree=target_degree,
-                                       schedule=schedule, strategy=strategy,
-                                       order=order, deviation=deviation)
+                                       schedule=schedule, strategy=search,
+                                       order=order, deviation=measure)
     return project_curve(curve, target_space(curve.space, n, target_degree), schedule)
 
 
@@ -153,11 +180,11 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
                  tol: float | None = None, u_knots: ArrayLike | None = None,
                  v_knots: ArrayLike | None = None, degree: IntPair | None = None,
                  weights: ArrayLike | None = None, target_degree: IntPair | None = None,
-                 schedule: Schedule = "auto", strategy: Strategy = "guaranteed",
-                 deviation: DeviationKind = "geometric", method: Method = "wavelet",
+                 schedule: Schedule = "auto", search: Search = "guaranteed",
+                 measure: Measure = "geometric", method: Method = "wavelet",
                  objective: Objective = "compact", borders: Borders = "auto",
-                 window: tuple[float, float, float, float] | None = None
-                 ) -> SurfaceFairResult:
+                 window: tuple[float, float, float, float] | None = None,
+                 **renamed: object) -> SurfaceFairResult:
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
 
     .. math:: C_n = A_u\, C\, A_v^T, \qquad
@@ -181,11 +208,13 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
         Source degrees, default 3.
     weights : array_like, shape (k_u, k_v), optional
     target_degree : int or (int, int), optional
-        Default ``min(source degree, 3)`` per direction.
+        Default ``min(source degree, 3)`` per direction; refused with ``method="energy"``.
     schedule : {"auto", "direct", "hybrid"}
-    strategy, deviation
-        Accuracy-control settings of the tolerance search (with ``tol``, see
-        :func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`); refused with ``n``.
+        ``method="wavelet"`` only.
+    search, measure
+        The tolerance search's step rule and distance, as for :func:`fair_curve` (see
+        :func:`~cq_fairing.core.accuracy.fair_surface_to_tolerance`); refused with ``n``
+        and with the other methods.
     method : {"wavelet", "adaptive", "energy"}
         ``"adaptive"``: exact projection onto u and v targets whose knots follow the
         error (:mod:`cq_fairing.core.adaptive`; polynomial surfaces).  ``"energy"``:
@@ -205,6 +234,8 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
         ``method="adaptive"`` the ``window`` of
         :func:`~cq_fairing.core.adaptive.fair_surface_adaptive`).  Refused with ``n`` and
         with ``method="energy"``.
+    **renamed
+        Old spellings ``strategy`` and ``deviation``, as for :func:`fair_curve`.
 
     Returns
     -------
@@ -213,14 +244,19 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
     Raises
     ------
     InvalidInputError
-        Bad poles, knots, weights or arguments; ``strategy``, ``deviation`` or ``window``
-        other than its default given with ``n`` instead of ``tol``.
+        Bad poles, knots, weights or arguments; an option the chosen method does not use;
+        ``search``, ``measure`` or ``window`` other than its default given with ``n``
+        instead of ``tol``.
     InvalidTargetError, InvalidToleranceError, ToleranceNotMetError
     """
+    search, measure = _checked_search(
+        **renamed_keywords("fair_surface", renamed, method, search=search, measure=measure))
     surface = make_surface(poles, u_knots, v_knots, degree, weights)
     method = tolerance_method(method, objective, n, tol, borders, window)
-    check_search_options(n, tol, (("strategy", strategy, "guaranteed"),
-                                  ("deviation", deviation, "geometric"), ("window", window, None)))
+    check_applies(method, (("target_degree", target_degree), ("schedule", schedule),
+                           ("search", search), ("measure", measure)))
+    check_search_options(n, tol, (("search", search, "guaranteed"),
+                                  ("measure", measure, "geometric"), ("window", window, None)))
     if method == "energy":
 
         return fair_surface_energy(surface, tol)
@@ -238,11 +274,16 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
     if tol is not None:
 
         return fair_surface_to_tolerance(surface, tol, target_degree=(tdu, tdv),
-                                         schedule=schedule, strategy=strategy,
-                                         deviation=deviation, window=window)
+                                         schedule=schedule, strategy=search,
+                                         deviation=measure, window=window)
     nu, nv = split_pair(n, "n")
     target_u = direction_target(surface.u_space, nu, tdu)
     target_v = direction_target(surface.v_space, nv, tdv)
     return project_surface(surface, target_u, target_v, schedule)
 
 
+
+
+def _checked_search(search, measure):
+    """``search`` and ``measure``, refused unless one of their values."""
+    return checked_choice("search", search, SEARCHES), checked_choice("measure", measure, MEASURES)

@@ -1,37 +1,286 @@
-"""The options of :func:`~cq_fairing.core.fairing.fair_curve` and
-:func:`~cq_fairing.core.fairing.fair_surface` that choose the method, validated once.
+r"""The fairing options: one name, one meaning, one set of values and one default each,
+validated once at the public boundary of every layer.
 
-An option that does not apply to the chosen method, or to an explicit target scale, is
-refused with a message that says which option to drop or what to add.
+:func:`~cq_fairing.core.fairing.fair_curve`, :func:`~cq_fairing.core.fairing.fair_surface`,
+:func:`cq_fairing.occ.fair_face`, :func:`cq_fairing.occ.fair_shape`, the ``cq-fairing``
+command line and the CadQuery plugin take their option names, values and checks from
+here.  An option that does not apply to the chosen method (or to an explicit target
+scale) is refused with a message naming what was given, why it does not apply and what
+to do; it is never ignored.
+
+The options
+-----------
+``method`` : {"wavelet", "adaptive", "energy"}, default "wavelet"
+    How the geometry is faired: the projection onto quasi-uniform targets, onto targets
+    whose knots follow the error, or Eck-Hadenfeld energy fairing that keeps the poles.
+``tol`` : positive length (model units)
+    Largest allowed deviation.  The occ layer's default is 1e-3 of the bounding-box
+    diagonal.  ``"adaptive"`` and ``"energy"`` need it.
+``n`` : int, or a pair of int or None
+    Target scale: knot **spans** per direction (``poles = n + target_degree``), the
+    index of the space :math:`V_n`.  ``"wavelet"`` only, instead of ``tol``.  The command
+    line's ``--target NU NV`` gives **poles** and is converted to ``n``.
+``target_degree`` : int >= 1, or a pair, default ``min(3, source degree)``
+    Degree of the faired geometry.  ``"wavelet"`` and ``"adaptive"`` (``"energy"`` keeps
+    the degree).
+``objective`` : {"compact", "faithful", "fair"}, default "compact"
+    What an adaptive fit spends ``tol`` on.  ``"adaptive"`` only.
+``borders`` : {"auto", "free", "pinned"}, default "auto"
+    The border rows of the adaptive **target** while it is fitted: ``"pinned"`` keeps the
+    corners and projects each edge on its own, ``"free"`` is the plain projection,
+    ``"auto"`` pins where that gives fewer poles.  ``"adaptive"`` surfaces only.
+``boundary`` : {"free", "fixed"}, default "free"
+    Occ faces only: ``"fixed"`` puts the **source's** border rows back into the faired
+    net after the fit, so the natural boundary curves do not move.  ``"wavelet"`` and
+    ``"adaptive"`` (``"energy"`` keeps the border ring of the net anyway).
+``search`` : {"guaranteed", "linear", "polyfit"}, occ also "local"
+    How the uniform tolerance search (``"wavelet"`` with ``tol``) finds the target scale:
+    the core's step rules (:mod:`cq_fairing.core.accuracy`), or, for an occ face,
+    ``"local"``: bisection on the face's own samples inside its trim
+    (:mod:`cq_fairing.occ.search`).  Default ``"guaranteed"`` in the core, ``"local"``
+    for occ faces.
+``order`` : int 2 .. 6, default 6
+    Degree of the least-squares fit of ``search="polyfit"``; only with it.
+``measure`` : {"geometric", "parametric"}, default "geometric"
+    The distance the core's tolerance search bounds: closest-point or same-parameter.
+    ``"wavelet"`` with ``tol`` in the core.
+``schedule`` : {"auto", "direct", "hybrid"}, default "auto"
+    Spaces the core's projection visits (:mod:`cq_fairing.core.schedule`).  ``"wavelet"``.
+``window`` : (u0, u1, v0, v1), default the whole domain
+    Parameter box the deviation is measured in (a trimmed face's UV box); core surfaces,
+    ``tol`` with ``"wavelet"`` or ``"adaptive"``.
+
+Choice of names
+---------------
+``search`` is the tolerance search in every layer (the workbench's property of that name
+has the same values; the core called it ``strategy``, the occ layer's ``"core"`` is the
+core's default rule ``"guaranteed"``).  ``measure`` names which distance is measured
+(the core called it ``deviation``, which names the measured value everywhere else:
+``max_deviation``, ``FaceFairReport.deviation``).  ``borders`` and ``boundary`` are two
+options, not two spellings: ``borders`` shapes the adaptive target during the fit,
+``boundary`` restores the source's rows after any fit.  Old spellings
+(:data:`RENAMED`, :data:`RENAMED_VALUES`) keep working for one release with a
+:class:`DeprecationWarning` naming the new one.
 """
+
+import warnings
 
 import numpy as np
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, InvalidToleranceError
 
-__all__ = ["METHODS", "OBJECTIVES", "BORDERS", "tolerance_method", "check_search_options",
-           "checked_objective", "check_borders", "checked_target_degree"]
+__all__ = ["METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "FACE_SEARCHES",
+           "MEASURES", "SCHEDULES", "DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED",
+           "RENAMED_VALUES", "tolerance_method", "check_applies", "check_search_options", "checked_choice",
+           "checked_objective", "check_borders", "checked_target_degree", "checked_order",
+           "check_order",
+           "renamed_keywords", "renamed_value", "check_face_options"]
 
-
+#: How the geometry is faired (``"wavelet"`` first: the default).
 METHODS = ("wavelet", "adaptive", "energy")
+#: What an adaptive fit spends the tolerance on.
+OBJECTIVES = ("compact", "faithful", "fair")
+#: Border rows of an adaptive surface target (``"auto"`` first: the default).
+BORDERS = ("auto", "free", "pinned")
+#: The source's border rows of an occ face after the fit.
+BOUNDARIES = ("free", "fixed")
+#: Step rules of the core's uniform tolerance search.
+SEARCHES = ("guaranteed", "linear", "polyfit")
+#: Tolerance searches of an occ face: its own samples, or the core's with a step rule.
+FACE_SEARCHES = ("local",) + SEARCHES
+#: The distance the core's tolerance search bounds.
+MEASURES = ("geometric", "parametric")
+#: Spaces visited by the core's projection.
+SCHEDULES = ("auto", "direct", "hybrid")
+
+#: Default of each option (``search`` of an occ face: ``"local"``).
+DEFAULTS = {"method": "wavelet", "objective": "compact", "borders": "auto",
+            "boundary": "free", "search": "guaranteed", "order": 6, "measure": "geometric",
+            "schedule": "auto", "window": None, "target_degree": None}
+
+_FACE_DEFAULTS = {**DEFAULTS, "search": "local"}
+
+#: The methods each method-specific option applies to.
+APPLIES = {"objective": ("adaptive",), "borders": ("adaptive",),
+           "target_degree": ("wavelet", "adaptive"), "boundary": ("wavelet", "adaptive"),
+           "window": ("wavelet", "adaptive"), "search": ("wavelet",),
+           "order": ("wavelet",), "measure": ("wavelet",), "schedule": ("wavelet",)}
+
+#: What each method does that makes the other methods' options meaningless for it.
+METHOD_DOES = {"wavelet": "projects onto quasi-uniform targets",
+               "adaptive": "chooses its knots itself and checks the true distance",
+               "energy": "keeps the control points, the degree and the border ring and "
+                         "moves each pole within tol"}
+
+#: Old keyword -> canonical keyword (accepted for one release, with a warning).
+RENAMED = {"strategy": "search", "deviation": "measure"}
+#: (keyword, old value) -> canonical value (accepted for one release, with a warning).
+RENAMED_VALUES = {("search", "core"): "guaranteed"}
+
+
+# -- names ---------------------------------------------------------------------------------
+def renamed_keywords(function, old, method, **current):
+    """The canonical options of a call, with the old spellings in ``old`` folded in.
+
+    An old spelling keeps its old behaviour for one release: given with a ``method`` that
+    does not use the option (:data:`APPLIES`), it is ignored, as it was, and its warning
+    says so (the canonical spelling is refused there).
+
+    Parameters
+    ----------
+    function : str
+        The public function's name, for the messages.
+    old : dict
+        The call's keywords beyond its signature (its ``**old``).
+    method : str
+        The call's method.
+    **current
+        The canonical options of the call as given (or defaulted).
+
+    Returns
+    -------
+    dict
+        ``current``, with each old spelling's value under its canonical name (unless
+        ignored).
+
+    Raises
+    ------
+    TypeError
+        A keyword that is neither an option nor an old spelling (as Python says it).
+    InvalidInputError
+        An old spelling given together with its canonical name.
+
+    Warns
+    -----
+    DeprecationWarning
+        Per old spelling used, naming the new one; it points at the public function's
+        caller.
+    """
+    out = dict(current)
+    for name, value in old.items():
+        new = RENAMED.get(name)
+        if new not in current:
+            raise TypeError(f"{function}() got an unexpected keyword argument {name!r}")
+        if _differs(current[new], DEFAULTS[new]):
+            raise InvalidInputError(
+                f"{name} is the old spelling of {new}; got {name}={value!r} and "
+                f"{new}={current[new]!r}: give {new} only.")
+        applies = method in APPLIES[new]
+        effect = "" if applies else (
+            f"; with method={method!r} it has no effect ({new} is refused there): drop it")
+        warnings.warn(f"{function}(): '{name}' is deprecated, use '{new}' (same values); "
+                      f"'{name}' goes in the next release{effect}.", DeprecationWarning,
+                      stacklevel=3)
+        if applies:
+            out[new] = value
+    return out
+
+
+def renamed_value(function, name, value, stacklevel=3):
+    """``value`` of option ``name``, an old value (:data:`RENAMED_VALUES`) replaced by
+    the new one with a :class:`DeprecationWarning` pointing at the public function's
+    caller (``stacklevel`` frames up: 3 when the public function calls this directly)."""
+    new = RENAMED_VALUES.get((name, value)) if isinstance(value, str) else None
+    if new is None:
+        return value
+    warnings.warn(f"{function}(): {name}={value!r} is deprecated, use {name}={new!r} "
+                  "(the same search); the old value goes in the next release.",
+                  DeprecationWarning, stacklevel=stacklevel)
+    return new
+
+
+# -- values --------------------------------------------------------------------------------
+def checked_choice(name, value, choices):
+    """``value``, refused unless one of ``choices``."""
+    if not isinstance(value, str) or value not in choices:
+        raise InvalidInputError(f"{name} must be one of {choices}, got {value!r}.")
+    return value
+
+
+def checked_objective(value):
+    """The adaptive ``objective``, refused unless one of :data:`OBJECTIVES`."""
+    if value not in OBJECTIVES:
+        raise InvalidInputError(
+            f"objective must be one of {OBJECTIVES}, got {value!r}: 'compact' for the fewest "
+            "poles within tol, 'faithful' to stop where the residual reaches the noise, "
+            "'fair' for the fairest of the compact net and a few slightly larger ones.")
+    return value
+
+
+def check_borders(value):
+    """Refuse a ``borders`` value of the adaptive surface fit that is not one of :data:`BORDERS`."""
+    checked_choice("borders", value, BORDERS)
+
+
+def checked_order(order):
+    """``order``, refused unless an integer 2 .. 6."""
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 2 <= order <= 6:
+        raise InvalidInputError(
+            f"order (degree of the least-squares fit of search='polyfit') must be an "
+            f"integer from 2 to 6, got {order!r}.")
+    return order
+
+
+def check_order(order, search):
+    """``order`` is an integer 2 .. 6 and, when not the default, comes with ``search="polyfit"``."""
+    if checked_order(order) != DEFAULTS["order"] and search != "polyfit":
+        raise InvalidInputError(
+            f"order is the degree of the least-squares fit of search='polyfit', got "
+            f"order={order!r} with search={search!r}; add search='polyfit' or drop order.")
+
+
+def checked_target_degree(value, source_degree):
+    """The target degree of an adaptive fit: ``value``, or ``min(3, source_degree)`` if None."""
+    if value is None:
+        return min(3, source_degree)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InvalidInputError(f"target_degree must be an integer >= 1, got {value!r}.")
+    return int(value)
+
+
+def _checked_tol(tol):
+    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(tol) or tol <= 0:
+        raise InvalidToleranceError(
+            f"tol must be a positive finite length in model units, got {tol!r}.")
+
+
+# -- which option goes with which method ---------------------------------------------------
+def check_applies(method, options, defaults=DEFAULTS):
+    """Refuse the method-specific options (:data:`APPLIES`) that ``method`` does not use.
+
+    Parameters
+    ----------
+    method : str
+        One of :data:`METHODS`.
+    options : iterable of (str, object)
+        ``(name, value)`` of each method-specific option of the call; a value equal to
+        the option's default is no request and passes.
+    defaults : dict
+        The defaults of the calling layer (:data:`DEFAULTS`, an occ face's ``search``:
+        ``"local"``).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the option and its value, what ``method`` does instead, and what to do.
+    """
+    for name, value in options:
+        allowed = APPLIES[name]
+        if method in allowed or not _differs(value, defaults[name]):
+            continue
+        methods = " or ".join(repr(m) for m in allowed)
+        raise InvalidInputError(
+            f"{name}={value!r} applies to method={methods} only, got method={method!r}, "
+            f"which {METHOD_DOES[method]}; add method={allowed[-1]!r} or drop {name}.")
 
 
 def tolerance_method(method, objective, n, tol, borders="auto", window=None):
-    """Validate ``method`` (and ``objective``, ``borders``, which belong to the adaptive
-    method, and ``window``, which belongs to the tolerance searches); the tolerance-only
-    methods need ``tol``, no ``n``."""
-    if method not in METHODS:
-        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
-    for name, value, default in (("objective", objective, "compact"), ("borders", borders, "auto")):
-        if method != "adaptive" and value != default:
-            raise InvalidInputError(
-                f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
-                f"add method='adaptive' or drop {name}.")
-    if method == "energy" and window is not None:
-        raise InvalidInputError(
-            f"window applies to the tolerance searches of method='wavelet' and 'adaptive', "
-            f"got window={window!r} with method='energy', which moves every pole within "
-            "tol; drop window or use another method.")
+    """Validate ``method`` with the options the core's two entry points share:
+    ``objective`` and ``borders`` belong to the adaptive method, ``window`` to the
+    tolerance searches; the tolerance-only methods need ``tol``, no ``n``."""
+    checked_choice("method", method, METHODS)
+    check_applies(method, (("objective", objective), ("borders", borders), ("window", window)))
     if method != "wavelet" and (n is not None or tol is None):
         what = ("keeps the control points" if method == "energy"
                 else "chooses the target itself")
@@ -73,6 +322,41 @@ def check_search_options(n, tol, options):
         "instead of n.")
 
 
+def check_face_options(tol, n, method, boundary, objective="compact", borders="auto",
+                       search="local", target_degree=None):
+    """Validate the options of an occ face (:func:`cq_fairing.occ.fair_face`, and
+    :func:`cq_fairing.occ.fair_shape` for each of its faces) once.
+
+    ``tol`` and ``n`` exclude each other (both ``None``: the default tolerance); the
+    values are checked against :data:`METHODS`, :data:`OBJECTIVES`, :data:`BORDERS`,
+    :data:`BOUNDARIES` and :data:`FACE_SEARCHES`; ``objective``, ``borders``,
+    ``boundary``, ``target_degree`` and ``search`` (an occ face's default: ``"local"``)
+    are refused with a method that does not use them (:func:`check_applies`);
+    ``"adaptive"`` and ``"energy"`` refuse ``n``; ``search`` is refused with ``n``
+    (:func:`check_search_options`).
+    """
+    if tol is not None and n is not None:
+        raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
+    if tol is not None:
+        _checked_tol(tol)
+    checked_choice("method", method, METHODS)
+    checked_objective(objective)
+    for name, value, choices in (("borders", borders, BORDERS),
+                                 ("boundary", boundary, BOUNDARIES),
+                                 ("search", search, FACE_SEARCHES)):
+        checked_choice(name, value, choices)
+    check_applies(method, (("objective", objective), ("borders", borders),
+                           ("boundary", boundary), ("target_degree", target_degree),
+                           ("search", search)), _FACE_DEFAULTS)
+    if method != "wavelet" and n is not None:
+        what = ("chooses the target itself" if method == "adaptive"
+                else "keeps the control points")
+        raise InvalidInputError(
+            f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
+            "Give tol, or use method='wavelet' for explicit scales.")
+    check_search_options(n, tol, (("search", search, "local"),))
+
+
 def _listed(words):
     """``"a"``, ``"a and b"``, ``"a, b and c"``."""
     return " and ".join(filter(None, (", ".join(words[:-1]), words[-1])))
@@ -83,34 +367,3 @@ def _differs(value, default):
     if default is None:
         return value is not None
     return not (np.ndim(value) == 0 and value == default)
-
-
-#: Border rows of an adaptive surface target (``"auto"`` first: the default).
-BORDERS = ("auto", "free", "pinned")
-#: What an adaptive fit spends the tolerance on.
-OBJECTIVES = ("compact", "faithful", "fair")
-
-
-def checked_objective(value):
-    """The adaptive ``objective``, refused unless one of :data:`OBJECTIVES`."""
-    if value not in OBJECTIVES:
-        raise InvalidInputError(
-            f"objective must be one of {OBJECTIVES}, got {value!r}: 'compact' for the fewest "
-            "poles within tol, 'faithful' to stop where the residual reaches the noise, "
-            "'fair' for the fairest of the compact net and a few slightly larger ones.")
-    return value
-
-
-def check_borders(value):
-    """Refuse a ``borders`` value of the adaptive surface fit that is not one of :data:`BORDERS`."""
-    if value not in BORDERS:
-        raise InvalidInputError(f"borders must be one of {BORDERS}, got {value!r}.")
-
-
-def checked_target_degree(value, source_degree):
-    """The target degree of an adaptive fit: ``value``, or ``min(3, source_degree)`` if None."""
-    if value is None:
-        return min(3, source_degree)
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InvalidInputError(f"target_degree must be an integer >= 1, got {value!r}.")
-    return int(value)

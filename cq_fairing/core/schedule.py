@@ -26,11 +26,10 @@ r"""Which spaces a fairing passes through: ladder (default), direct ARWFA, seed 
 import numpy as np
 
 from ..errors import InvalidInputError
+from .options import SCHEDULES
 from .spaces import SplineSpace
 
 __all__ = ["SCHEDULES", "plan_spaces"]
-
-SCHEDULES = ("auto", "direct", "hybrid")
 
 
 def plan_spaces(source, target, schedule="auto"):

@@ -21,7 +21,8 @@ Special cases handled, not refused:
   and last rows are tied to their mean afterwards, so the surface stays closed (G0 at
   the seam; tangent continuity across the seam is not enforced);
 * **trimmed** faces keep their wires and UV pcurves (same parameter domain);
-* ``boundary="fixed"`` keeps the border rows of the source net: the faired surface is
+* ``boundary="fixed"`` keeps the border rows of the source net (``"wavelet"`` and
+  ``"adaptive"``; the energy method keeps them by itself): the faired surface is
   projected back into the source spaces (L2, exact when the spaces are nested) and its
   border rows are replaced by the source's, so the natural boundary curves do not
   move (the result has as many poles as the source: fairer, not lighter).
@@ -40,13 +41,12 @@ from OCP.TopoDS import TopoDS, TopoDS_Face
 from ..core.adaptive_surface import fair_surface_adaptive
 from ..core.fairing import fair_surface
 from ..core.geometry import COINCIDENT, BSplineSurface, closed_axes, extent
-from ..core.options import BORDERS, check_search_options
+from ..core.options import check_face_options, renamed_value
 from ..core.plans import target_space
 from ..core.results import SurfaceFairResult
 from ..core.spaces import SplineSpace
 from ..errors import (
     InvalidInputError,
-    InvalidToleranceError,
     NumericalError,
     ToleranceNotMetError,
     UnsupportedGeometryError,
@@ -60,15 +60,8 @@ from .trims import face_region
 if TYPE_CHECKING:
     import cadquery
 
-__all__ = ["fair_face", "FaceFairReport", "METHODS", "BOUNDARIES", "default_tolerance",
-           "check_options", "collapsed_kept"]
+__all__ = ["fair_face", "FaceFairReport", "default_tolerance", "collapsed_kept"]
 
-METHODS = ("wavelet", "adaptive", "energy")
-# methods that choose their own net and so need tol, never n
-TOLERANCE_ONLY = ("adaptive", "energy")
-OBJECTIVES = ("compact", "faithful", "fair")
-BOUNDARIES = ("free", "fixed")
-SEARCHES = ("local", "core")
 MARGIN = 0.9
 STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-rational",
             "skipped-not-selected", "tolerance-not-met", "failed")
@@ -138,47 +131,6 @@ def default_tolerance(shape):
     return 1e-3 * float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
 
 
-def check_options(tol, n, method, boundary, objective="compact", borders="auto",
-                  search="local"):
-    """Validate the shared options of :func:`fair_face` and ``fair_shape`` once.
-
-    ``method="adaptive"`` chooses its targets itself and ``method="energy"`` keeps the
-    net: both need ``tol`` (or the default tolerance, ``n`` and ``tol`` both ``None``)
-    and refuse ``n``; ``objective`` and ``borders`` apply to the adaptive method only;
-    ``search`` belongs to the tolerance search and is refused with ``n`` (as the core's
-    search options are, :func:`~cq_fairing.core.options.check_search_options`).
-    """
-    if tol is not None and n is not None:
-        raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
-    if tol is not None:
-        if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating, np.integer)) \
-                or not np.isfinite(tol) or tol <= 0:
-            raise InvalidToleranceError(
-                f"tol must be a positive finite length in model units, got {tol!r}."
-            )
-    if method not in METHODS:
-        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
-    for name, value, choices, default in (("objective", objective, OBJECTIVES, "compact"),
-                                          ("borders", borders, BORDERS, "auto")):
-        if value not in choices:
-            raise InvalidInputError(f"{name} must be one of {choices}, got {value!r}.")
-        if method != "adaptive" and value != default:
-            raise InvalidInputError(
-                f"{name}={value!r} applies to method='adaptive' only, got method={method!r}; "
-                f"add method='adaptive' or drop {name}.")
-    if method in TOLERANCE_ONLY and n is not None:
-        what = ("chooses the target itself" if method == "adaptive"
-                else "keeps the control points")
-        raise InvalidInputError(
-            f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
-            "Give tol, or use method='wavelet' for explicit scales.")
-    if boundary not in BOUNDARIES:
-        raise InvalidInputError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}.")
-    if search not in SEARCHES:
-        raise InvalidInputError(f"search must be one of {SEARCHES}, got {search!r}.")
-    check_search_options(n, tol, (("search", search, "local"),))
-
-
 def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
               n: tuple[int | None, int | None] | None = None,
               method: Literal["wavelet", "adaptive", "energy"] = "wavelet",
@@ -186,7 +138,7 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
               convert: bool = False, boundary: Literal["free", "fixed"] = "free",
               target_degree: int | tuple[int, int] | None = None,
               density: int | tuple[int, int] | None = None, details: bool = True,
-              search: Literal["local", "core"] = "local",
+              search: Literal["local", "guaranteed", "linear", "polyfit"] = "local",
               borders: Literal["auto", "free", "pinned"] = "auto") -> FaceFairReport:
     r"""Fair one face and put the result under the face's own trim.
 
@@ -209,7 +161,9 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         energy fairing that keeps the net, each pole within ``tol`` of its place
         (``cq_fairing.fair_surface(method="energy")``), so the same-parameter distance,
         and with it the true distance, stays within ``tol``.  ``"adaptive"`` and
-        ``"energy"`` need ``tol`` (or the default), refuse ``n`` and ignore ``search``.
+        ``"energy"`` need ``tol`` (or the default) and refuse ``n`` and ``search``;
+        ``"energy"`` also refuses ``target_degree`` and ``boundary="fixed"``.  The
+        options' names, values and defaults: :mod:`cq_fairing.core.options`.
         ``"wavelet"`` and ``"adaptive"`` fair rational faces in homogeneous coordinates
         (``"adaptive"`` without its polish); ``"energy"`` fairs polynomial faces only
         (rational ones: ``'skipped-rational'``).
@@ -224,23 +178,29 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         Convert a non-B-spline face to NURBS (``BRepBuilderAPI_NurbsConvert``, exact)
         instead of skipping it.
     boundary : {"free", "fixed"}
-        ``"fixed"`` keeps the source's border rows of poles (see module notes).
+        ``"fixed"`` puts the source's border rows of poles back after the fit (see module
+        notes); refused with ``method="energy"``, which keeps the border ring anyway.
     target_degree : int or (int, int), optional
-        Default ``min(3, source degree)`` per direction.
+        Default ``min(3, source degree)`` per direction; refused with
+        ``method="energy"``, which keeps the degree.
     density : int or (int, int), optional
         UV samples per direction for the deviation check; default
         ``clip(2 k + 1, 20, 400)`` for ``k`` poles in that direction.
     details : bool, optional
-        Compute the wavelet details (``report.result``) with the core; ``False`` skips
-        them (``result`` is then ``None``) and is faster on large nets.
-    search : {"local", "core"}
-        How the target is found with ``tol``.  ``"local"``: bisection on the face's own
-        samples (inside the trim) with the distance to the faired tangent planes
-        (:mod:`cq_fairing.occ.search`); ``"core"``: ``cq_fairing.fair_surface(tol=...)``
-        (the core's accuracy control, measured on the whole parameter domain).  Either
-        way OCCT's projection checks the result; if it fails, the local search runs
-        again with the parametric distance, an upper bound of the true distance.
-        Refused with ``n`` (no search runs).
+        Compute the wavelet details (``report.result``) with the core after the local
+        search, which does not; ``False`` skips that step (``result`` is then ``None``)
+        and is faster on large nets.  The core's searches and the adaptive and energy
+        methods return their core result, details included, at no extra cost.
+    search : {"local", "guaranteed", "linear", "polyfit"}
+        How the ``method="wavelet"`` target is found with ``tol``.  ``"local"``:
+        bisection on the face's own samples (inside the trim) with the distance to the
+        faired tangent planes (:mod:`cq_fairing.occ.search`); the others:
+        ``cq_fairing.fair_surface(tol=..., search=...)``, the core's accuracy control
+        with that step rule, measured in the face's UV box.  Either way OCCT's
+        projection checks the result; if it fails, the local search runs again with the
+        parametric distance, an upper bound of the true distance.  Refused with ``n``
+        (no search runs) and with the other methods.  ``"core"`` is the old spelling of
+        ``"guaranteed"`` (a ``DeprecationWarning``, for one release).
     borders : {"auto", "free", "pinned"}
         ``method="adaptive"`` only: the border rows of the core's target
         (:func:`cq_fairing.core.adaptive.fair_surface_adaptive`).  ``"auto"`` pins them
@@ -256,13 +216,15 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
     Raises
     ------
     InvalidInputError, InvalidToleranceError, InvalidTargetError
-        Bad arguments (also ``search="core"`` with ``n``).
+        Bad arguments, or an option the chosen method or ``n`` does not use
+        (:func:`cq_fairing.core.options.check_face_options`).
     ToleranceNotMetError
         No target keeps the face within ``tol`` (checked with OCCT's projection).
     """
     start = time.perf_counter()
     face = as_face(face)
-    check_options(tol, n, method, boundary, objective, borders, search)
+    search = renamed_value("fair_face", "search", search)
+    check_face_options(tol, n, method, boundary, objective, borders, search, target_degree)
     info = face_info(face)
     if not info.is_bspline:
         if not convert:
@@ -305,6 +267,13 @@ class AdaptiveTarget(NamedTuple):
     borders: str
 
 
+class CoreSearch(NamedTuple):
+    """Criterion of an attempt that runs the core's uniform tolerance search with
+    ``rule`` (one of :data:`~cq_fairing.core.options.SEARCHES`)."""
+
+    rule: str
+
+
 def _criteria(tol, search, method, objective, borders):
     """The ``(criterion, goal)`` attempts of :func:`_fair_verified`, in order.
 
@@ -312,7 +281,8 @@ def _criteria(tol, search, method, objective, borders):
     (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``;
     ``method="energy"`` likewise with the criterion ``"energy"``.
     Otherwise the requested search (``"local"`` with the normal-distance estimate, then
-    the core's ``fair_surface(tol=...)``; ``"core"``: the core's alone), then the local
+    the core's ``fair_surface(tol=...)``; a core step rule: the core's search with it
+    alone, a :class:`CoreSearch`), then the local
     search with the parametric distance, an upper bound of the true distance; they aim
     at ``MARGIN * tol`` (room for excursions between samples), the last one at ``tol``.
     The normal distance looks from the original's samples only; where the faired face
@@ -323,10 +293,10 @@ def _criteria(tol, search, method, objective, borders):
     """
     if tol is None:
         return [(None, None)]
-    if method in TOLERANCE_ONLY:
+    if method != "wavelet":
         target = AdaptiveTarget(objective, borders) if method == "adaptive" else "energy"
         return [(target, tol), (target, MARGIN * tol)]
-    first = ["core"] if search == "core" else ["normal", "core"]
+    first = ["normal", CoreSearch("guaranteed")] if search == "local" else [CoreSearch(search)]
     return [(criterion, MARGIN * tol) for criterion in first + ["parametric"]] + \
         [("parametric", tol)]
 
@@ -349,7 +319,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
         return _unchanged(face, info, surface, "the net is already at its coarsest "
                           "(degree + 1 poles per direction); nothing to fair", tol)
     if None in scales:  # the core's uniform search coarsens both directions or none
-        criteria = [c for c in criteria if c[0] != "core"]
+        criteria = [c for c in criteria if not isinstance(c[0], CoreSearch)]
     try:
         return _fair_verified(face, info, surface, surface, tol, n, degree, sampler, finish,
                               details, criteria, notes)
@@ -467,8 +437,8 @@ def _choose(source, tol, n, degree, sampler, finish, criterion, region=None, win
     For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
     pair of non-uniform spaces the core chose, measured only on the face (``region``,
     :func:`~cq_fairing.occ.trims.face_region` of a trimmed face, and its UV box
-    ``window``, whose bounds are sample lines); the core's uniform search (``"core"``)
-    measures in ``window``; energy fairing (``criterion`` ``"energy"``) keeps the
+    ``window``, whose bounds are sample lines); the core's uniform search
+    (a :class:`CoreSearch`) measures in ``window``; energy fairing (``criterion`` ``"energy"``) keeps the
     source's spaces and has no target (``None``).
     """
     if criterion == "energy":
@@ -484,11 +454,12 @@ def _choose(source, tol, n, degree, sampler, finish, criterion, region=None, win
                                        window=window)
         spaces = (result.surface.u_space, result.surface.v_space)
         return spaces, finish(result.surface), result
-    if criterion == "core":
+    if isinstance(criterion, CoreSearch):
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,
                               degree=(source.u_degree, source.v_degree),
-                              weights=source.weights, target_degree=degree, window=window)
+                              weights=source.weights, target_degree=degree,
+                              search=criterion.rule, window=window)
         return result.n, finish(result.surface), result
     if n is not None:
         pair = (n, n) if np.ndim(n) == 0 else tuple(n)

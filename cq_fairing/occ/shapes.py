@@ -43,6 +43,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
+from ..core.options import check_face_options
 from ..errors import InvalidInputError
 from .adjacency import find_joins, measure_joins
 from .congruence import compose, congruence_classes, inverse
@@ -57,7 +58,7 @@ from .convert import (
 )
 from .engine import ProcessFaces
 from .face_tasks import fair_one_face, kept_face_report
-from .faces import FaceFairReport, check_options, default_tolerance
+from .faces import FaceFairReport, default_tolerance
 from .joint import JOINS, JoinReport, fair_joined
 
 __all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
@@ -168,7 +169,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         each move by up to ``tol``, so a gap can reach ``2 tol``: the faces next to a
         larger gap are faired again with half their tolerance (up to three times), and
         a face still next to a too-large gap gets its original surface back (status
-        ``'unchanged'``, the message says why).  Not applied with explicit ``n``.
+        ``'unchanged'``, the message says why).  Refused with explicit ``n``.
     jobs : int, optional
         Faces faired at once, each in its own worker process
         (:class:`~cq_fairing.occ.engine.ProcessFaces`); the result is the same as with
@@ -195,7 +196,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         smooth, else a crease (default 1).
     engine : object, optional
         Where the faces are fitted instead (each face alone: the first pass and the
-        fits again that close gaps; ``jobs`` and ``face_timeout`` then do not apply;
+        fits again that close gaps; ``jobs`` and ``face_timeout`` are then refused;
         faces solved together along their joins stay here): an object with ``run(tasks, done)`` and ``close()`` as
         :class:`~cq_fairing.occ.engine.ProcessFaces`, e.g.
         :class:`cq_fairing.batch.DaskFaces` for a Dask cluster.  Faces cross to it as
@@ -223,7 +224,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     """
     start = time.perf_counter()
     shape = as_shape(shape)
-    check_options(tol, n, method, boundary, objective, borders)
+    check_face_options(tol, n, method, boundary, objective, borders,
+                       target_degree=target_degree)
     _check_joins(joins, angle_tol)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
@@ -234,15 +236,9 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
             "Model.converted()) and fair that in place.")
     if tol is None and n is None:
         tol = default_tolerance(shape)
-    if max_gap is not None:
-        check_options(max_gap, None, method, boundary, objective, borders)
-    max_gap = tol if max_gap is None else float(max_gap)
+    max_gap = _checked_max_gap(max_gap, tol, n)
     _check_workers(jobs, face_timeout)
-    if engine is not None and not all(callable(getattr(engine, name, None))
-                                      for name in ("run", "close")):
-        raise InvalidInputError(
-            f"engine must have run(tasks, done) and close(), as "
-            f"cq_fairing.occ.engine.ProcessFaces has, got {engine!r}; or pass engine=None.")
+    _check_engine(engine, jobs, face_timeout)
     free_before = free_edge_count(shape)
     source = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if convert else shape
     originals = indexed_faces(source)
@@ -286,6 +282,36 @@ def _check_joins(joins, angle_tol):
         raise InvalidInputError(
             f"angle_tol must be an angle in degrees between 0 and 90, got {angle_tol!r}; "
             "e.g. angle_tol=1.0.")
+
+
+def _checked_max_gap(max_gap, tol, n):
+    """``max_gap`` (default ``tol``); refused with explicit ``n``, where no face is faired
+    again to close a gap."""
+    if max_gap is None:
+        return tol
+    if n is not None:
+        raise InvalidInputError(
+            f"max_gap applies to faces faired with a tolerance (they are faired again with "
+            f"half of it to close a gap), got max_gap={max_gap!r} with n={n!r}; drop "
+            "max_gap or give tol instead of n.")
+    check_face_options(max_gap, None, "wavelet", "free")
+    return float(max_gap)
+
+
+def _check_engine(engine, jobs, face_timeout):
+    """``engine`` has ``run`` and ``close``, and comes without ``jobs`` and
+    ``face_timeout``, which configure the worker processes an engine replaces."""
+    if engine is None:
+        return
+    if not all(callable(getattr(engine, name, None)) for name in ("run", "close")):
+        raise InvalidInputError(
+            f"engine must have run(tasks, done) and close(), as "
+            f"cq_fairing.occ.engine.ProcessFaces has, got {engine!r}; or pass engine=None.")
+    if jobs != 1 or face_timeout is not None:
+        raise InvalidInputError(
+            f"jobs and face_timeout configure the worker processes that engine replaces, "
+            f"got jobs={jobs!r}, face_timeout={face_timeout!r} with engine={engine!r}; "
+            "drop them or pass engine=None.")
 
 
 def _check_workers(jobs, face_timeout):

@@ -119,3 +119,33 @@ def test_an_empty_or_folder_output_name_is_named_as_such(tmp_path, command):
     proc = run(*command, "-o", "o.step", cwd=tmp_path)
     assert proc.returncode == 4
     assert "--output 'o.step' is a folder; give a file name" in proc.stderr
+
+
+
+REFUSED_WITH_ENERGY = [
+    (["--method", "energy", "--target-degree", "2"],
+     "--target-degree 2 applies to --method wavelet or adaptive only, got --method energy, "
+     "which keeps the control points, the degree"),
+    (["--method", "energy", "--target-degree", "3", "2"], "--target-degree 3 2 applies to"),
+    (["--method", "energy", "--boundary", "fixed"],
+     "--boundary fixed applies to --method wavelet or adaptive only"),
+    (["--method", "energy", "--objective", "fair"], "--objective fair applies to --method "
+                                                    "adaptive only, got --method energy"),
+]
+
+
+@pytest.mark.parametrize("command, args, words", [
+    *[("fair", args, words) for args, words in REFUSED_WITH_ENERGY],
+    *[("batch", args, words) for args, words in REFUSED_WITH_ENERGY],
+    ("fair", ["--method", "energy", "--target", "6", "6"],
+     "--method energy keeps the control points; give --tol instead of --target"),
+])
+def test_an_option_the_method_does_not_use_is_a_one_line_usage_error(box, tmp_path, command,
+                                                                      args, words):
+    """Checked before the model is read (or Dask started): exit 2, the option, why, and
+    what to do, on one line."""
+    output = ["-o", "o.step"] if command == "fair" else ["-o", "out"]
+    proc = run(command, box, *output, *args, cwd=tmp_path)
+    assert_one_line_error(proc, 2, tmp_path, words)
+    assert proc.stderr.rstrip().endswith(".")
+    assert not (tmp_path / "out").exists()

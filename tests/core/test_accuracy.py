@@ -49,12 +49,12 @@ def test_invalid_tolerance(bad):
 
 def test_bad_options():
     poles = noisy_poles(20, 0.01, 0)
-    with pytest.raises(cf.InvalidInputError, match="strategy"):
-        cf.fair_curve(poles, tol=0.1, strategy="magic")
+    with pytest.raises(cf.InvalidInputError, match="search"):
+        cf.fair_curve(poles, tol=0.1, search="magic")
     with pytest.raises(cf.InvalidInputError, match="order"):
-        cf.fair_curve(poles, tol=0.1, strategy="polyfit", order=9)
-    with pytest.raises(cf.InvalidInputError, match="deviation"):
-        cf.fair_curve(poles, tol=0.1, deviation="hausdorff")
+        cf.fair_curve(poles, tol=0.1, search="polyfit", order=9)
+    with pytest.raises(cf.InvalidInputError, match="measure"):
+        cf.fair_curve(poles, tol=0.1, measure="hausdorff")
 
 
 def _refusal(call):
@@ -66,11 +66,11 @@ def _refusal(call):
 
 
 @pytest.mark.parametrize("options, names", [
-    (dict(strategy="linear"), "strategy applies"),
+    (dict(search="linear"), "search applies"),
     (dict(order=4), "order applies"),
-    (dict(deviation="parametric"), "deviation applies"),
-    (dict(strategy="polyfit", order=3, deviation="parametric"),
-     "strategy, order and deviation apply"),
+    (dict(measure="parametric"), "measure applies"),
+    (dict(search="polyfit", order=3, measure="parametric"),
+     "search, order and measure apply"),
 ])
 def test_curve_search_options_are_refused_with_an_explicit_scale(options, names):
     """They were ignored silently with n: the caller believed they did something."""
@@ -82,10 +82,10 @@ def test_curve_search_options_are_refused_with_an_explicit_scale(options, names)
 
 
 @pytest.mark.parametrize("options, names", [
-    (dict(strategy="linear"), "strategy applies"),
-    (dict(deviation="parametric"), "deviation applies"),
+    (dict(search="linear"), "search applies"),
+    (dict(measure="parametric"), "measure applies"),
     (dict(window=(0.0, 0.7, 0.0, 1.0)), "window applies"),
-    (dict(strategy="polyfit", window=(0.0, 0.7, 0.0, 1.0)), "strategy and window apply"),
+    (dict(search="polyfit", window=(0.0, 0.7, 0.0, 1.0)), "search and window apply"),
 ])
 def test_surface_search_options_are_refused_with_an_explicit_scale(options, names):
     message = _refusal(lambda: cf.fair_surface(_wavy_edge_net(), (5, None), **options))
@@ -97,9 +97,9 @@ def test_surface_search_options_are_refused_with_an_explicit_scale(options, name
 
 def test_search_options_at_their_defaults_still_work_with_an_explicit_scale():
     poles, net = noisy_poles(20, 0.01, 0), _wavy_edge_net()
-    curve = cf.fair_curve(poles, 8, strategy="guaranteed", order=6, deviation="geometric")
+    curve = cf.fair_curve(poles, 8, search="guaranteed", order=6, measure="geometric")
     np.testing.assert_array_equal(curve.poles, cf.fair_curve(poles, 8).poles)
-    surface = cf.fair_surface(net, (5, 7), strategy="guaranteed", deviation="geometric",
+    surface = cf.fair_surface(net, (5, 7), search="guaranteed", measure="geometric",
                               window=None)
     np.testing.assert_array_equal(surface.poles, cf.fair_surface(net, (5, 7)).poles)
     assert surface.poles.shape == (8, 10, 3)
@@ -108,8 +108,10 @@ def test_search_options_at_their_defaults_still_work_with_an_explicit_scale():
 def test_a_window_with_another_method_names_the_method_it_belongs_to():
     message = _refusal(lambda: cf.fair_surface(_wavy_edge_net(), tol=3e-3, method="energy",
                                                window=(0.0, 0.7, 0.0, 1.0)))
-    assert "method='wavelet' and 'adaptive'" in message and "method='energy'" in message
-    assert message.endswith("drop window or use another method.")
+    assert message.startswith("window=(0.0, 0.7, 0.0, 1.0) applies to method='wavelet' or "
+                              "'adaptive' only, got method='energy', which keeps the control "
+                              "points")
+    assert message.endswith("add method='adaptive' or drop window.")
 
 
 def test_tolerance_not_met():
@@ -205,7 +207,7 @@ def test_seed_table1_shape(seed):
 
 def test_seed_table2_linear_iterations(seed):
     result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
-                           strategy="linear", schedule="hybrid")
+                           search="linear", schedule="hybrid")
     dyadic = [r for r in result.table if r.n in (1024, 512, 256, 128, 64)]
     iterations = [r for r in result.table if r.n not in (1024, 512, 256, 128, 64, 1299)]
     assert len(dyadic) == 5 and 2 <= len(iterations) <= 4
@@ -225,7 +227,7 @@ def test_seed_table3_polyfit_orders(seed):
     assert abs(scales[-1] - objective) <= 0.05 * objective
     assert scales[0] > objective
     result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
-                           strategy="polyfit", schedule="hybrid")
+                           search="polyfit", schedule="hybrid")
     assert result.max_deviation <= 0.02 and result.n >= objective
 
 
@@ -253,16 +255,16 @@ def _wavy_edge_net():
     return np.stack([u, v, z], axis=2) + 1e-4 * rng.normal(size=(30, 30, 3))
 
 
-@pytest.mark.parametrize("strategy", ["guaranteed", "linear"])
-def test_window_measures_the_tolerance_inside_a_parameter_box(strategy):
+@pytest.mark.parametrize("search", ["guaranteed", "linear"])
+def test_window_measures_the_tolerance_inside_a_parameter_box(search):
     """A trimmed face uses part of its surface: measured only in the box u <= 0.7 that
     leaves the ripple out, the search keeps fewer poles, and the fit is within tol there
     by the same-parameter distance on a 400 x 400 grid of the box (an upper bound of
     the true one, independent of the probes), while over the whole domain it is not."""
     net = _wavy_edge_net()
     source = cf.make_surface(net)
-    whole = cf.fair_surface(net, tol=3e-3, strategy=strategy)
-    part = cf.fair_surface(net, tol=3e-3, strategy=strategy, window=(0.0, 0.7, 0.0, 1.0))
+    whole = cf.fair_surface(net, tol=3e-3, search=search)
+    part = cf.fair_surface(net, tol=3e-3, search=search, window=(0.0, 0.7, 0.0, 1.0))
     assert np.prod(part.surface.shape) < np.prod(whole.surface.shape)
     u, v = np.linspace(0.0, 0.7, 400), np.linspace(0.0, 1.0, 400)
     same = np.linalg.norm(source.evaluate_grid(u, v) - part.surface.evaluate_grid(u, v), axis=2)
@@ -275,7 +277,7 @@ def test_window_must_be_a_box_in_the_domain_for_the_wavelet_tolerance_search():
     for window in ((0.0, 1.5, 0.0, 1.0), (0.5, 0.2, 0.0, 1.0), (0.0, 1.0), "box"):
         with pytest.raises(cf.InvalidInputError, match="window"):
             cf.fair_surface(net, tol=3e-3, window=window)
-    with pytest.raises(cf.InvalidInputError, match="window applies"):
+    with pytest.raises(cf.InvalidInputError, match="applies to method=.wavelet. or .adaptive. only"):
         cf.fair_surface(net, tol=3e-3, method="energy", window=(0.0, 0.7, 0.0, 1.0))
     with pytest.raises(cf.InvalidInputError, match="window applies"):
         cf.fair_surface(net, (5, 5), window=(0.0, 0.7, 0.0, 1.0))

@@ -1,6 +1,7 @@
 """The CadQuery plugin on real models: Workplane.fair, fair_face, fair_shape."""
 
 import cadquery as cq
+import numpy as np
 import pytest
 
 from cq_fairing.cadquery_plugin import fair_face, fair_shape, register
@@ -136,3 +137,34 @@ def test_workplane_fair_refuses_a_stack_mixing_faces_and_edges_whole(linkrods):
     assert edges > 1
     assert f"holds {edges} Edge objects with no face (and 18 objects with faces: a mixed " \
            "stack is refused whole);" in str(info.value)
+
+
+def _noisy_face():
+    from tests.reliability.test_occ_inputs import bspline_surface, face_of
+
+    return cq.Face(face_of(bspline_surface(16, 14, wiggle=0.01, seed=0)))
+
+
+def test_the_old_search_value_warns_at_the_plugin_callers_line():
+    """``search="core"`` through the plugin: the warning points here, not into the
+    plugin (Python shows a DeprecationWarning by default only where it is attributed to
+    the caller's code), and the result is the new spelling's."""
+    register()
+    face = _noisy_face()
+    _, new = fair_face(face, tol=0.01, search="guaranteed", return_report=True)
+    with pytest.warns(DeprecationWarning) as caught:
+        _, old = fair_face(face, tol=0.01, search="core", return_report=True)
+    with pytest.warns(DeprecationWarning) as caught_wp:
+        wp = cq.Workplane().add(face).fair(tol=0.01, search="core")
+    for record in (*caught, *caught_wp):
+        assert record.filename == __file__ and "use search='guaranteed'" in str(record.message)
+    assert len(caught) == len(caught_wp) == 1
+    assert new.status == "faired" and np.prod(new.poles_after) < np.prod(new.poles_before)
+    for report in (old, wp.fair_report[0]):
+        np.testing.assert_array_equal(report.surface.poles, new.surface.poles)
+
+
+def test_an_option_the_method_does_not_use_is_refused_through_the_plugin():
+    register()
+    with pytest.raises(InvalidInputError, match="target_degree=2 applies to method="):
+        cq.Workplane().add(_noisy_face()).fair(tol=0.01, method="energy", target_degree=2)

@@ -240,11 +240,11 @@ def test_the_search_option_is_refused_with_an_explicit_scale(real):
 
     face = faces_of(real("IEA_15MW_CFD.stp"))[1]
     with pytest.raises(InvalidInputError) as info:
-        fair_face(face, n=(None, 12), search="core", details=False)
+        fair_face(face, n=(None, 12), search="guaranteed", details=False)
     assert type(info.value) is InvalidInputError
     message = str(info.value)
     assert message.startswith("search applies to the tolerance search (tol=...)")
-    assert "search='core' with n=(None, 12);" in message
+    assert "search='guaranteed' with n=(None, 12);" in message
     assert message.endswith("drop search or give tol instead of n.")
     report = fair_face(face, n=(None, 12), search="local", details=False)
     assert report.status == "faired" and report.poles_after == (17, 15)

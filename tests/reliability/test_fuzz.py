@@ -320,11 +320,11 @@ def test_unresolved_target_is_refused_up_front():
 def test_accuracy_search_skips_unresolved_targets():
     """With ``tol`` the search treats unresolved ``n`` as inadmissible (never returned)."""
     poles = np.c_[np.cos(np.linspace(0, 3, 19)), np.sin(np.linspace(0, 3, 19))]
-    for strategy in ("guaranteed", "linear", "polyfit"):
+    for search in ("guaranteed", "linear", "polyfit"):
         with pytest.raises(cf.ToleranceNotMetError, match=r"largest admissible target \(n=14\)"):
-            cf.fair_curve(poles, tol=1e-3, knots=CLUSTERED_KNOTS, degree=4, strategy=strategy)
+            cf.fair_curve(poles, tol=1e-3, knots=CLUSTERED_KNOTS, degree=4, search=search)
         result = cf.fair_curve(poles, tol=0.5, knots=CLUSTERED_KNOTS, degree=4,
-                               strategy=strategy)
+                               search=search)
         assert result.n <= 14 and result.max_deviation <= 0.5
 
 

@@ -1,0 +1,127 @@
+"""One vocabulary: the options of fair_curve / fair_surface, their old spellings, and the
+refusal of an option the chosen method does not use."""
+
+import inspect
+import warnings
+
+import numpy as np
+import pytest
+
+import cq_fairing as cf
+from cq_fairing.core import options
+from tests.core.test_accuracy import noisy_poles
+
+
+def _net():
+    """A 12 x 10 bicubic net with a ripple (the tolerance search has work to do)."""
+    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 10), indexing="ij")
+    ripple = 0.01 * np.sin(17 * u) * np.cos(13 * v)
+    return np.stack([u, v, 0.2 * u * v + ripple], axis=-1)
+
+
+CURVE = noisy_poles(40, 0.01, 3)
+
+
+def _fair(kind, **options):
+    call = cf.fair_curve if kind == "curve" else cf.fair_surface
+    return call(CURVE if kind == "curve" else _net(), tol=0.02, **options)
+
+
+def _silent(call):
+    """``call()`` with every warning an error: the canonical spellings warn of nothing."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return call()
+
+
+@pytest.mark.parametrize("kind", ["curve", "surface"])
+@pytest.mark.parametrize("old, new, value", [("strategy", "search", "linear"),
+                                             ("deviation", "measure", "parametric")])
+def test_an_old_spelling_warns_and_gives_the_new_spellings_result(kind, old, new, value):
+    expected = _silent(lambda: _fair(kind, **{new: value}))
+    default = _fair(kind)
+    with pytest.warns(DeprecationWarning) as caught:
+        result = _fair(kind, **{old: value})
+    warning, = caught
+    assert f"'{old}' is deprecated, use '{new}'" in str(warning.message)
+    assert warning.filename == __file__          # it points at the caller
+    np.testing.assert_array_equal(result.poles, expected.poles)
+    assert result.n == expected.n and result.max_deviation == expected.max_deviation
+    # the option does something here, so the equality above compares real choices
+    if value == "linear":
+        assert [r.n for r in result.table] != [r.n for r in default.table]
+
+
+def test_the_old_value_of_an_option_and_its_new_name_together_are_refused():
+    with pytest.raises(cf.InvalidInputError, match="strategy is the old spelling of search"):
+        cf.fair_curve(CURVE, tol=0.02, strategy="linear", search="polyfit")
+
+
+def test_an_unknown_keyword_is_a_type_error_as_python_says_it():
+    with pytest.raises(TypeError, match="fair_surface\\(\\) got an unexpected keyword "
+                                        "argument 'stratgy'"):
+        cf.fair_surface(_net(), tol=0.02, stratgy="linear")
+
+
+def test_an_old_spelling_with_a_method_that_does_not_use_it_keeps_its_old_effect():
+    """Ignored for one release, as before, and the warning says so; the new spelling is
+    refused there."""
+    plain = cf.fair_curve(CURVE, tol=0.02, method="adaptive")
+    with pytest.warns(DeprecationWarning, match="with method='adaptive' it has no effect"):
+        old = cf.fair_curve(CURVE, tol=0.02, method="adaptive", strategy="linear")
+    np.testing.assert_array_equal(old.poles, plain.poles)
+    with pytest.raises(cf.InvalidInputError, match="search='linear' applies to "
+                                                   "method='wavelet' only"):
+        cf.fair_curve(CURVE, tol=0.02, method="adaptive", search="linear")
+
+
+@pytest.mark.parametrize("method, option, value", [
+    ("adaptive", "search", "linear"), ("energy", "search", "polyfit"),
+    ("adaptive", "measure", "parametric"), ("energy", "measure", "parametric"),
+    ("adaptive", "schedule", "direct"), ("energy", "schedule", "hybrid"),
+    ("adaptive", "order", 3), ("energy", "target_degree", 2),
+])
+def test_an_option_the_method_does_not_use_is_refused(method, option, value):
+    """These were ignored silently: the caller believed they did something."""
+    kinds = ("curve",) if option == "order" else ("curve", "surface")  # a surface: no order
+    for kind in kinds:
+        with pytest.raises(cf.InvalidInputError) as info:
+            _fair(kind, method=method, **{option: value})
+        message = str(info.value)
+        assert message.startswith(f"{option}={value!r} applies to method=")
+        assert f"got method={method!r}, which " in message
+        assert message.endswith(f"or drop {option}.")
+
+
+def test_fair_surface_has_no_order():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'order'"):
+        cf.fair_surface(_net(), tol=0.02, order=3)
+
+
+def test_order_needs_the_polyfit_search():
+    with pytest.raises(cf.InvalidInputError, match="order=3 with search='guaranteed'; add "
+                                                   "search='polyfit' or drop order"):
+        cf.fair_curve(CURVE, tol=0.02, order=3)
+    result = _silent(lambda: cf.fair_curve(CURVE, tol=0.02, search="polyfit", order=3))
+    assert result.max_deviation <= 0.02
+
+
+def test_options_at_their_defaults_pass_with_every_method():
+    """A default value is no request: spelling it out is never refused."""
+    for method in options.METHODS:
+        kwargs = dict(search="guaranteed", measure="geometric", schedule="auto",
+                      target_degree=None)
+        result = _silent(lambda: cf.fair_curve(CURVE, tol=0.02, method=method, **kwargs))
+        assert result.max_deviation <= 0.02
+
+
+@pytest.mark.parametrize("function", [cf.fair_curve, cf.fair_surface])
+def test_the_signatures_take_their_defaults_from_the_options_module(function):
+    parameters = inspect.signature(function).parameters
+    shared = [name for name in options.DEFAULTS if name in parameters]
+    assert {"method", "objective", "search", "measure", "schedule"} <= set(shared)
+    for name in shared:
+        assert parameters[name].default == options.DEFAULTS[name], name
+    assert not set(options.RENAMED) & set(parameters)     # old spellings only through **renamed
+    for name in options.APPLIES:
+        assert name in options.DEFAULTS
