@@ -105,17 +105,21 @@ def fair_joined(job, adjacency, joins):
 
 def _project_jointly(job, adjacency, readable, border, joins):
     """The joint projection of the faces faired alone, the others kept; the joins it
-    held."""
-    faces = sorted({s.face for j in border for s in j.sides})
+    held.  Faces that carry one and the same surface (a surface split into faces by its
+    trims) are one patch: their surface is faired once, for all of them, so the joins
+    between them stay where the source has them, exactly."""
+    group = _shared_surfaces(job, readable, border)
+    faces = sorted({group[s.face] for j in border for s in j.sides})
     kept = {i for i in faces if not _fairable(job.reports[i], readable[i])}
     if not faces or len(kept) == len(faces):
         return []
+    members = {face: [m for m in group if group[m] == face] for face in faces}
     refined = dict.fromkeys(faces, 0)
     while True:
-        result, imposed = _solve(job, readable, faces, kept, refined, border, joins)
-        checked = _checked(job, readable, faces, kept, result)
-        over = [i for i, (_, _, deviation) in checked.items()
-                if deviation["max"] > job.tol[i]]
+        result, imposed = _solve(job, readable, faces, kept, refined, border, joins, group)
+        checked = _checked(job, readable, faces, kept, result, members)
+        over = sorted({group[i] for i, (_, _, deviation) in checked.items()
+                       if deviation["max"] > job.tol[i]})
         turned = [i for i in _turned(result, readable, faces, kept)
                   if refined[i] < REFINEMENTS and i not in over]
         if not over and not turned:
@@ -127,10 +131,38 @@ def _project_jointly(job, adjacency, readable, border, joins):
                 refined[index] += 1
             else:
                 kept.add(index)
-                _keep(job, index, checked[index][2]["max"], adjacency.joins_of(index))
+                for member in members[index]:
+                    worst = max(checked[m][2]["max"] for m in members[index])
+                    _keep(job, member, worst, adjacency.joins_of(member))
     for index, (face, surface, deviation) in checked.items():
         _install(job.reports[index], face, surface, deviation)
-    return imposed
+    inside = [j for j in adjacency.joins if j.faces[0] != j.faces[1]
+              and group.get(j.faces[0], -1) == group.get(j.faces[1], -2)
+              and group[j.faces[0]] not in kept]
+    return imposed + inside
+
+
+def _shared_surfaces(job, readable, border):
+    """``{face: representative}`` over the faces of ``border``: faces whose surfaces are
+    identical (poles, knots, degrees) share the representative with the finest target
+    (most poles) of those faired alone; every other face represents itself.  A group
+    whose faces would bring the same side of the surface into two joins is not formed."""
+    faces = sorted({s.face for j in border for s in j.sides})
+    by_surface = {}
+    for face in faces:
+        surface = readable[face]
+        key = (surface.u_degree, surface.v_degree, surface.u_knots.tobytes(),
+               surface.v_knots.tobytes(), surface.poles.tobytes())
+        by_surface.setdefault(key, []).append(face)
+    out = {face: face for face in faces}
+    for same in by_surface.values():
+        sides = [s.side for j in border for s in j.sides if s.face in same]
+        if len(same) < 2 or len(sides) != len(set(sides)):
+            continue
+        fairable = [f for f in same if _fairable(job.reports[f], readable[f])] or same
+        rep = max(fairable, key=lambda f: np.prod(job.reports[f].poles_after or (0, 0)))
+        out.update(dict.fromkeys(same, rep))
+    return out
 
 
 def _tolerance(job, join):
@@ -199,14 +231,14 @@ def _halved(space):
     return SplineSpace(p, np.concatenate([np.full(p + 1, b[0]), inner, np.full(p + 1, b[-1])]))
 
 
-def _solve(job, readable, faces, kept, refined, border, joins):
-    """The core's joint projection of ``faces`` (``kept`` fixed) and the adjacency joins
-    it imposed."""
+def _solve(job, readable, faces, kept, refined, border, joins, group):
+    """The core's joint projection of ``faces`` (``kept`` fixed; a face stands for every
+    face of ``group`` it represents) and the adjacency joins it imposed."""
     position = {face: k for k, face in enumerate(faces)}
     patches = [JointPatch(readable[i], None if i in kept else
                           _targets(job.reports[i], refined[i])) for i in faces]
-    core_joins = {BorderJoin(position[a.face], a.side, position[b.face], b.side,
-                             _reversed(join), join.kind == "smooth"): join
+    core_joins = {BorderJoin(position[group[a.face]], a.side, position[group[b.face]],
+                             b.side, _reversed(join), join.kind == "smooth"): join
                   for join in border for a, b in [join.sides]}
     result = fair_patches(patches, list(core_joins),
                           continuity="G1" if joins == "smooth" else "G0")
@@ -229,7 +261,7 @@ def _reversed(join):
     return ((a.along[1] > a.along[0]) != (b.along[1] > b.along[0])) != join.opposed
 
 
-def _checked(job, readable, faces, kept, result):
+def _checked(job, readable, faces, kept, result, members):
     """``{face: (new face, surface, deviation)}`` of every solved face, measured both
     ways by OCCT against its original.  A border row collapsed in the source (the nose of
     a fuselage, where several faces meet at one point) is put back onto its point, which
@@ -239,8 +271,10 @@ def _checked(job, readable, faces, kept, result):
     for k, index in enumerate(faces):
         if index not in kept:
             surface = collapsed_kept(readable[index], result.surfaces[k])
-            face = surface_to_face(surface, job.originals[index])
-            out[index] = (face, surface, sample_face_deviation(job.originals[index], face))
+            for member in members[index]:
+                face = surface_to_face(surface, job.originals[member])
+                out[member] = (face, surface,
+                               sample_face_deviation(job.originals[member], face))
     return out
 
 

@@ -100,3 +100,22 @@ def test_an_edge_of_three_faces_is_reported_and_its_faces_kept_whole():
     assert len(result.faces) == 3 and result.valid
     assert result.joins.summary()["non_manifold"] == 1
     assert result.joins.line() == "joins: none; 1 non-manifold edges (not joined)"
+
+
+def test_faces_that_share_one_surface_are_faired_as_one():
+    """The IEA blade's two main faces are halves of one surface (identical poles), trimmed
+    along an inner iso-line: faired once for both, their smooth join stays where it was."""
+    from pathlib import Path
+
+    from cq_fairing.occ.convert import face_to_surface
+    from cq_fairing.occ.io import read_shape
+
+    blade = read_shape(Path(__file__).resolve().parents[2] / "examples/data/IEA_15MW_CFD.stp")
+    result = fair_shape(blade, tol=0.001)
+    smooth = [r for r in result.joins.rows() if r["kind"] == "smooth"]
+    assert len(smooth) == 1 and smooth[0]["held"]
+    assert smooth[0]["gap"] <= 1e-9 and smooth[0]["angle_excess"] <= 0.05
+    first, second = (face_to_surface(result.faces[i].face)[0] for i in (1, 2))
+    assert np.array_equal(first.poles, second.poles)
+    assert first.shape[1] < 204 and all(r.max_deviation <= 0.001 for r in result.faces
+                                        if r.faired)
