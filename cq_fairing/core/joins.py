@@ -66,7 +66,7 @@ from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
-           "turned_patches", "SIDES", "ANGLE_SLACK"]
+           "turned_patches", "mirror_ratio", "UnionFind", "SIDES", "ANGLE_SLACK"]
 
 SIDES = ("u0", "u1", "v0", "v1")
 SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
@@ -258,7 +258,7 @@ def _end(side):
 
 
 # -- chords --------------------------------------------------------------------------------
-class _UnionFind:
+class UnionFind:
     """Union-find whose members carry a parity against their root: a chord member's
     reversal, ignored where only the sets matter."""
 
@@ -266,14 +266,20 @@ class _UnionFind:
         self.parent, self.parity = {}, {}
 
     def find(self, key):
-        """``(root, parity of key against it)``."""
+        """``(root, parity of key against it)``; the path is compressed on the way."""
         self.parent.setdefault(key, key)
         self.parity.setdefault(key, False)
-        if self.parent[key] == key:
-            return key, False
-        root, parity = self.find(self.parent[key])
-        self.parent[key], self.parity[key] = root, self.parity[key] ^ parity
-        return root, self.parity[key]
+        path, node, parity = [], key, False
+        while self.parent[node] != node:
+            path.append(node)
+            parity ^= self.parity[node]
+            node = self.parent[node]
+        root, running = node, parity
+        for member in path:       # each member's parity against the root, then link it
+            own = self.parity[member]
+            self.parent[member], self.parity[member] = root, running
+            running ^= own
+        return root, parity
 
     def tie(self, a, b, parity=False):
         """Put ``a`` and ``b`` in one set with ``parity`` between them; ``None`` when
@@ -294,9 +300,9 @@ class _UnionFind:
 
 
 def _chords(patches, joins):
-    """The chords (:class:`_UnionFind` of ``(patch, axis)``, parity: reversed) of the
+    """The chords (:class:`UnionFind` of ``(patch, axis)``, parity: reversed) of the
     joins, the joins kept and those dropped with a reason."""
-    chords, kept, dropped = _UnionFind(), [], []
+    chords, kept, dropped = UnionFind(), [], []
     for join in joins:
         if patches[join.a].kept and patches[join.b].kept:
             dropped.append((join, "both patches are kept"))
@@ -398,7 +404,7 @@ def _vertices(patches, joins):
     ``None`` where a crease meets the vertex: the edges' end tangents are held in the
     plane it defines, so that the patches around a smooth vertex share a tangent plane.
     """
-    corners, creased = _UnionFind(), set()
+    corners, creased = UnionFind(), set()
     for join in joins:
         ends_a = _side_ends(join.side_a)
         ends_b = _side_ends(join.side_b)[::-1] if join.reversed else _side_ends(join.side_b)
@@ -649,11 +655,11 @@ def _cross_vectors(work, surfaces, side_rows):
     return np.array([surfaces[index].poles[q] - surfaces[index].poles[b] for b, q in rows])
 
 
-def _ratios(wa, wb):
-    r"""One :math:`\mu` per join, repeated for every pole along it: the geometric mean of
-    :math:`|w_{a,i}| / |w_{b,i}|`."""
+def mirror_ratio(wa, wb):
+    r"""One :math:`\mu` for a join's mirrored rows :math:`w_{a,i} + \mu w_{b,i} = 0`: the
+    geometric mean of :math:`|w_{a,i}| / |w_{b,i}|` over the poles along it."""
     mu = np.linalg.norm(wa, axis=1) / np.maximum(np.linalg.norm(wb, axis=1), 1e-300)
-    return np.full(mu.size, np.exp(np.mean(np.log(np.maximum(mu, 1e-300)))))
+    return float(np.exp(np.mean(np.log(np.maximum(mu, 1e-300)))))
 
 
 def _mirror_rows(work, joins, chords, surfaces):
@@ -664,11 +670,11 @@ def _mirror_rows(work, joins, chords, surfaces):
     row ties its one or two free inner poles, a row with one to the held poles.  Returns the sparse matrix over the free
     poles and the right-hand sides (rows, 3) from held poles."""
     rows_, cols, vals, rhs = [], [], [], []
-    linked = _UnionFind()   # free inner poles (and -1, the held ones) tied by a row
+    linked = UnionFind()   # free inner poles (and -1, the held ones) tied by a row
     for join in (j for j in joins if j.smooth):
         sides = _cross_rows(work, join, chords)
         wa, wb = (_cross_vectors(work, surfaces, side) for side in sides)
-        mu = _ratios(wa, wb)
+        mu = np.full(len(wa), mirror_ratio(wa, wb))
         for k in range(len(mu)):
             entries, known = [], np.zeros(3)
             for (index, rows), weight, w in zip(sides, (1.0, mu[k]), (wa, wb)):

@@ -44,7 +44,7 @@ import scipy.sparse.linalg as spla
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
-from .joins import turned_patches
+from .joins import UnionFind, mirror_ratio, turned_patches
 from .patch_grid import insert_knot
 
 __all__ = ["NetworkResult", "fair_network", "network_joinable"]
@@ -284,28 +284,6 @@ def _border_rows(patch, side):
     return [((k, e), (k, n)) for k in range(ku)]
 
 
-class _Classes:
-    """Union-find over pole indices (G0 identifications), then over their classes (the
-    mirrored rows' cycles)."""
-
-    def __init__(self):
-        self.parent = {}
-
-    def find(self, x):
-        self.parent.setdefault(x, x)
-        while self.parent[x] != x:
-            self.parent[x] = self.parent[self.parent[x]]
-            x = self.parent[x]
-        return x
-
-    def union(self, a, b):
-        ra, rb = self.find(a), self.find(b)
-        if ra == rb:
-            return False
-        self.parent[rb] = ra
-        return True
-
-
 def _constraints(system, joins, continuity):
     """The sparse constraint rows (G0 pole identities, G1 mirrored rows) and the number
     of G1 rows.
@@ -313,7 +291,7 @@ def _constraints(system, joins, continuity):
     A row that would tie two poles already tied (through other rows, or both held by
     kept patches) is left out: it could only repeat or contradict the others."""
     rows, cols, vals = [], [], []
-    g0 = _Classes()
+    g0 = UnionFind()   # G0 identifications of poles, then (cycles) of their classes
 
     def row(entries):
         r = rows[-1] + 1 if rows else 0
@@ -323,7 +301,7 @@ def _constraints(system, joins, continuity):
             vals.append(v)
 
     for index in np.flatnonzero(system.fixed):
-        g0.union(HELD, int(index))      # the kept patches' poles: one held class
+        g0.tie(HELD, int(index))      # the kept patches' poles: one held class
     sides = []
     for join in joins:
         ra = _border_rows(system.patches[join.a], join.side_a)
@@ -333,33 +311,26 @@ def _constraints(system, joins, continuity):
         sides.append((join, ra, rb))
         for (pa, _), (pb, _) in zip(ra, rb):
             ia, ib = system.index(join.a, *pa), system.index(join.b, *pb)
-            if g0.union(ia, ib):
+            if g0.tie(ia, ib) is None:
                 row([(ia, 1.0), (ib, -1.0)])
     g1 = 0
     if continuity == "G1":
-        cycles = _Classes()
+        cycles = UnionFind()
         for join, ra, rb in sides:
             if not join.smooth:
                 continue
-            mu = _ratio(system.patches[join.a], system.patches[join.b], ra, rb)
+            a, b = system.patches[join.a], system.patches[join.b]
+            mu = mirror_ratio(np.array([a.poles[q] - a.poles[p] for p, q in ra]),
+                              np.array([b.poles[q] - b.poles[p] for p, q in rb]))
             for (pa, qa), (pb, qb) in zip(ra, rb):
                 ia, na = system.index(join.a, *pa), system.index(join.a, *qa)
                 ib, nb = system.index(join.b, *pb), system.index(join.b, *qb)
-                if cycles.union(g0.find(na), g0.find(nb)):
+                if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
                     row([(na, 1.0), (ia, -1.0), (nb, mu), (ib, -mu)])
                     g1 += 1
     count = rows[-1] + 1 if rows else 0
     matrix = sp.csr_matrix((vals, (rows, cols)), shape=(count, int(system.offsets[-1])))
     return matrix, g1
-
-
-def _ratio(a, b, ra, rb):
-    r"""One :math:`\mu` for a join: the geometric mean of :math:`|w_{a,i}| / |w_{b,i}|`
-    in the sources."""
-    wa = np.array([a.poles[q] - a.poles[p] for p, q in ra])
-    wb = np.array([b.poles[q] - b.poles[p] for p, q in rb])
-    ratio = np.linalg.norm(wa, axis=1) / np.maximum(np.linalg.norm(wb, axis=1), 1e-300)
-    return float(np.exp(np.mean(np.log(np.maximum(ratio, 1e-300)))))
 
 
 class _Probe:

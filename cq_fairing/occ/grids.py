@@ -36,9 +36,7 @@ from ..core.joins import BorderJoin
 from ..core.patch_grid import merge_grid, split_grid
 from ..core.patch_layout import find_grids
 from ..errors import FairingError, ToleranceNotMetError
-from .convert import surface_to_face
-from .deviation import sample_face_deviation
-from .faces import FaceFairReport, SurfaceSampler, collapsed_kept, target_degrees
+from .faces import SurfaceSampler, collapsed_kept, target_degrees
 from .search import search_scales
 
 __all__ = ["fair_grids", "GridFairing", "RETRIES", "SHRINK"]
@@ -150,8 +148,8 @@ def _fair_block(job, block, cell_faces, readable, merge_gap):
         if faired is None:
             return None
         pieces = split_grid(merged, faired)
-        checked = {f: _checked(job, f, collapsed_kept(readable[f],
-                                                      cell.from_grid(pieces[i][j])))
+        checked = {f: job.measured(f, collapsed_kept(readable[f],
+                                                     cell.from_grid(pieces[i][j])))
                    for i, (column, faces) in enumerate(zip(block.cells, cell_faces))
                    for j, (cell, f) in enumerate(zip(column, faces))}
         if all(deviation["max"] <= job.tol[f] for f, (_, _, deviation) in checked.items()):
@@ -209,21 +207,8 @@ def _samples(breaks):
                                      for a, b in zip(breaks[:-1], breaks[1:])]))
 
 
-def _checked(job, index, surface):
-    """``(face, surface, deviation)`` of one piece under its face's trim, measured both
-    ways by OCCT against the face."""
-    face = surface_to_face(surface, job.originals[index])
-    return face, surface, sample_face_deviation(job.originals[index], face)
-
-
 def _install(job, checked, readable, cell_faces, shape):
     members = ", ".join(str(f + 1) for column in cell_faces for f in column)
-    for index, (face, surface, deviation) in checked.items():
-        before = job.reports[index]
-        job.reports[index] = FaceFairReport(
-            face, "faired", f"faired as one surface with faces {members} "
-            f"({shape[0]} x {shape[1]} patch grid)", info=before.info,
-            poles_before=readable[index].shape, poles_after=surface.shape,
-            max_deviation=deviation["max"], tolerance=job.tol[index], deviation=deviation,
-            original=job.originals[index], surface=surface, index=index,
-            seconds=before.seconds)
+    message = f"faired as one surface with faces {members} ({shape[0]} x {shape[1]} patch grid)"
+    for index, measured in checked.items():
+        job.faired(index, measured, message, readable[index].shape)

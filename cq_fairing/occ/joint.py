@@ -31,8 +31,7 @@ import numpy as np
 from ..core.joins import BorderJoin, JointPatch, fair_patches, turned_patches
 from ..core.spaces import SplineSpace
 from ..errors import FairingError
-from .convert import face_to_surface, is_occt_error, surface_to_face
-from .deviation import sample_face_deviation
+from .convert import face_to_surface, is_occt_error
 from .faces import collapsed_kept
 from .grids import fair_grids
 from .networks import fair_networks
@@ -272,9 +271,7 @@ def _checked(job, readable, faces, kept, result, members):
         if index not in kept:
             surface = collapsed_kept(readable[index], result.surfaces[k])
             for member in members[index]:
-                face = surface_to_face(surface, job.originals[member])
-                out[member] = (face, surface,
-                               sample_face_deviation(job.originals[member], face))
+                out[member] = job.measured(member, surface)
     return out
 
 

@@ -22,9 +22,7 @@ from dataclasses import dataclass
 
 from ..core.joins import BorderJoin
 from ..core.network import fair_network, network_joinable
-from .convert import surface_to_face
-from .deviation import sample_face_deviation
-from .faces import FaceFairReport, collapsed_kept
+from .faces import collapsed_kept
 
 __all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK"]
 
@@ -128,8 +126,8 @@ def _fair_component(job, readable, faces, moving, links, reversed_, continuity):
         moved = {f for f in moving if position[f] not in result.kept}
         if not moved:
             return None
-        checked = {f: _checked(job, f, collapsed_kept(readable[f],
-                                                      result.surfaces[position[f]]))
+        checked = {f: job.measured(f, collapsed_kept(readable[f],
+                                                     result.surfaces[position[f]]))
                    for f in moved}
         if all(d["max"] <= job.tol[f] for f, (_, _, d) in checked.items()):
             _install(job, checked, readable, len(faces))
@@ -139,18 +137,8 @@ def _fair_component(job, readable, faces, moving, links, reversed_, continuity):
     return None
 
 
-def _checked(job, index, surface):
-    face = surface_to_face(surface, job.originals[index])
-    return face, surface, sample_face_deviation(job.originals[index], face)
-
-
 def _install(job, checked, readable, size):
-    for index, (face, surface, deviation) in checked.items():
-        before = job.reports[index]
-        job.reports[index] = FaceFairReport(
-            face, "faired", f"faired with its network of {size} faces by thin-plate energy "
-            "across their joins (its net was already at its coarsest)", info=before.info,
-            poles_before=readable[index].shape, poles_after=surface.shape,
-            max_deviation=deviation["max"], tolerance=job.tol[index], deviation=deviation,
-            original=job.originals[index], surface=surface, index=index,
-            seconds=before.seconds)
+    message = (f"faired with its network of {size} faces by thin-plate energy across their "
+               "joins (its net was already at its coarsest)")
+    for index, measured in checked.items():
+        job.faired(index, measured, message, readable[index].shape)

@@ -56,6 +56,7 @@ from .convert import (
     surface_to_face,
     to_geom_surface,
 )
+from .deviation import sample_face_deviation
 from .engine import ProcessFaces
 from .face_tasks import fair_one_face, kept_face_report
 from .faces import FaceFairReport, default_tolerance
@@ -390,6 +391,22 @@ class _Job:
             leader = first[self.face_class[index]]
             if leader != index:
                 report(index, self._placed(self.reports[leader], index))
+
+    def measured(self, index, surface):
+        """``(face, surface, deviation)``: ``surface`` under face ``index``'s trim, measured
+        both ways by OCCT against the original face."""
+        face = surface_to_face(surface, self.originals[index])
+        return face, surface, sample_face_deviation(self.originals[index], face)
+
+    def faired(self, index, measured, message, poles_before):
+        """Replace face ``index``'s report by a faired one from :meth:`measured`."""
+        face, surface, deviation = measured
+        before = self.reports[index]
+        self.reports[index] = FaceFairReport(
+            face, "faired", message, info=before.info, poles_before=poles_before,
+            poles_after=surface.shape, max_deviation=deviation["max"],
+            tolerance=self.tol[index], deviation=deviation, original=self.originals[index],
+            surface=surface, index=index, seconds=before.seconds)
 
     def kept(self, index, status, message):
         """The report of face ``index`` kept as it was, with ``status`` and ``message``."""
