@@ -14,7 +14,8 @@ constraints that make the joins hold:
    member runs the other way; knots closer than :data:`SNAP` of the finest member's span
    merged) at the largest member degree :math:`P`.  A kept patch adds its own knots with
    multiplicity :math:`m + P - p`, so that its degree-:math:`p` border lies in the class
-   space exactly.
+   space exactly; where it has at least as many spans as each solved member, its knots
+   alone make the class.
 2. **Vertices.**  The corners tied by the joins form vertices, each at the mean of its
    corners (a kept patch's corner where there is one).  Where no crease meets a vertex,
    the end tangents of its edges are held in the plane of its mean source normal, so
@@ -66,7 +67,7 @@ from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
-           "turned_patches", "mirror_ratio", "UnionFind", "SIDES", "ANGLE_SLACK"]
+           "pinning_patch", "turned_patches", "mirror_ratio", "UnionFind", "SIDES", "ANGLE_SLACK"]
 
 SIDES = ("u0", "u1", "v0", "v1")
 SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
@@ -182,6 +183,29 @@ def fair_patches(patches, joins, *, continuity="G1"):
         c, d = _mirror_rows(work, joins, chords, surfaces)
         surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
     return JointResult(surfaces, joins, dropped, rows)
+
+
+def pinning_patch(source, side):
+    r"""A kept patch that, joined to ``side`` of a patch faired from ``source``, holds
+    that side where the source has it.
+
+    It is the source reflected through its border along ``side`` (for ``"v0"``:
+    :math:`R(u, v) = 2 S(u, v_0) - S(u, v)`, poles :math:`2 c_{i0} - c_{ij}`): its border
+    is the source's border and its cross derivative the source's, reversed.  Joined by
+    :class:`BorderJoin` ``(patch, side, pinning, side)``, the edge is the source's border
+    (a kept patch's border is the edge, and its knots enter the class space), and at a
+    smooth join the mirrored rows give :math:`w = \mu\, w_{source}`: the faired patch
+    keeps the source's border curve and tangent plane along it exactly.  This holds a
+    side whose neighbour the joint projection cannot join pole for pole (a neighbour
+    parametrized differently, a partial side, an analytic or rational neighbour): the
+    join keeps the source's gap and angle.
+    """
+    if side not in SIDES:
+        raise InvalidInputError(f"side must be one of {SIDES}, got {side!r}.")
+    poles = np.moveaxis(source.poles, 1 - _along(side), 0)
+    poles = np.moveaxis(2.0 * poles[_end(side)] - poles, 0, 1 - _along(side))
+    return JointPatch(BSplineSurface(poles, source.u_knots, source.v_knots, source.u_degree,
+                                     source.v_degree))
 
 
 def join_angles(surfaces, join, t):
@@ -337,9 +361,16 @@ def _normalised_knots(space, flip):
 
 
 def _class_space(members):
-    """One space on [0, 1] holding every member's space (kept members exactly)."""
+    """One space on [0, 1] holding every member's space (kept members exactly).  Where
+    a kept member has at least as many spans as every solved one, the kept members'
+    knots alone make the class: the solved members' knots between them would only add
+    poles to a direction the kept border already refines."""
     degree = max(space.degree for space, _, _ in members)
     finest = max(space.n_spans for space, _, _ in members)
+    spans = {kept: max((s.n_spans for s, _, k in members if k == kept), default=0)
+             for kept in (True, False)}
+    if spans[True] >= spans[False]:
+        members = [m for m in members if m[2]]
     entries = []   # (value, multiplicity, kept)
     for space, flip, kept in members:
         t = _normalised_knots(space, flip)
@@ -508,21 +539,21 @@ def _edge_poles(unit, curve, ends, normals):
     if k <= 2:
         return x
     rhs = moments[1:-1] - gram[1:-1][:, [0, -1]] @ ends
+    factor = sla.cho_factor(gram[1:-1, 1:-1])
+    x[1:-1] = sla.cho_solve(factor, rhs)
     rows, values = [], []
     for normal, inner, end in ((normals[0], 0, ends[0]), (normals[1], k - 3, ends[1])):
         if normal is not None:
             row = np.zeros((k - 2, 3))
             row[inner] = normal
-            rows.append(row.ravel())
+            rows.append(row)
             values.append(normal @ end)
-    if not rows:
-        x[1:-1] = sla.solve(gram[1:-1, 1:-1], rhs, assume_a="pos")
-        return x
-    a = np.kron(gram[1:-1, 1:-1], np.eye(3))
-    c = np.array(rows)
-    kkt = np.block([[a, c.T], [c, np.zeros((len(rows), len(rows)))]])
-    solution = sla.lstsq(kkt, np.concatenate([rhs.ravel(), values]))[0]
-    x[1:-1] = solution[: 3 * (k - 2)].reshape(k - 2, 3)
+    if rows:   # Lagrange multipliers by the Schur complement S = C G^-1 C^T (at most 2 x 2)
+        solved = [sla.cho_solve(factor, row) for row in rows]
+        schur = np.array([[np.sum(a * b) for b in solved] for a in rows])
+        residual = np.array([np.sum(a * x[1:-1]) for a in rows]) - np.array(values)
+        multipliers = sla.lstsq(schur, residual)[0]
+        x[1:-1] -= sum(m * z for m, z in zip(multipliers, solved))
     return x
 
 

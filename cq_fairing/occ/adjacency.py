@@ -46,6 +46,7 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 from scipy.spatial import cKDTree
 
+from ..core.joint_projection import Join, JoinSide
 from ..errors import InvalidInputError
 from .convert import as_shape, indexed_faces
 
@@ -53,8 +54,10 @@ __all__ = ["JoinSide", "Join", "JoinMeasure", "Adjacency", "find_joins", "measur
 
 SIDES = ("u0", "u1", "v0", "v1")
 BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a pcurve sample on a border
-FULL_TOLERANCE = 1e-9     # relative to the border's span: an edge covering the whole side
+FULL_TOLERANCE = 1e-7     # relative to the model size: an edge's end this close to a side's
+                          # end in 3-D (or within the edge's tolerance) covers the side there
 COINCIDENCE = 1e-4        # default coincidence, relative to the bounding-box diagonal
+EDGE_SHARE = 1e-2         # ... and at most this share of the shorter edge's length
 EDGE_PROBES = 5           # samples per free edge when matching loose boundaries
 NEWTON_STEPS = 12         # Gauss-Newton iterations of a projection onto a surface
 NEWTON_STOP = 1e-12       # step (relative to the model size) that ends a projection
@@ -64,77 +67,6 @@ NUDGE = 1e-6              # parameter step (relative to the edge's range) off a 
 
 
 # -- results -------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class JoinSide:
-    """One face's side of a :class:`Join`.
-
-    Attributes
-    ----------
-    face : int
-        0-based face index in :func:`~cq_fairing.occ.convert.indexed_faces` order.
-    edge : int
-        1-based index, in ``TopExp::MapShapesAndAncestors(shape, EDGE, FACE)`` order, of
-        this face's edge on the join (for a shell: the shared edge, the same for both
-        sides; for loose faces: each face's own edge).
-    side : str or None
-        ``"u0"``, ``"u1"``, ``"v0"`` or ``"v1"`` when the edge's pcurve runs along that
-        border of the surface's parameter rectangle ``Bounds()`` (``"u0"`` is the
-        iso-line :math:`u = u_{min}`, along which :math:`v` varies); ``None`` when the
-        pcurve leaves the border (a trimmed face, an interior curve) or the surface is
-        neither a B-spline nor a Bezier surface.
-    along : tuple of float
-        The border parameter (:math:`v` for a u-side, :math:`u` for a v-side) at the
-        start and the end of the FORWARD edge; ``(nan, nan)`` when ``side`` is ``None``.
-    full : bool
-        The edge covers the whole side: ``along`` spans the border's whole parameter
-        range within :data:`FULL_TOLERANCE` of it.
-    """
-
-    face: int
-    edge: int
-    side: str = None
-    along: tuple = (float("nan"), float("nan"))
-    full: bool = False
-
-
-@dataclass(frozen=True)
-class Join:
-    """Two faces meeting along a boundary, as found in the source.
-
-    Attributes
-    ----------
-    sides : tuple of JoinSide
-        Side 0 and side 1; the measurement samples side 0's edge.
-    kind : str
-        ``"smooth"`` when ``source_angle < angle_tol``, else ``"crease"``.
-    source_gap : float
-        Largest distance between the two faces along the join, in the source.
-    source_angle : float
-        Largest angle (degrees) between the two faces' normals along the join.
-    source_angles : numpy.ndarray
-        The angle (degrees) at each sample, for a point-by-point comparison with
-        :attr:`JoinMeasure.angles` of a faired copy.
-    shared : bool
-        ``True``: one edge of the shape used by both faces; ``False``: two coincident
-        free edges of loose faces (their normals' angle is folded to at most 90 deg).
-    opposed : bool
-        The two sides' edges run in opposite directions (``False`` for a shared edge).
-    """
-
-    sides: tuple
-    kind: str
-    source_gap: float
-    source_angle: float
-    source_angles: np.ndarray = field(default=None, compare=False, repr=False)
-    shared: bool = True
-    opposed: bool = False
-
-    @property
-    def faces(self):
-        """``(face of side 0, face of side 1)``."""
-        return self.sides[0].face, self.sides[1].face
-
-
 @dataclass(frozen=True)
 class JoinMeasure:
     """A join measured on some shape (:func:`measure_joins`).
@@ -337,13 +269,24 @@ def _join_side(model, face_index, edge_index):
         span = max(u1 - u0, v1 - v0)
         if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
             along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
-            eps = FULL_TOLERANCE * (hi - lo)
-            full = min(along) <= lo + eps and max(along) >= hi - eps
-            return JoinSide(face_index, edge_index, name, along, bool(full))
+            reach = max(BRep_Tool.Tolerance_s(edge), FULL_TOLERANCE * model.size)
+            full = _covers(surface, axis, level, (lo, hi), along, reach)
+            return JoinSide(face_index, edge_index, name, along, full)
     return JoinSide(face_index, edge_index)
 
 
 # -- measurement ---------------------------------------------------------------------------
+def _covers(surface, axis, level, ends, along, reach):
+    """True when the border parameters ``along`` reach both ``ends`` of the side at
+    ``level`` on ``axis``, up to a shortfall of ``reach`` in 3-D."""
+    def point(t):
+        uv = (level, t) if axis == 0 else (t, level)
+        return np.array(surface.Value(*uv).Coord())
+    reached = (min(along), max(along))
+    return all(np.linalg.norm(point(end) - point(got)) <= reach
+               for end, got in zip(ends, reached))
+
+
 def _evaluate(surface, uv):
     """Points, :math:`S_u`, :math:`S_v` (each (n, 3)) of ``surface`` at ``uv`` (n, 2)."""
     out = np.empty((len(uv), 3, 3))
@@ -565,7 +508,8 @@ def find_joins(shape, *, angle_tol=1.0, coincidence=None, samples=24):
     *Loose boundaries.*  Free edges (used by one face) are matched geometrically, as
     sewing would pair them but without changing anything: two edges of different faces
     whose start and end points coincide (in the same or in reverse order) within the
-    coincidence distance, and whose :data:`EDGE_PROBES` samples lie within it of each
+    coincidence distance (at most :data:`EDGE_SHARE` of the shorter edge's length, or
+    the edges' tolerance), and whose :data:`EDGE_PROBES` samples lie within it of each
     other (at the same fractions of the parameter range, or else by projection onto the
     other edge's 3-D curve), form a join with ``shared=False``.  Each edge is matched
     once, the closest candidate first.  Partial overlaps (one long edge against two
@@ -625,6 +569,7 @@ class _FreeEdge:
         self.points = np.array([adaptor.Value(float(t)).Coord()
                                 for t in np.linspace(first, last, EDGE_PROBES)])
         self.tolerance = BRep_Tool.Tolerance_s(self.edge)
+        self.length = float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
 
     def distance_along(self, other):
         """Largest distance from this edge's probes to ``other``'s 3-D curve (inf when
@@ -670,8 +615,12 @@ def _match_free_edges(model, free, coincidence):
 
 
 def _coincident(a, b, opposed, coincidence):
-    """Largest probe distance of two free edges when they coincide, else ``None``."""
-    limit = max(coincidence, a.tolerance, b.tolerance)
+    """Largest probe distance of two free edges when they coincide, else ``None``: within
+    the coincidence distance, but no more than :data:`EDGE_SHARE` of the shorter edge
+    (small faces of a large model are not joined across gaps of their own size), or
+    within the edges' tolerances."""
+    limit = max(min(coincidence, EDGE_SHARE * min(a.length, b.length)), a.tolerance,
+                b.tolerance)
     other = b.points[::-1] if opposed else b.points
     ends = max(np.linalg.norm(a.points[0] - other[0]), np.linalg.norm(a.points[-1] - other[-1]))
     if ends > limit:

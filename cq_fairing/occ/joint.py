@@ -1,46 +1,42 @@
 r"""Fair the faces of a model together: joins stay closed and smooth.
 
 After the face-by-face pass has chosen each face's target (its tolerance search), the
-faces that meet along whole borders of their parameter rectangles (a shell's shared
-edges, a compound's coincident boundaries: :func:`~cq_fairing.occ.adjacency.find_joins`)
-are projected again together by the core's :func:`~cq_fairing.core.joins.fair_patches`:
-each shared border is faired once and both faces take it pole for pole (G0 to
-round-off), and across the smooth joins the cross-boundary rows of poles mirror each
-other (G1).  A join is held so when the two borders, at equal normalised parameters, lie
-within :data:`SOURCE_GAP` times the tolerance: a wider source gap is the source's, and
-borders that run along one curve with different parametrizations would pull each
-other's faces off their sources; such joins are faired as with ``joins="free"``.  A
-face next to one that is not faired (kept, refused, analytic or rational)
-takes that face's border exactly where the border is a polynomial B-spline curve.
-
-Each face is then checked against its own tolerance by OCCT, both ways
-(:func:`~cq_fairing.occ.deviation.sample_face_deviation`).  A face over its tolerance
-gets its targets refined (every span halved, :data:`REFINEMENTS` times at most); a face
-still over it is kept as it was, and the joint solve runs again with it fixed, so its
-neighbours close onto it.  Its report names the join that binds it.  A face on a smooth
-join that turns more than the source's angle + 0.05 degrees somewhere (next to a vertex,
-where a mirrored row of the cycle around it is left out) gets its targets refined the
-same way: the spans that the vertex's poles reach shrink, and with them the turn (the
-fuselage: 0.107 degrees on its targets, 0.017 with them halved once).
+joins of the source (a shell's shared edges, a compound's coincident boundaries:
+:func:`~cq_fairing.occ.adjacency.find_joins`) are held by the core: patch grids that
+form whole parts of the model are merged and faired as one surface
+(:mod:`cq_fairing.occ.grids`), the faces faired alone are projected again together
+(:func:`~cq_fairing.core.joint_projection.project_jointly`: border joins faired once and
+shared pole for pole, G1 across the smooth ones, every other side of a face on a join
+pinned to its source), and the faces already at their coarsest are faired together by
+energy (:mod:`cq_fairing.occ.networks`).  This module supplies the OCCT side: the faces
+read as B-spline patches, each face's target, and OCCT's two-sided deviation of each
+solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`); it installs the
+results and names, in each kept face's report, the joins that bind it.  A border row
+collapsed in the source (the nose of a fuselage, where several faces meet at one point)
+is put back onto its point: the projection alone spreads it, and a STEP file of such
+faces read back as unclosed wires.
 """
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.joins import BorderJoin, JointPatch, fair_patches, turned_patches
-from ..core.spaces import SplineSpace
+from ..core.joint_projection import (
+    REFINEMENTS,
+    SOURCE_GAP,
+    border_joins,
+    project_jointly,
+    runs_reversed,
+)
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
 from .faces import collapsed_kept
 from .grids import fair_grids
 from .networks import fair_networks
 
-__all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS", "REFINEMENTS"]
+__all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS"]
 
 JOINS = ("smooth", "closed", "free")
-REFINEMENTS = 2
-SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 
 
 @dataclass(frozen=True)
@@ -86,111 +82,44 @@ def fair_joined(job, adjacency, joins):
     -------
     JointOutcome
     """
-    border = [j for j in adjacency.joins if _is_border_join(j)]
-    readable = _readable_faces(job, {s.face for j in border for s in j.sides})
-    border = [j for j in border if all(s.face in readable for s in j.sides) and
-              _parametric_gap(j, readable) <= SOURCE_GAP * _tolerance(job, j)]
-    grids = fair_grids(job, adjacency, readable, border, _reversed, lambda tol: SOURCE_GAP * tol)
+    readable = _readable_faces(job, {s.face for j in adjacency.joins for s in j.sides
+                                     if s.side is not None})
+    border = border_joins(adjacency.joins, readable, job.tol)
+    grids = fair_grids(job, adjacency, readable, border, runs_reversed,
+                       lambda tol: SOURCE_GAP * tol)
     gridded = {face for grid in grids for face in grid.faces}
     in_grids = [j for j in border if set(j.faces) <= gridded]
     border = [j for j in border if not set(j.faces) & gridded]
-    imposed = _project_jointly(job, adjacency, readable, border, joins)
-    networks = fair_networks(job, adjacency, readable, border, _reversed,
-                             "G1" if joins == "smooth" else "G0")
+    continuity = "G1" if joins == "smooth" else "G0"
+    joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
+    networks = fair_networks(job, adjacency, readable, border, runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
-    return JointOutcome(in_grids + imposed + in_networks, grids, networks)
+    pinned = [j for j, sides in joint.pinned.items()
+              if all((s.face, s.side) in sides or not (job.reports[s.face].faired
+                                                       or s.face in moved)
+                     for s in j.sides)]
+    return JointOutcome(in_grids + joint.held + in_networks + pinned, grids, networks)
 
 
-def _project_jointly(job, adjacency, readable, border, joins):
-    """The joint projection of the faces faired alone, the others kept; the joins it
-    held.  Faces that carry one and the same surface (a surface split into faces by its
-    trims) are one patch: their surface is faired once, for all of them, so the joins
-    between them stay where the source has them, exactly."""
-    group = _shared_surfaces(job, readable, border)
-    faces = sorted({group[s.face] for j in border for s in j.sides})
-    kept = {i for i in faces if not _fairable(job.reports[i], readable[i])}
-    if not faces or len(kept) == len(faces):
-        return []
-    members = {face: [m for m in group if group[m] == face] for face in faces}
-    refined = dict.fromkeys(faces, 0)
-    while True:
-        result, imposed = _solve(job, readable, faces, kept, refined, border, joins, group)
-        checked = _checked(job, readable, faces, kept, result, members)
-        over = sorted({group[i] for i, (_, _, deviation) in checked.items()
-                       if deviation["max"] > job.tol[i]})
-        turned = [i for i in _turned(result, readable, faces, kept)
-                  if refined[i] < REFINEMENTS and i not in over]
-        if not over and not turned:
-            break
-        for index in turned:
-            refined[index] += 1
-        for index in over:
-            if refined[index] < REFINEMENTS:
-                refined[index] += 1
-            else:
-                kept.add(index)
-                for member in members[index]:
-                    worst = max(checked[m][2]["max"] for m in members[index])
-                    _keep(job, member, worst, adjacency.joins_of(member))
-    for index, (face, surface, deviation) in checked.items():
-        _install(job.reports[index], face, surface, deviation)
-    inside = [j for j in adjacency.joins if j.faces[0] != j.faces[1]
-              and group.get(j.faces[0], -1) == group.get(j.faces[1], -2)
-              and group[j.faces[0]] not in kept]
-    return imposed + inside
+def _project_jointly(job, adjacency, readable, border, continuity, gridded):
+    """The core's joint projection of the faces faired alone, measured by OCCT; installs
+    the solved faces and keeps those it returns kept."""
+    targets = {face: (job.reports[face].surface.u_space, job.reports[face].surface.v_space)
+               for face in readable if _fairable(job.reports[face], readable[face])}
+    measured = {}
 
+    def check(face, surface):
+        measured[face] = job.measured(face, collapsed_kept(readable[face], surface))
+        return measured[face][2]["max"]
 
-def _shared_surfaces(job, readable, border):
-    """``{face: representative}`` over the faces of ``border``: faces whose surfaces are
-    identical (poles, knots, degrees) share the representative with the finest target
-    (most poles) of those faired alone; every other face represents itself.  A group
-    whose faces would bring the same side of the surface into two joins is not formed."""
-    faces = sorted({s.face for j in border for s in j.sides})
-    by_surface = {}
-    for face in faces:
-        surface = readable[face]
-        key = (surface.u_degree, surface.v_degree, surface.u_knots.tobytes(),
-               surface.v_knots.tobytes(), surface.poles.tobytes())
-        by_surface.setdefault(key, []).append(face)
-    out = {face: face for face in faces}
-    for same in by_surface.values():
-        sides = [s.side for j in border for s in j.sides if s.face in same]
-        if len(same) < 2 or len(sides) != len(set(sides)):
-            continue
-        fairable = [f for f in same if _fairable(job.reports[f], readable[f])] or same
-        rep = max(fairable, key=lambda f: np.prod(job.reports[f].poles_after or (0, 0)))
-        out.update(dict.fromkeys(same, rep))
-    return out
-
-
-def _tolerance(job, join):
-    """The smaller tolerance of a join's faces (a face not selected has none: ``-inf``
-    when neither is selected, so the join is left out)."""
-    tols = [job.tol[s.face] for s in join.sides if job.tol.get(s.face) is not None]
-    return min(tols) if tols else -np.inf
-
-
-def _parametric_gap(join, readable, samples=33):
-    """Largest distance between the two faces' borders at equal normalised parameters
-    (reversed where they run opposite ways): at least the source's gap, and above it
-    where the faces run along the join with different parametrizations."""
-    t = np.linspace(0.0, 1.0, samples)
-    points = []
-    for side, ts in zip(join.sides, (t, 1.0 - t if _reversed(join) else t)):
-        surface = readable[side.face]
-        (u0, u1), (v0, v1) = surface.domain
-        if side.side[0] == "u":
-            u, v = [u0 if side.side[1] == "0" else u1], v0 + (v1 - v0) * ts
-            points.append(surface.evaluate_grid(u, v)[0])
-        else:
-            u, v = u0 + (u1 - u0) * ts, [v0 if side.side[1] == "0" else v1]
-            points.append(surface.evaluate_grid(u, v)[:, 0])
-    return float(np.linalg.norm(points[0] - points[1], axis=1).max())
-
-
-def _is_border_join(join):
-    return all(side.side is not None and side.full for side in join.sides)
+    joint = project_jointly(readable, targets, adjacency.joins, border, job.tol, check,
+                            continuity=continuity, excluded=gridded)
+    for face in joint.surfaces:
+        _install(job.reports[face], *measured[face])
+    for face, deviation in joint.kept.items():
+        _keep(job, face, deviation, adjacency.joins_of(face))
+    return joint
 
 
 def _readable_faces(job, indices):
@@ -215,74 +144,20 @@ def _fairable(report, source):
             and report.surface.domain == source.domain)
 
 
-def _targets(report, refined):
-    """The face's target spaces, each span halved ``refined`` times."""
-    spaces = (report.surface.u_space, report.surface.v_space)
-    for _ in range(refined):
-        spaces = tuple(_halved(s) for s in spaces)
-    return spaces
-
-
-def _halved(space):
-    """``space`` with a knot in the middle of every span."""
-    b, p = space.breakpoints, space.degree
-    inner = np.sort(np.concatenate([space.knots[p + 1: -p - 1], 0.5 * (b[1:] + b[:-1])]))
-    return SplineSpace(p, np.concatenate([np.full(p + 1, b[0]), inner, np.full(p + 1, b[-1])]))
-
-
-def _solve(job, readable, faces, kept, refined, border, joins, group):
-    """The core's joint projection of ``faces`` (``kept`` fixed; a face stands for every
-    face of ``group`` it represents) and the adjacency joins it imposed."""
-    position = {face: k for k, face in enumerate(faces)}
-    patches = [JointPatch(readable[i], None if i in kept else
-                          _targets(job.reports[i], refined[i])) for i in faces]
-    core_joins = {BorderJoin(position[group[a.face]], a.side, position[group[b.face]],
-                             b.side, _reversed(join), join.kind == "smooth"): join
-                  for join in border for a, b in [join.sides]}
-    result = fair_patches(patches, list(core_joins),
-                          continuity="G1" if joins == "smooth" else "G0")
-    return result, [core_joins[j] for j in result.joins]
-
-
-def _turned(result, readable, faces, kept):
-    """The solved faces on a smooth join that turns more than the source's angle +
-    :data:`~cq_fairing.core.joins.ANGLE_SLACK` somewhere (around a vertex where a
-    mirrored row was left out): halving their spans confines that to a smaller region."""
-    moved = [k for k, face in enumerate(faces) if face not in kept]
-    turned = turned_patches(result.surfaces, [readable[f] for f in faces], result.joins,
-                            moved)
-    return [faces[k] for k in turned]
-
-
-def _reversed(join):
-    """True when the two faces' along-parameters run opposite ways."""
-    a, b = join.sides
-    return ((a.along[1] > a.along[0]) != (b.along[1] > b.along[0])) != join.opposed
-
-
-def _checked(job, readable, faces, kept, result, members):
-    """``{face: (new face, surface, deviation)}`` of every solved face, measured both
-    ways by OCCT against its original.  A border row collapsed in the source (the nose of
-    a fuselage, where several faces meet at one point) is put back onto its point, which
-    the faces that share it then share exactly: the projection alone spreads it, and a
-    STEP file of such faces read back as unclosed wires."""
-    out = {}
-    for k, index in enumerate(faces):
-        if index not in kept:
-            surface = collapsed_kept(readable[index], result.surfaces[k])
-            for member in members[index]:
-                out[member] = job.measured(member, surface)
-    return out
-
-
 def _install(report, face, surface, deviation):
     report.face, report.surface, report.poles_after = face, surface, surface.shape
     report.max_deviation, report.deviation, report.result = deviation["max"], deviation, None
 
 
 def _keep(job, index, deviation, joins):
-    """Keep a face that its joins hold over its tolerance; name them."""
+    """Keep a face that its joins hold over its tolerance, or whose pinned sides leave it
+    nothing to fair (``deviation`` ``None``); name its joins."""
     neighbours = sorted({f + 1 for join in joins for f in join.faces if f != index})
+    if deviation is None:
+        job.reports[index] = job.kept(index, "unchanged", (
+            f"its joins (with faces {neighbours}), held where the source has them, leave no "
+            "net smaller than the source's: kept as it was"))
+        return
     job.reports[index] = job.kept(index, "tolerance-not-met", (
         f"with its joins closed the face stays {deviation:.3g} from its source, over "
         f"tol={job.tol[index]:g}, after {REFINEMENTS} refinements; kept as it was, and "

@@ -10,7 +10,8 @@ the joins.
 
 The network is the faces left unchanged that meet along whole sides with the same
 knots (:func:`~cq_fairing.core.network.network_joinable`), across joins whose faces lie
-within ``SOURCE_GAP`` times the tolerance of each other (:mod:`cq_fairing.occ.joint`).
+within ``SOURCE_GAP`` times the tolerance of each other
+(:func:`~cq_fairing.core.joint_projection.border_joins`).
 A member with any other join (to a faired face, a partial or trimmed side, other knots)
 keeps its surface and constrains its neighbours, so every join of a moved face is held
 closed.  Each moved face is then checked against its own face by OCCT, both ways; if one

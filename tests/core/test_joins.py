@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cq_fairing.core.examples import patch_grid
-from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches
+from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches, pinning_patch
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
@@ -114,6 +114,21 @@ def test_a_kept_patch_constrains_its_neighbours_exactly():
     assert result.surfaces[0] is patches[0]
     gap, _ = _joins_measured(result.surfaces, joins[:2])
     assert gap <= 1e-9 * 2.0
+
+
+@given(st.sampled_from(["u0", "u1", "v0", "v1"]), st.integers(1, 4))
+def test_a_pinned_side_keeps_the_source_border_and_tangent_plane(side, n):
+    """A side joined to its pinning patch keeps the source's border curve and normals
+    along it, whatever the target, while the rest of the patch is projected."""
+    patch = _grid()[0][0]
+    result = fair_patches(_targets([patch], n) + [pinning_patch(patch, side)],
+                          [BorderJoin(0, side, 1, side)])
+    faired = result.surfaces[0]
+    (pf, nf), (ps, ns) = (_border(s, side, SAMPLES) for s in (faired, patch))
+    assert np.linalg.norm(pf - ps, axis=1).max() <= 1e-9 * 2.0
+    assert np.degrees(np.arccos(np.clip(np.sum(nf * ns, axis=1), -1, 1))).max() < 1e-5
+    across = 0 if side[0] == "u" else 1
+    assert faired.shape[across] == n + 3 < patch.shape[across]
 
 
 @given(st.integers(3, 7), st.sampled_from(["G0", "G1"]))

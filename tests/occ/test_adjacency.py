@@ -114,8 +114,12 @@ def test_testtoler_joins_are_the_edges_of_two_faces(real):
     assert sorted(j.sides[0].edge for j in adjacency.joins) == two
     assert len(adjacency.joins) == 97
     assert adjacency.free_edges == free_edge_count(shape) == 30
-    # untrimmed faces: every side lies on a border of its parameter rectangle
+    # untrimmed faces: every side lies on a border of its parameter rectangle, and covers
+    # it (some edges stop up to 7e-5 inside the surface's bounds: 1e-4 or less in 3-D)
     assert all(side.side is not None for j in adjacency.joins for side in j.sides)
+    assert all(side.full for j in adjacency.joins for side in j.sides)
+    short = [j for j in adjacency.joins if j.faces == (0, 47)][0].sides[0]
+    assert 0.0 < 110.9834165 - max(short.along) < 1e-4
 
 
 def test_testtoler_source_gaps_match_an_independent_projection(real):
@@ -232,6 +236,16 @@ def test_two_loose_squares_join_along_their_common_side():
     assert join.kind == "smooth" and join.source_angle < 1e-9 and join.source_gap < 1e-12
     assert all(s.side is None for s in join.sides)              # planes
     assert adjacency.free_edges == 6 and adjacency.point_contacts == []
+
+
+def test_small_faces_of_a_large_model_are_not_joined_across_a_gap_of_their_own_size():
+    """The coincidence distance (1e-4 of a 14000-wide model: 1.4) is capped at 1 % of the
+    shorter edge: two unit squares 0.05 apart stay apart, 0.005 apart they join."""
+    far = square(10000, 10000, 10001, 10001)
+    apart = find_joins(compound(square(0, 0, 1, 1), square(1.05, 0, 2.05, 1), far))
+    close = find_joins(compound(square(0, 0, 1, 1), square(1.005, 0, 2.005, 1), far))
+    assert apart.coincidence > 1.0 and apart.joins == []
+    assert [j.faces for j in close.joins] == [(0, 1)]
 
 
 def test_squares_touching_at_a_corner_are_a_point_contact():

@@ -221,8 +221,11 @@ def test_fairing_a_step_assembly_keeps_products_instances_names_colours_layers(r
 
 
 def test_the_coloured_face_is_the_faired_one_and_keeps_colour_and_layer(rotor_step, tmp_path):
+    """Each border of the skin meets a plane or a flat strip: with its joins held it is kept
+    as it is (the next test), so it is faired alone here."""
     out = tmp_path / "faired.step"
-    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05"]) == 0
+    assert main(["fair", str(rotor_step), "-o", str(out), "--tol", "0.05",
+                 "--joins", "free"]) == 0
     source_skin = _bspline_face(read_shape(rotor_step))
     back = _ReadBack(out)
     part, _alive = back.part()
@@ -236,6 +239,15 @@ def test_the_coloured_face_is_the_faired_one_and_keeps_colour_and_layer(rotor_st
     source_poles, faired_poles = _poles(source_skin), _poles(skin)
     assert faired_poles.shape[0] < source_poles.shape[0]  # the coloured face was faired
     assert area(skin) == pytest.approx(area(source_skin), rel=1e-3)
+
+
+def test_a_skin_whose_every_border_is_held_is_kept_with_its_reason(rotor_step):
+    result = fair_shape(read_shape(rotor_step), tol=0.05)
+    skins = [r for r in result.faces if r.poles_before and r.poles_before[0] == 16]
+    assert len(skins) == 3
+    assert all(r.status == "unchanged" and "held where the source has them" in r.message
+               for r in skins)
+    assert result.joins.summary()["max_gap_opened"] <= 1e-12
 
 
 def test_the_document_gets_the_same_surfaces_as_a_plain_fair(rotor_step, tmp_path):
@@ -267,7 +279,7 @@ def test_in_place_returns_the_input_and_reports_keep_the_original_faces(rotor_st
     shape = read_shape(rotor_step)
     before = _face_pole_counts(shape)
     source_poles = [_poles(f) if c else None for f, c in zip(faces_of(shape), before)]
-    result = fair_shape(shape, tol=0.05, in_place=True)
+    result = fair_shape(shape, tol=0.05, in_place=True, joins="free")  # the skin is faired
     assert result.shape.IsSame(shape) and result.valid
     after = _face_pole_counts(shape)
     faired = [r for r in result.faces if r.faired]

@@ -1,0 +1,379 @@
+r"""Joint projection of a model's faces: which joins are faired across, which sides are
+pinned, and the refinement that keeps every face within its tolerance.
+
+A model's faces meet along *joins* (:class:`Join`, two :class:`JoinSide`), read by a
+backend from its shapes (OCCT's :func:`~cq_fairing.occ.adjacency.find_joins`, FreeCAD's
+Part module in the workbench).  After each face was faired alone (its tolerance search
+chose its target spaces), :func:`project_jointly` projects the faces again together
+with :func:`~cq_fairing.core.joins.fair_patches`:
+
+* a **border join** (:func:`border_joins`: both faces polynomial B-spline patches
+  meeting along whole sides of their parameter rectangles, whose borders agree at equal
+  normalised parameters within :data:`SOURCE_GAP` times the tolerance) is faired once
+  and both faces take its border pole for pole: closed to round-off, and G1 across a
+  smooth join;
+* every other side of a face on a join (a neighbour parametrized differently along it,
+  analytic, rational or trimmed there; a side shared by several neighbours) is
+  **pinned** (:func:`~cq_fairing.core.joins.pinning_patch`): the face keeps its source's
+  border curve there and, across a smooth join, its source's tangent plane, exactly; the
+  join keeps the source's gap and angle wherever its other side is pinned or unchanged;
+* faces that carry one and the same surface (one surface split into faces by its trims)
+  are one patch, faired once for all of them.
+
+Each solved face is then checked against its own tolerance by the backend's two-sided
+measure (``check``).  A face over its tolerance gets its targets refined (every span
+halved, :data:`REFINEMENTS` times at most), then is kept as it was, and the joint solve
+runs again with it fixed, so its neighbours close onto it.  A face on a smooth join that
+turns more than the source's angle + :data:`~cq_fairing.core.joins.ANGLE_SLACK` degrees
+(next to a vertex, where a mirrored row of the cycle around it is left out) gets its
+targets refined the same way.  A face whose pinned sides leave it a net no smaller than
+its source's is kept: nothing is left to fair.
+
+This module imports numpy only (and the core).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .joins import BorderJoin, JointPatch, fair_patches, pinning_patch, turned_patches
+from .spaces import SplineSpace
+
+__all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
+           "is_border_join", "runs_reversed", "join_tolerance", "SOURCE_GAP", "REFINEMENTS"]
+
+SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
+REFINEMENTS = 2    # span halvings of a face over its tolerance before it is kept
+
+
+@dataclass(frozen=True)
+class JoinSide:
+    """One face's side of a :class:`Join`.
+
+    Attributes
+    ----------
+    face : int
+        0-based face index in the backend's face order.
+    edge : int
+        The backend's index of this face's edge on the join (for a shell: the shared
+        edge, the same for both sides; for loose faces: each face's own edge).
+    side : str or None
+        ``"u0"``, ``"u1"``, ``"v0"`` or ``"v1"`` when the edge runs along that border of
+        the surface's parameter rectangle (``"u0"`` is the iso-line :math:`u = u_{min}`,
+        along which :math:`v` varies); ``None`` when it leaves the border (a trimmed
+        face, an interior curve) or the surface is not a B-spline surface.
+    along : tuple of float
+        The border parameter (:math:`v` for a u-side, :math:`u` for a v-side) at the
+        start and the end of the edge (in its forward direction); ``(nan, nan)`` when
+        ``side`` is ``None``.
+    full : bool
+        The edge covers the whole side (up to the edge's tolerance in 3-D).
+    """
+
+    face: int
+    edge: int
+    side: str = None
+    along: tuple = (float("nan"), float("nan"))
+    full: bool = False
+
+
+@dataclass(frozen=True)
+class Join:
+    """Two faces meeting along a boundary, as found in the source.
+
+    Attributes
+    ----------
+    sides : tuple of JoinSide
+        Side 0 and side 1; the measurement samples side 0's edge.
+    kind : str
+        ``"smooth"`` when ``source_angle < angle_tol``, else ``"crease"``.
+    source_gap : float
+        Largest distance between the two faces along the join, in the source.
+    source_angle : float
+        Largest angle (degrees) between the two faces' normals along the join.
+    source_angles : numpy.ndarray
+        The angle (degrees) at each sample, for a point-by-point comparison with a
+        faired copy's.
+    shared : bool
+        ``True``: one edge of the shape used by both faces; ``False``: two coincident
+        free edges of loose faces (their normals' angle is folded to at most 90 deg).
+    opposed : bool
+        The two sides' edges run in opposite directions (``False`` for a shared edge).
+    """
+
+    sides: tuple
+    kind: str
+    source_gap: float
+    source_angle: float
+    source_angles: np.ndarray = field(default=None, compare=False, repr=False)
+    shared: bool = True
+    opposed: bool = False
+
+    @property
+    def faces(self):
+        """``(face of side 0, face of side 1)``."""
+        return self.sides[0].face, self.sides[1].face
+
+
+@dataclass(frozen=True)
+class JointProjection:
+    """Outcome of :func:`project_jointly`.
+
+    Attributes
+    ----------
+    surfaces : dict
+        ``{face: BSplineSurface}`` of every face solved (each face of a group that
+        shares one surface gets that surface).
+    kept : dict
+        ``{face: deviation}`` of the faces kept as they were: the deviation they stayed
+        at with their joins closed (over their tolerance after :data:`REFINEMENTS`), or
+        ``None`` where their pinned sides left nothing to fair.
+    held : list of Join
+        The joins faired across pole for pole (border joins, and joins between faces of
+        one shared surface).
+    pinned : dict
+        ``{join: {(face, side)}}``: the other joins with a side pinned to its source.
+    """
+
+    surfaces: dict
+    kept: dict
+    held: list
+    pinned: dict
+
+
+def is_border_join(join):
+    """True when both sides cover whole borders of their faces' parameter rectangles."""
+    return all(side.side is not None and side.full for side in join.sides)
+
+
+def runs_reversed(join):
+    """True when the two faces' along-parameters run opposite ways."""
+    a, b = join.sides
+    return ((a.along[1] > a.along[0]) != (b.along[1] > b.along[0])) != join.opposed
+
+
+def join_tolerance(join, tolerances):
+    """The smaller tolerance of a join's faces (a face not selected has none: ``-inf``
+    when neither is selected, so the join is left out)."""
+    tols = [tolerances[s.face] for s in join.sides if tolerances.get(s.face) is not None]
+    return min(tols) if tols else -np.inf
+
+
+def border_joins(joins, sources, tolerances):
+    """The joins of ``joins`` that :func:`project_jointly` can fair across pole for pole:
+    border joins (:func:`is_border_join`) between faces of ``sources`` (polynomial,
+    non-periodic B-spline surfaces ``{face: BSplineSurface}``) whose borders, at equal
+    normalised parameters, lie within :data:`SOURCE_GAP` times the join's tolerance
+    (:func:`join_tolerance`) of each other.  A wider source gap is the source's, and
+    borders that run along one curve with different parametrizations would pull each
+    other's faces off their sources: those joins are pinned instead."""
+    return [j for j in joins if is_border_join(j)
+            and all(s.face in sources for s in j.sides)
+            and _parametric_gap(j, sources) <= SOURCE_GAP * join_tolerance(j, tolerances)]
+
+
+def _parametric_gap(join, sources, samples=33):
+    """Largest distance between the two faces' borders at equal normalised parameters
+    (reversed where they run opposite ways)."""
+    t = np.linspace(0.0, 1.0, samples)
+    points = []
+    for side, ts in zip(join.sides, (t, 1.0 - t if runs_reversed(join) else t)):
+        surface = sources[side.face]
+        (u0, u1), (v0, v1) = surface.domain
+        if side.side[0] == "u":
+            u, v = [u0 if side.side[1] == "0" else u1], v0 + (v1 - v0) * ts
+            points.append(surface.evaluate_grid(u, v)[0])
+        else:
+            u, v = u0 + (u1 - u0) * ts, [v0 if side.side[1] == "0" else v1]
+            points.append(surface.evaluate_grid(u, v)[:, 0])
+    return float(np.linalg.norm(points[0] - points[1], axis=1).max())
+
+
+def project_jointly(sources, targets, joins, border, tolerances, check, *, continuity="G1",
+                    excluded=frozenset()):
+    """Project the faces on ``border`` and the faces with pinned sides together.
+
+    Parameters
+    ----------
+    sources : dict
+        ``{face: BSplineSurface}``: the faces read as polynomial, non-periodic B-spline
+        patches (any others stay out, as analytic faces do).
+    targets : dict
+        ``{face: (SplineSpace, SplineSpace)}``: each face that may move, with the target
+        spaces its own tolerance search chose (on its source's domain).  A face of
+        ``sources`` without one is kept: its borders constrain its neighbours.
+    joins : sequence of Join
+        Every join of the model: the sides off ``border`` are pinned.
+    border : sequence of Join
+        The joins to fair across (:func:`border_joins`, less those the caller fairs
+        otherwise).
+    tolerances : dict
+        ``{face: tol}`` of the faces selected.
+    check : callable
+        ``check(face, surface) -> float``: the face's two-sided deviation from its source
+        with ``surface`` under its trim (the backend's measure; the last call for a face
+        is its final surface).
+    continuity : {"G1", "G0"}
+        ``"G1"``: tangent planes held across smooth joins, and pinned there too.
+    excluded : set of int
+        Faces faired otherwise (patch grids): neither solved nor pinned.
+
+    Returns
+    -------
+    JointProjection
+    """
+    group = _shared_surfaces(sources, targets, border)
+    pins = _pins(sources, targets, joins, border, group, tolerances, excluded, continuity)
+    group.update({face: face for face in pins if face not in group})
+    faces = sorted({group[s.face] for j in border for s in j.sides} | set(pins))
+    kept = {i: None for i in faces if i not in targets}
+    if len(kept) == len(faces):
+        return JointProjection({}, {}, [], {})
+    members = {face: [m for m in group if group[m] == face] for face in faces}
+    refined = dict.fromkeys(faces, 0)
+    while True:
+        solve = _solve(sources, targets, faces, kept, refined, border, group, pins, continuity)
+        deviations = {m: check(m, solve.result.surfaces[k]) for k, face in enumerate(faces)
+                      if face not in kept for m in members[face]}
+        over = sorted({group[m] for m, d in deviations.items() if d > tolerances[m]})
+        turned = [i for i in _turned(solve, faces, kept) if refined[i] < REFINEMENTS
+                  and i not in over]
+        grown = _grown(solve.result, sources, faces, kept, pins)
+        kept.update(dict.fromkeys(grown))
+        for face in over:
+            if refined[face] < REFINEMENTS:
+                refined[face] += 1
+            else:
+                kept[face] = max(deviations[m] for m in members[face])
+        for face in turned:
+            refined[face] += 1
+        if not over and not turned and not grown:
+            break
+    surfaces = {m: solve.result.surfaces[k] for k, face in enumerate(faces) if face not in kept
+                for m in members[face]}
+    inside = [j for j in joins if j.faces[0] != j.faces[1]
+              and group.get(j.faces[0], -1) == group.get(j.faces[1], -2)
+              and group[j.faces[0]] not in kept]
+    pinned = {(face, side) for face, side in solve.pinned if face not in kept}
+    return JointProjection(surfaces, {m: d for face, d in kept.items() if face in targets
+                                      for m in members[face]},
+                           solve.imposed + inside, _pinned_joins(joins, border, group, pinned))
+
+
+def _shared_surfaces(sources, targets, border):
+    """``{face: representative}`` over the faces of ``border``: faces whose surfaces are
+    identical (poles, knots, degrees) share the representative with the finest target
+    (most poles) of those that may move; every other face represents itself.  A group
+    whose faces would bring the same side of the surface into two joins is not formed."""
+    faces = sorted({s.face for j in border for s in j.sides})
+    by_surface = {}
+    for face in faces:
+        surface = sources[face]
+        key = (surface.u_degree, surface.v_degree, surface.u_knots.tobytes(),
+               surface.v_knots.tobytes(), surface.poles.tobytes())
+        by_surface.setdefault(key, []).append(face)
+    out = {face: face for face in faces}
+    for same in by_surface.values():
+        sides = [s.side for j in border for s in j.sides if s.face in same]
+        if len(same) < 2 or len(sides) != len(set(sides)):
+            continue
+        movable = [f for f in same if f in targets] or same
+        rep = max(movable, key=lambda f: np.prod([s.dimension for s in targets[f]])
+                  if f in targets else 0)
+        out.update(dict.fromkeys(same, rep))
+    return out
+
+
+def _pins(sources, targets, joins, border, group, tolerances, excluded, continuity):
+    """``{face: {side: smooth}}``: the sides of the faces that may move that lie on a join
+    off ``border`` (a side on a border join is joined instead); a smooth join pins the
+    tangent plane too (``continuity="G1"``)."""
+    in_border = {id(j) for j in border}
+    joined = {(group.get(s.face, s.face), s.side) for j in border for s in j.sides}
+    out = {}
+    for join in joins:
+        if id(join) in in_border or join.faces[0] == join.faces[1]:
+            continue
+        for side in join.sides:
+            face = group.get(side.face, side.face)
+            if (side.side is None or face not in sources or face not in targets
+                    or face in excluded or tolerances.get(face) is None
+                    or (face, side.side) in joined):
+                continue
+            smooth = continuity == "G1" and join.kind == "smooth"
+            sides = out.setdefault(face, {})
+            sides[side.side] = sides.get(side.side, False) or smooth
+    return out
+
+
+def _targets(spaces, refined):
+    """``spaces`` with each span halved ``refined`` times."""
+    for _ in range(refined):
+        spaces = tuple(_halved(s) for s in spaces)
+    return spaces
+
+
+def _halved(space):
+    """``space`` with a knot in the middle of every span."""
+    b, p = space.breakpoints, space.degree
+    inner = np.sort(np.concatenate([space.knots[p + 1: -p - 1], 0.5 * (b[1:] + b[:-1])]))
+    return SplineSpace(p, np.concatenate([np.full(p + 1, b[0]), inner, np.full(p + 1, b[-1])]))
+
+
+@dataclass(frozen=True)
+class _Solve:
+    result: object
+    patches: list
+    imposed: list
+    pinned: set
+
+
+def _solve(sources, targets, faces, kept, refined, border, group, pins, continuity):
+    """The core's joint projection of ``faces`` (``kept`` fixed; a face stands for every
+    face of ``group`` it represents; the sides of ``pins`` held at their sources by
+    pinning patches after them)."""
+    position = {face: k for k, face in enumerate(faces)}
+    patches = [JointPatch(sources[i], None if i in kept else _targets(targets[i], refined[i]))
+               for i in faces]
+    core_joins = {BorderJoin(position[group[a.face]], a.side, position[group[b.face]],
+                             b.side, runs_reversed(join), join.kind == "smooth"): join
+                  for join in border for a, b in [join.sides]}
+    pinning = []
+    for face in faces:
+        for side, smooth in pins.get(face, {}).items() if face not in kept else ():
+            pinning.append(BorderJoin(position[face], side, len(patches), side, False, smooth))
+            patches.append(pinning_patch(sources[face], side))
+    result = fair_patches(patches, list(core_joins) + pinning, continuity=continuity)
+    pinned = {(faces[j.a], j.side_a) for j in result.joins if j.b >= len(faces)}
+    return _Solve(result, patches, [core_joins[j] for j in result.joins if j in core_joins],
+                  pinned)
+
+
+def _pinned_joins(joins, border, group, pinned):
+    """``{join: {(face, side)}}``: the joins off ``border`` with a side held at its
+    source (``pinned``: ``(patch face, side)``)."""
+    in_border = {id(j) for j in border}
+    out = {}
+    for join in joins:
+        sides = {(s.face, s.side) for s in join.sides
+                 if (group.get(s.face, s.face), s.side) in pinned}
+        if sides and id(join) not in in_border:
+            out[join] = sides
+    return out
+
+
+def _turned(solve, faces, kept):
+    """The solved faces on a smooth join that turns more than the source's angle +
+    :data:`~cq_fairing.core.joins.ANGLE_SLACK` somewhere (a pinning patch is its own
+    source)."""
+    moved = [k for k, face in enumerate(faces) if face not in kept]
+    turned = turned_patches(solve.result.surfaces, [p.source for p in solve.patches],
+                            solve.result.joins, moved)
+    return [faces[k] for k in turned]
+
+
+def _grown(result, sources, faces, kept, pins):
+    """The solved faces with pinned sides whose nets are no smaller than their sources'
+    (pinned along both directions, the target spaces hold the source's)."""
+    return [face for k, face in enumerate(faces) if face not in kept and face in pins
+            and np.prod(result.surfaces[k].shape) >= np.prod(sources[face].shape)]
