@@ -13,7 +13,8 @@
    normal angle measured by projection both ways (``ShapeFairResult.joins``).
 
     python benchmarks/bench_joins.py    # grid; fuselage 2.5, testtoler 0.01, shell_patches
-                                        # 0.083 (its default), linkrods 0.01
+                                        # 0.083 (its default), linkrods 0.01, impeller 0.2
+                                        # (its default)
 """
 
 import time
@@ -32,7 +33,7 @@ from cq_fairing.occ.shapes import fair_shape
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 CASES = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01), ("shell_patches.brep", 0.083),
-         ("linkrods.step", 0.01))
+         ("linkrods.step", 0.01), ("impeller.igs", 0.2))
 
 
 def run(name, tol, joins):

@@ -50,7 +50,14 @@ constraints that make the joins hold:
    points, the obvious alternative, leave the tangent planes free between the points
    (several degrees on a curved 2 x 2 grid), and more points collapse the cross rows.
 
-Patches are polynomial (non-rational).  This module imports numpy and scipy only.
+Rational patches are solved in homogeneous coordinates :math:`(w c, w)`: where any
+patch is rational, every net is lifted (weights 1 for a polynomial patch), the
+projection, the shared borders and the mirrored rows act on four coordinates alike, and
+the results are rational.  A shared homogeneous border is one border curve (G0), and
+mirrored homogeneous rows make both the numerator's and the weight's cross derivatives
+proportional, hence the cross derivatives of the quotient (G1).  The vertices' tangent
+planes (step 2) are then not imposed, and the weights are not checked: the caller keeps
+a patch whose weights are not all positive.  This module imports numpy and scipy only.
 """
 
 from dataclasses import dataclass
@@ -170,14 +177,15 @@ def fair_patches(patches, joins, *, continuity="G1"):
     Raises
     ------
     InvalidInputError
-        Unknown sides or patch indices, a side in two joins, rational patches, or an
-        unknown ``continuity``.
+        Unknown sides or patch indices, a side in two joins, or an unknown
+        ``continuity``.
     """
     patches, joins = _checked(patches, joins, continuity)
     chords, joins, dropped = _chords(patches, joins)
     spaces = _spaces(patches, chords)
-    held = _held_rows(patches, joins, spaces, chords, _vertices(patches, joins))
-    work = _Patchwork(patches, spaces, held)
+    lifted = any(p.source.is_rational for p in patches)
+    held = _held_rows(patches, joins, spaces, chords, _vertices(patches, joins, lifted), lifted)
+    work = _Patchwork(patches, spaces, held, lifted)
     surfaces, rows = work.surfaces(_separate(work)), 0
     if continuity == "G1" and any(j.smooth for j in joins):
         c, d = _mirror_rows(work, joins, chords, surfaces)
@@ -202,10 +210,21 @@ def pinning_patch(source, side):
     """
     if side not in SIDES:
         raise InvalidInputError(f"side must be one of {SIDES}, got {side!r}.")
-    poles = np.moveaxis(source.poles, 1 - _along(side), 0)
-    poles = np.moveaxis(2.0 * poles[_end(side)] - poles, 0, 1 - _along(side))
-    return JointPatch(BSplineSurface(poles, source.u_knots, source.v_knots, source.u_degree,
-                                     source.v_degree))
+    net = np.moveaxis(_net(source, source.is_rational), 1 - _along(side), 0)
+    border = net[_end(side)]
+    scale = _reflection_scale(border[..., -1], net[..., -1]) if source.is_rational else 1.0
+    net = np.moveaxis((1.0 + scale) * border - scale * net, 0, 1 - _along(side))
+    return JointPatch(_from_net(net, (source.u_space, source.v_space), source.is_rational))
+
+
+def _reflection_scale(border_weights, weights):
+    r"""The largest :math:`s \le 1` keeping the weights :math:`(1 + s) w_0 - s w` of a
+    rational source reflected through its border positive (halved for a margin): the
+    cross row then mirrors the source's scaled by ``s``, which the mirror ratio absorbs."""
+    base = np.broadcast_to(border_weights, weights.shape)
+    rise = weights - base
+    limits = base[rise > 0] / rise[rise > 0]
+    return 1.0 if not len(limits) or limits.min() > 2.0 else 0.5 * float(limits.min())
 
 
 def join_angles(surfaces, join, t):
@@ -251,10 +270,6 @@ def _checked(patches, joins, continuity):
     for i, patch in enumerate(patches):
         if not isinstance(patch, JointPatch):
             raise InvalidInputError(f"patch {i} must be a JointPatch, got {type(patch).__name__}.")
-        if patch.source.is_rational:
-            raise InvalidInputError(
-                f"patch {i} is rational; joint fairing takes polynomial patches. Keep it "
-                "out of the joint solve (fair it alone).")
     used = set()
     for join in joins:
         for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
@@ -279,6 +294,21 @@ def _along(side):
 def _end(side):
     """0 for the low side (``"u0"``, ``"v0"``), -1 for the high one."""
     return 0 if side[1] == "0" else -1
+
+
+def _net(surface, lifted):
+    """The net the solves work on: the poles, or the homogeneous poles :math:`(w c, w)`
+    (weights 1 for a polynomial patch) when some patch is rational."""
+    return surface.homogeneous() if lifted else surface.poles
+
+
+def _from_net(net, spaces, lifted):
+    """The surface of ``net`` on ``spaces`` (u, v): rational from homogeneous poles when
+    ``lifted`` (weights are not checked here: the caller keeps a patch whose weights are
+    not all positive)."""
+    poles, weights = (net[..., :-1] / net[..., -1:], net[..., -1]) if lifted else (net, None)
+    tu, tv = spaces
+    return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
 
 
 # -- chords --------------------------------------------------------------------------------
@@ -427,7 +457,7 @@ def _side_ends(side):
     return [(0, _end(side)), (-1, _end(side))]
 
 
-def _vertices(patches, joins):
+def _vertices(patches, joins, lifted):
     """``{(patch, corner): (point, normal)}`` of every corner tied by a join.
 
     The point is the mean of the vertex's corners (a kept patch's corner where there is
@@ -449,10 +479,10 @@ def _vertices(patches, joins):
         members = [key for key, _ in group]
         kept = [k for k in members if patches[k[0]].kept]
         chosen = kept[:1] or members
-        point = np.mean([patches[i].source.poles[c] for i, c in chosen], axis=0)
+        point = np.mean([_net(patches[i].source, lifted)[c] for i, c in chosen], axis=0)
         smooth = root not in creased_roots
         normal = _vertex_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
-            if smooth else None
+            if smooth and not lifted else None
         out.update({key: (point, normal) for key in members})
     return out
 
@@ -477,11 +507,11 @@ def _vertex_normal(normals):
     return total / length if length > 0 else None
 
 
-def _border(surface, side):
-    """The border curve of a side: (space along, poles)."""
+def _border(surface, net, side):
+    """The border curve of a side: (space along, poles of its net)."""
     if side[0] == "u":
-        return surface.v_space, surface.poles[_end(side)]
-    return surface.u_space, surface.poles[:, _end(side)]
+        return surface.v_space, net[_end(side)]
+    return surface.u_space, net[:, _end(side)]
 
 
 def _unit_curve(space, poles, flip):
@@ -490,7 +520,7 @@ def _unit_curve(space, poles, flip):
     return SplineSpace(space.degree, knots), (poles[::-1] if flip else poles)
 
 
-def _held_rows(patches, joins, spaces, chords, vertices):
+def _held_rows(patches, joins, spaces, chords, vertices, lifted):
     """``{patch: {side: border poles in the patch's own along order}}`` of every join."""
     held = {}
     for join in joins:
@@ -499,7 +529,7 @@ def _held_rows(patches, joins, spaces, chords, vertices):
             root_flip[index, side] = chords.find((index, _along(side)))[1]
         unit = _unit_space(spaces, _solved_side(patches, join), root_flip)
         index, side = (join.b, join.side_b) if patches[join.b].kept else (join.a, join.side_a)
-        space, poles = _border(patches[index].source, side)
+        space, poles = _border(patches[index].source, _net(patches[index].source, lifted), side)
         curve = _unit_curve(space, poles, root_flip[index, side])
         ends = [vertices[join.a, c] for c in _side_ends(join.side_a)]
         if root_flip[join.a, join.side_a]:
@@ -544,7 +574,7 @@ def _edge_poles(unit, curve, ends, normals):
     rows, values = [], []
     for normal, inner, end in ((normals[0], 0, ends[0]), (normals[1], k - 3, ends[1])):
         if normal is not None:
-            row = np.zeros((k - 2, 3))
+            row = np.zeros((k - 2, x.shape[1]))
             row[inner] = normal
             rows.append(row)
             values.append(normal @ end)
@@ -562,27 +592,30 @@ class _Patchwork:
     """The free poles of every solved patch, numbered together, and each patch's
     held-row net: what the per-patch (G0) and joint (G1) solves share."""
 
-    def __init__(self, patches, spaces, held):
-        self.patches, self.spaces = patches, spaces
+    def __init__(self, patches, spaces, held, lifted):
+        self.patches, self.spaces, self.lifted = patches, spaces, lifted
+        self.dimension = 4 if lifted else 3
         self.nets, self.position, self.blocks, self.rhs = {}, {}, [], []
         offset = 0
         for index, patch in enumerate(patches):
             if patch.kept:
                 continue
             net, mask = _held_net(tuple(s.dimension for s in spaces[index]),
-                                  held.get(index, {}))
-            block, rhs, rows, cols = _free_system(patch.source, spaces[index], net, mask)
+                                  held.get(index, {}), self.dimension)
+            block, rhs, rows, cols = _free_system(_net(patch.source, lifted), patch.source,
+                                                  spaces[index], net, mask)
             position = -np.ones(mask.shape, dtype=int)
             position[np.ix_(rows, cols)] = offset + np.arange(len(rows) * len(cols)).reshape(
                 len(rows), len(cols))
             offset += len(rows) * len(cols)
             self.nets[index], self.position[index] = net, position
             self.blocks.append(block)
-            self.rhs.append(rhs.reshape(-1, 3))
+            self.rhs.append(rhs.reshape(-1, self.dimension))
         self.count = offset
 
     def surfaces(self, free):
-        """Every patch's surface with the free poles ``free`` (count, 3) filled in."""
+        """Every patch's surface with the free poles ``free`` (count, dimension) filled
+        in; rational where the system is homogeneous."""
         out = []
         for index, patch in enumerate(self.patches):
             if patch.kept:
@@ -591,8 +624,7 @@ class _Patchwork:
             net, position = self.nets[index].copy(), self.position[index]
             inside = position >= 0
             net[inside] = free[position[inside]]
-            tu, tv = self.spaces[index]
-            out.append(BSplineSurface(net, tu.knots, tv.knots, tu.degree, tv.degree))
+            out.append(_from_net(net, self.spaces[index], self.lifted))
         return out
 
     def pole(self, index, i, j):
@@ -602,10 +634,10 @@ class _Patchwork:
         return (int(k), None) if k >= 0 else (-1, self.nets[index][i, j])
 
 
-def _held_net(shape, held):
+def _held_net(shape, held, dimension):
     """Net with the held rows set (NaN elsewhere) and the mask of held poles."""
     ku, kv = shape
-    net = np.full((ku, kv, 3), np.nan)
+    net = np.full((ku, kv, dimension), np.nan)
     for side, row in held.items():
         if side[0] == "u":
             net[_end(side)] = row
@@ -614,14 +646,14 @@ def _held_net(shape, held):
     return net, ~np.isnan(net[..., 0])
 
 
-def _free_system(source, spaces, net, mask):
+def _free_system(source_net, source, spaces, net, mask):
     r"""The L2 projection's system on the free poles, with the held ones moved right:
     :math:`(G_u\otimes G_v)_{FF}` as factors ``(A_u, A_v)`` of the free rows and columns,
     and :math:`r_F = (E_u C_S E_v^T - G_u X_H G_v^T)_F`."""
     tu, tv = spaces
     gu, gv = gram_matrix(tu).toarray(), gram_matrix(tv).toarray()
     moments = np.einsum("ia,abd,jb->ijd", gram_matrix(tu, source.u_space).toarray(),
-                        source.poles, gram_matrix(tv, source.v_space).toarray())
+                        source_net, gram_matrix(tv, source.v_space).toarray())
     rows = np.flatnonzero(~mask.all(axis=1))
     cols = np.flatnonzero(~mask.all(axis=0))
     known = np.where(mask[..., None], net, 0.0)
@@ -631,14 +663,14 @@ def _free_system(source, spaces, net, mask):
 
 def _separate(work):
     """Free poles of every patch solved on its own (G0): banded solves per direction."""
-    free = np.empty((work.count, 3))
+    free = np.empty((work.count, work.dimension))
     start = 0
     for (a_u, a_v), rhs in zip(work.blocks, work.rhs):
         size = rhs.shape[0]
         if size:
             factors = (BandedSPD(sp.csr_matrix(a)) for a in (a_u, a_v))
-            net = rhs.reshape(a_u.shape[0], a_v.shape[0], 3)
-            free[start:start + size] = kron_solve(*factors, net).reshape(-1, 3)
+            net = rhs.reshape(a_u.shape[0], a_v.shape[0], work.dimension)
+            free[start:start + size] = kron_solve(*factors, net).reshape(-1, work.dimension)
         start += size
     return free
 
@@ -657,7 +689,8 @@ def _cross_rows(work, join, chords):
     for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
         flip = flips[index, side]
         if work.patches[index].kept:
-            out.append((index, _kept_cross_row(work.patches[index].source, side, unit, flip)))
+            out.append((index, _kept_cross_row(work.patches[index].source, side, unit, flip,
+                                               work.lifted)))
             continue
         along = np.arange(unit.dimension)[::-1] if flip else np.arange(unit.dimension)
         end, inner = (0, 1) if side[1] == "0" else (-1, -2)
@@ -666,12 +699,12 @@ def _cross_rows(work, join, chords):
     return out
 
 
-def _kept_cross_row(surface, side, unit, flip):
+def _kept_cross_row(surface, side, unit, flip, lifted):
     """A kept patch's cross row on ``unit`` (root order): the difference of its first
     inner and border rows, as a curve, projected onto ``unit`` (exact: the class space
     holds the patch's along space)."""
     space = surface.v_space if side[0] == "u" else surface.u_space
-    net = surface.poles if side[0] == "u" else np.swapaxes(surface.poles, 0, 1)
+    net = _net(surface, lifted) if side[0] == "u" else np.swapaxes(_net(surface, lifted), 0, 1)
     end, inner = (0, 1) if side[1] == "0" else (-1, -2)
     row_space, row = _unit_curve(space, net[inner] - net[end], flip)
     return sla.solve(gram_matrix(unit).toarray(), gram_matrix(unit, row_space) @ row,
@@ -683,7 +716,8 @@ def _cross_vectors(work, surfaces, side_rows):
     index, rows = side_rows
     if isinstance(rows, np.ndarray):
         return rows
-    return np.array([surfaces[index].poles[q] - surfaces[index].poles[b] for b, q in rows])
+    net = _net(surfaces[index], work.lifted)
+    return np.array([net[q] - net[b] for b, q in rows])
 
 
 def mirror_ratio(wa, wb):
@@ -707,7 +741,7 @@ def _mirror_rows(work, joins, chords, surfaces):
         wa, wb = (_cross_vectors(work, surfaces, side) for side in sides)
         mu = np.full(len(wa), mirror_ratio(wa, wb))
         for k in range(len(mu)):
-            entries, known = [], np.zeros(3)
+            entries, known = [], np.zeros(work.dimension)
             for (index, rows), weight, w in zip(sides, (1.0, mu[k]), (wa, wb)):
                 if isinstance(rows, np.ndarray):    # a kept patch: its cross row is known
                     known -= weight * w[k]
@@ -725,7 +759,7 @@ def _mirror_rows(work, joins, chords, surfaces):
                 vals += [e[1] for e in entries]
                 rhs.append(known)
     matrix = sp.csr_matrix((vals, (rows_, cols)), shape=(len(rhs), work.count))
-    return matrix, np.array(rhs).reshape(-1, 3)
+    return matrix, np.array(rhs).reshape(-1, work.dimension)
 
 
 def _joint(work, c, d):

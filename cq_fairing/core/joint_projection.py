@@ -40,7 +40,9 @@ from .joins import BorderJoin, JointPatch, fair_patches, pinning_patch, turned_p
 from .spaces import SplineSpace
 
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
-           "is_border_join", "runs_reversed", "join_tolerance", "SOURCE_GAP", "REFINEMENTS"]
+           "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
+           "SOURCE_GAP",
+           "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 REFINEMENTS = 2    # span halvings of a face over its tolerance before it is kept
@@ -189,6 +191,27 @@ def _parametric_gap(join, sources, samples=33):
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())
 
 
+def unholdable(joins, sources, moved, selected):
+    """``{face: [neighbour faces]}``: the faces of ``moved`` with a join that neither a
+    shared border nor a pinned side can hold, because its edge runs across the face's
+    surface (``side`` ``None``: a trimmed face's inner edge) or the face is not among
+    ``sources`` (not read as a B-spline net with borders, a periodic face).  A join
+    between two faces of ``selected`` that carry one surface is held by fairing that
+    surface once.  The
+    caller keeps these faces as they are, so that their joins stay as the source has
+    them."""
+    out = {}
+    for join in joins:
+        a, b = join.faces
+        if a == b or ({a, b} <= set(sources) & set(selected)
+                      and surface_key(sources[a]) == surface_key(sources[b])):
+            continue
+        for side, other in zip(join.sides, (b, a)):
+            if side.face in moved and (side.side is None or side.face not in sources):
+                out.setdefault(side.face, set()).add(other)
+    return {face: sorted(others) for face, others in out.items()}
+
+
 def project_jointly(sources, targets, joins, border, tolerances, check, *, continuity="G1",
                     excluded=frozenset()):
     """Project the faces on ``border`` and the faces with pinned sides together.
@@ -222,10 +245,10 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
     -------
     JointProjection
     """
-    group = _shared_surfaces(sources, targets, border)
+    group = _shared_surfaces(sources, targets, joins, border, tolerances)
     pins = _pins(sources, targets, joins, border, group, tolerances, excluded, continuity)
     group.update({face: face for face in pins if face not in group})
-    faces = sorted({group[s.face] for j in border for s in j.sides} | set(pins))
+    faces = sorted(set(group.values()))
     kept = {i: None for i in faces if i not in targets}
     if len(kept) == len(faces):
         return JointProjection({}, {}, [], {})
@@ -260,22 +283,34 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
                            solve.imposed + inside, _pinned_joins(joins, border, group, pinned))
 
 
-def _shared_surfaces(sources, targets, border):
-    """``{face: representative}`` over the faces of ``border``: faces whose surfaces are
-    identical (poles, knots, degrees) share the representative with the finest target
-    (most poles) of those that may move; every other face represents itself.  A group
-    whose faces would bring the same side of the surface into two joins is not formed."""
-    faces = sorted({s.face for j in border for s in j.sides})
+def surface_key(surface):
+    """A key equal for identical surfaces (degrees, knots, poles, weights): faces that
+    carry one surface split by their trims."""
+    weights = b"" if surface.weights is None else surface.weights.tobytes()
+    return (surface.u_degree, surface.v_degree, surface.u_knots.tobytes(),
+            surface.v_knots.tobytes(), surface.poles.tobytes(), weights)
+
+
+def _shared_surfaces(sources, targets, joins, border, tolerances):
+    """``{face: representative}`` over the faces of ``border`` and the faces joined to one
+    that carries the same surface: faces whose surfaces are identical
+    (:func:`surface_key`) share the representative with the finest target (most poles)
+    of those that may move; every other face represents itself.  A group with a face not
+    selected (no tolerance), or whose faces would bring the same side of the surface
+    into two joins, is not formed."""
+    twins = {f for j in joins if j.faces[0] != j.faces[1]
+             and all(f in sources for f in j.faces)
+             and surface_key(sources[j.faces[0]]) == surface_key(sources[j.faces[1]])
+             for f in j.faces}
+    faces = sorted({s.face for j in border for s in j.sides} | twins)
     by_surface = {}
     for face in faces:
-        surface = sources[face]
-        key = (surface.u_degree, surface.v_degree, surface.u_knots.tobytes(),
-               surface.v_knots.tobytes(), surface.poles.tobytes())
-        by_surface.setdefault(key, []).append(face)
+        by_surface.setdefault(surface_key(sources[face]), []).append(face)
     out = {face: face for face in faces}
     for same in by_surface.values():
         sides = [s.side for j in border for s in j.sides if s.face in same]
-        if len(same) < 2 or len(sides) != len(set(sides)):
+        if len(same) < 2 or len(sides) != len(set(sides)) or \
+                any(tolerances.get(f) is None for f in same):
             continue
         movable = [f for f in same if f in targets] or same
         rep = max(movable, key=lambda f: np.prod([s.dimension for s in targets[f]])

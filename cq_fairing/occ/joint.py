@@ -27,6 +27,7 @@ from ..core.joint_projection import (
     border_joins,
     project_jointly,
     runs_reversed,
+    unholdable,
 )
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
@@ -84,15 +85,20 @@ def fair_joined(job, adjacency, joins):
     """
     readable = _readable_faces(job, {s.face for j in adjacency.joins for s in j.sides
                                      if s.side is not None})
+    _keep_unholdable(job, adjacency, readable)
     border = border_joins(adjacency.joins, readable, job.tol)
-    grids = fair_grids(job, adjacency, readable, border, runs_reversed,
+    polynomial = {face: s for face, s in readable.items() if not s.is_rational}
+    within = [j for j in border if set(j.faces) <= set(polynomial)]
+    grids = fair_grids(job, adjacency, polynomial, within, runs_reversed,
                        lambda tol: SOURCE_GAP * tol)
     gridded = {face for grid in grids for face in grid.faces}
     in_grids = [j for j in border if set(j.faces) <= gridded]
     border = [j for j in border if not set(j.faces) & gridded]
     continuity = "G1" if joins == "smooth" else "G0"
     joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
-    networks = fair_networks(job, adjacency, readable, border, runs_reversed, continuity)
+    networks = fair_networks(job, adjacency, polynomial,
+                             [j for j in border if set(j.faces) <= set(polynomial)],
+                             runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
     pinned = [j for j, sides in joint.pinned.items()
@@ -110,6 +116,8 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded):
     measured = {}
 
     def check(face, surface):
+        if surface.is_rational and not np.all(surface.weights > 0):
+            return np.inf
         measured[face] = job.measured(face, collapsed_kept(readable[face], surface))
         return measured[face][2]["max"]
 
@@ -122,9 +130,20 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded):
     return joint
 
 
+def _keep_unholdable(job, adjacency, readable):
+    """Keep each faired face with a join no fairing can hold
+    (:func:`~cq_fairing.core.joint_projection.unholdable`); its neighbours then close onto
+    it, as the source has them; ``joins="free"`` fairs it alone."""
+    moved = {face for face, report in enumerate(job.reports) if report.faired}
+    for face, neighbours in unholdable(adjacency.joins, readable, moved, job.tol).items():
+        job.reports[face] = job.kept(face, "unchanged", (
+            f"its joins with faces {[n + 1 for n in neighbours]} run across its surface, "
+            "where no fairing can hold them: kept as it was (joins='free' fairs it alone)"))
+
+
 def _readable_faces(job, indices):
-    """``{face: source surface}`` of the faces that read as polynomial, non-periodic
-    B-spline nets (the others keep their joins free)."""
+    """``{face: source surface}`` of the faces that read as non-periodic B-spline nets,
+    polynomial or rational (the others keep their joins as the source has them)."""
     out = {}
     for index in sorted(indices):
         try:
@@ -133,14 +152,16 @@ def _readable_faces(job, indices):
             if not isinstance(exc, FairingError) and not is_occt_error(exc):
                 raise
             continue
-        if surface.weights is None and not info.unperiodized:
+        if not info.unperiodized:
             out[index] = surface
     return out
 
 
 def _fairable(report, source):
-    """True when the face was faired alone onto polynomial targets on its own domain."""
-    return (report.faired and report.surface is not None and report.surface.weights is None
+    """True when the face was faired alone onto targets on its own domain, rational where
+    its source is (a rational face faired onto a polynomial approximation stays out)."""
+    return (report.faired and report.surface is not None
+            and report.surface.is_rational == source.is_rational
             and report.surface.domain == source.domain)
 
 
@@ -158,10 +179,12 @@ def _keep(job, index, deviation, joins):
             f"its joins (with faces {neighbours}), held where the source has them, leave no "
             "net smaller than the source's: kept as it was"))
         return
+    what = (f"stays {deviation:.3g} from its source, over tol={job.tol[index]:g}, after "
+            f"{REFINEMENTS} refinements" if np.isfinite(deviation)
+            else "gets weights that are not all positive")
     job.reports[index] = job.kept(index, "tolerance-not-met", (
-        f"with its joins closed the face stays {deviation:.3g} from its source, over "
-        f"tol={job.tol[index]:g}, after {REFINEMENTS} refinements; kept as it was, and "
-        f"its neighbours close onto it (joins with faces {neighbours})"))
+        f"with its joins closed the face {what}; kept as it was, and its neighbours close "
+        f"onto it (joins with faces {neighbours})"))
 
 
 @dataclass(eq=False)

@@ -251,9 +251,10 @@ def test_help_documents_exit_codes():
 def test_adaptive_fairs_the_rational_faces_of_linkrods(tmp_path):
     """--method adaptive used to skip every rational face ('skipped-rational'); linkrods'
     B-spline faces are rational but two. All 18 are now faired within tol (OCCT's
-    two-sided check), the report says which are rational, and the poles drop."""
+    two-sided check), the report says which are rational, and the poles drop. Face by
+    face: with its joins held, every one of them is kept (its joins run across it)."""
     proc = run("fair", data_path("linkrods.step"), "-o", "out.step", "--tol", "0.01",
-               "--method", "adaptive", "--report", "r.json", cwd=tmp_path)
+               "--method", "adaptive", "--joins", "free", "--report", "r.json", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     report = json.loads((tmp_path / "r.json").read_text())
     bspline = [f for f in report["faces"] if f["surface_type"] == "BSpline"]
@@ -267,11 +268,13 @@ def test_adaptive_fairs_the_rational_faces_of_linkrods(tmp_path):
 
 
 def test_target_degree_reaches_every_face_and_refusals_speak_in_options(tmp_path):
-    """--target-degree 5: the blade's two large faces are faired at degree 5 within tol
+    """--target-degree 5: the blade's large face 3, alone (its twin, face 2, not selected,
+    would keep it with the joins held), is faired at degree 5 within tol
     (more spans than the source's, the core's grown top). The root face at degree 2 and
     tol 1e-4 is refused, and the refusal names the option, not the API's argument."""
     proc = run("fair", BLADE, "-o", "out.step", "--tol", "0.001", "--method", "adaptive",
-               "--faces", "3", "--target-degree", "5", "--report", "r.json", cwd=tmp_path)
+               "--faces", "3", "--target-degree", "5", "--joins", "free", "--report", "r.json",
+               cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     face = json.loads((tmp_path / "r.json").read_text())["faces"][2]
     assert face["status"] == "ok" and face["degree_after"] == [5, 5]

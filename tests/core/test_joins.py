@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cq_fairing.core.examples import patch_grid
+from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches, pinning_patch
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
@@ -129,6 +130,55 @@ def test_a_pinned_side_keeps_the_source_border_and_tangent_plane(side, n):
     assert np.degrees(np.arccos(np.clip(np.sum(nf * ns, axis=1), -1, 1))).max() < 1e-5
     across = 0 if side[0] == "u" else 1
     assert faired.shape[across] == n + 3 < patch.shape[across]
+
+
+def _rational_pair(seed=3):
+    """Patches 0 and 2 of the grid (joined v1 to v0) with random weights in [0.7, 1.5],
+    equal along their common border."""
+    patches, joins = _grid()
+    rng = np.random.default_rng(seed)
+    weights = [rng.uniform(0.7, 1.5, p.shape) for p in (patches[0], patches[2])]
+    weights[1][:, 0] = weights[0][:, -1]
+    pair = [BSplineSurface(p.poles, p.u_knots, p.v_knots, 3, 3, w)
+            for p, w in zip((patches[0], patches[2]), weights)]
+    return pair, [BorderJoin(0, "v1", 1, "v0")]
+
+
+def test_rational_patches_are_joined_in_homogeneous_coordinates():
+    pair, joins = _rational_pair()
+    targets = _targets(pair)
+    joint = fair_patches(targets, joins)
+    alone = [fair_patches([p], []).surfaces[0] for p in targets]
+    assert all(s.is_rational and np.all(s.weights > 0) for s in joint.surfaces)
+    (pa, na), (pb, nb) = (_rational_border(s, side)
+                          for s, side in zip(joint.surfaces, ("v1", "v0")))
+    assert np.linalg.norm(pa - pb, axis=1).max() <= 1e-9 * 2.0
+    assert np.degrees(np.arccos(np.clip(np.abs(np.sum(na * nb, axis=1)), -1, 1))).max() < 1e-5
+    (pa, na), (pb, nb) = (_rational_border(s, side) for s, side in zip(alone, ("v1", "v0")))
+    assert np.linalg.norm(pa - pb, axis=1).max() > 1e-3
+    assert np.degrees(np.arccos(np.clip(np.abs(np.sum(na * nb, axis=1)), -1, 1))).max() > 1.0
+
+
+@given(st.sampled_from(["u0", "u1", "v0", "v1"]), st.integers(0, 20))
+def test_a_pinned_rational_side_keeps_its_border_and_tangent_plane(side, seed):
+    patch = _rational_pair(seed)[0][0]
+    result = fair_patches(_targets([patch]) + [pinning_patch(patch, side)],
+                          [BorderJoin(0, side, 1, side)])
+    (pf, nf), (ps, ns) = (_rational_border(s, side) for s in (result.surfaces[0], patch))
+    assert np.linalg.norm(pf - ps, axis=1).max() <= 1e-9 * 2.0
+    assert np.degrees(np.arccos(np.clip(np.sum(nf * ns, axis=1), -1, 1))).max() < 1e-5
+
+
+def _rational_border(surface, side):
+    """Points and unit normals along a side by the surface's own (rational) evaluation."""
+    (u0, u1), (v0, v1) = surface.domain
+    t = SAMPLES
+    u, v = ([{"u0": u0, "u1": u1}[side]], v0 + (v1 - v0) * t) if side[0] == "u" else \
+        (u0 + (u1 - u0) * t, [{"v0": v0, "v1": v1}[side]])
+    point, su, sv = (surface.evaluate_grid(u, v, nu, nv).reshape(len(t), 3)
+                     for nu, nv in ((0, 0), (1, 0), (0, 1)))
+    normal = np.cross(su, sv)
+    return point, normal / np.linalg.norm(normal, axis=1, keepdims=True)
 
 
 @given(st.integers(3, 7), st.sampled_from(["G0", "G1"]))

@@ -5,7 +5,13 @@ its source, and a face that cannot meet its tolerance is kept."""
 import numpy as np
 
 from cq_fairing.core.examples import patch_grid
-from cq_fairing.core.joint_projection import Join, JoinSide, border_joins, project_jointly
+from cq_fairing.core.joint_projection import (
+    Join,
+    JoinSide,
+    border_joins,
+    project_jointly,
+    unholdable,
+)
 from cq_fairing.core.spaces import SplineSpace
 
 from .test_joins import _joins_measured
@@ -81,3 +87,20 @@ def test_a_face_over_its_tolerance_is_kept_and_its_neighbours_close_onto_it():
     assert list(joint.kept) == [0] and joint.kept[0] > 1e-6
     surfaces = [joint.surfaces.get(i, sources[i]) for i in range(4)]
     assert _joins_measured(surfaces, grid.joins)[0] <= 1e-9 * 2.0
+
+
+def test_a_join_across_a_face_makes_it_unholdable_unless_both_faces_share_a_surface():
+    """An edge off the borders (side None) cannot be held by a border or a pin; a face
+    not read as a patch (absent from the sources) neither; two faces cut from one
+    surface are held by fairing it once."""
+    grid, joins = _model()
+    sources = dict(enumerate(grid.patches))
+    a, b = joins[1].sides
+    across = Join((JoinSide(a.face, a.edge), b), "smooth", 1e-7, 0.0)
+    every = {0, 1, 2, 3}
+    assert unholdable([across] + joins[2:], sources, every, every) == {0: [2]}
+    assert unholdable(joins, {i: sources[i] for i in (0, 1, 2)}, every, every) == {3: [1, 2]}
+    assert unholdable([across], sources, {2, 3}, every) == {}
+    twins = {0: sources[0], 2: sources[0]}
+    assert unholdable([across], twins, {0, 2}, every) == {}
+    assert unholdable([across], twins, {0}, {0}) == {0: [2]}     # its twin not selected

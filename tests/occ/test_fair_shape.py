@@ -23,8 +23,10 @@ def count(shape, kind):
 
 @pytest.fixture(scope="module")
 def linkrods_result(real):
+    """linkrods faired face by face: with its joins held (the default) every B-spline face
+    is kept, its joins running across it (tests/occ/test_joint.py)."""
     calls = []
-    result = fair_shape(real("linkrods.step"), tol=5e-3,
+    result = fair_shape(real("linkrods.step"), tol=5e-3, joins="free",
                         progress=lambda done, total, rep: calls.append((done, total)))
     return result, calls
 
@@ -97,10 +99,16 @@ def test_ring_through_fair_shape_stays_closed(real):
 
 def test_face_selection_and_errors(real):
     source = real("IEA_15MW_CFD.stp")
-    result = fair_shape(source, tol=0.01, faces=[1])
-    assert [r.status for r in result.faces] == ["skipped-not-selected", "faired",
-                                                "skipped-not-selected"]
-    assert result.valid
+    alone = fair_shape(source, tol=0.01, faces=[1], joins="free")
+    assert [r.status for r in alone.faces] == ["skipped-not-selected", "faired",
+                                               "skipped-not-selected"]
+    assert alone.valid
+    # face 2 is half of a surface whose other half (face 3) is not selected: fairing it
+    # would open their join, so by default it is kept, and says so
+    held = fair_shape(source, tol=0.01, faces=[1])
+    assert [r.status for r in held.faces] == ["skipped-not-selected", "unchanged",
+                                              "skipped-not-selected"]
+    assert "[3] run across its surface" in held.faces[1].message
     with pytest.raises(InvalidInputError, match="out of range"):
         fair_shape(source, faces=[3])
     with pytest.raises(InvalidInputError):
@@ -113,13 +121,18 @@ def test_impeller_subset_keeps_a_validcompound(real):
     """Every ninth impeller face (31 faces; the full 277-face run takes ~3 min)."""
     source = real("impeller.igs")
     chosen = list(range(0, 277, 9))
-    result = fair_shape(source, tol=0.05, faces=chosen)
+    result = fair_shape(source, tol=0.05, faces=chosen, joins="free")
     assert result.valid
     assert result.free_edges_after == result.free_edges_before
     for report in result.faces:
         if report.faired:
             assert report.max_deviation <= 0.05
     assert sum(r.faired for r in result.faces) >= 10
+    held = fair_shape(source, tol=0.05, faces=chosen)   # joins held: fewer faces faired,
+    assert held.valid and held.joins.summary()["max_gap_opened"] <= 1e-9 * 300.0
+    kept = [r for r in held.faces if r.status == "unchanged" and r.index in chosen]
+    assert all(r.message for r in kept)
+    assert sum("run across its surface" in r.message for r in kept) >= 5
 
 
 # -- worker processes: jobs and a per-face time limit (G2) ---------------------------------

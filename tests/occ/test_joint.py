@@ -80,6 +80,32 @@ def test_a_join_parametrized_differently_on_each_side_keeps_the_source_gap(real)
     assert rows["free"]["gap"] > 10 * rows["free"]["source_gap"]
 
 
+def test_rational_faces_are_joined_in_homogeneous_coordinates(real):
+    """Impeller faces 191 and 192 are rational and meet along whole sides: their smooth
+    join is faired once and shared (source gap 0.001, angle 0.065 deg)."""
+    impeller = real("impeller.igs")
+    runs = {j: fair_shape(impeller, tol=0.05, joins=j, faces=[190, 191]) for j in ("smooth", "free")}
+    rows = {j: [r for r in run.joins.rows() if r["faces"] == (191, 192)][0]
+            for j, run in runs.items()}
+    faired = [r for r in runs["smooth"].faces if r.index in (190, 191)]
+    assert all(r.faired and r.surface.is_rational and r.max_deviation <= 0.05 for r in faired)
+    assert rows["smooth"]["held"] and rows["smooth"]["gap"] < 1e-6
+    assert rows["smooth"]["angle"] < 1e-4
+    assert rows["free"]["gap"] > 1e-3 and rows["free"]["angle"] > 0.1
+
+
+def test_faces_whose_joins_run_across_them_are_kept_with_their_reason(real):
+    """linkrods' faired faces all meet an analytic or trimmed neighbour along an edge that
+    runs across their surfaces, where no fairing holds the join: the default keeps them
+    (its joins stay as the source has them); joins="free" fairs them alone."""
+    shape = real("linkrods.step")
+    joint, alone = (fair_shape(shape, tol=0.01, joins=j) for j in ("smooth", "free"))
+    assert alone.n_faired >= 18 and alone.joins.summary()["max_gap_opened"] > 1e-3
+    kept = [r for r in joint.faces if r.status == "unchanged" and "run across" in r.message]
+    assert len(kept) >= 18 and joint.valid
+    assert joint.joins.summary()["max_gap_opened"] <= 1e-9
+
+
 @pytest.mark.parametrize("kwargs, match", [
     (dict(joins="sealed"), "joins must be one of"),
     (dict(angle_tol=0.0), "angle_tol"),
