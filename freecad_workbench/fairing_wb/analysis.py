@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from cq_fairing.core.closest_points import closest_points_surface
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
-           "two_sided_deviation", "curvature"]
+           "two_sided_deviation", "curvature", "points_and_normals", "foot_points"]
 
 
 def sample_parameters(uv_range, count):
@@ -67,7 +67,14 @@ def foot_points(surface, points, u, v, uv_range):
     and the unit normals there."""
     u0, u1, v0, v1 = uv_range
     u, v, _ = closest_points_surface(surface, points, u, v, bounds=((u0, u1), (v0, v1)))
-    s, su, sv = _point_and_tangents(surface, u, v)
+    return points_and_normals(surface, u, v)
+
+
+def points_and_normals(surface, u, v):
+    r"""Points and unit normals :math:`S_u \times S_v / |S_u \times S_v|` of ``surface``
+    at scattered parameters ``(u_q, v_q)``, each (q, 3) (a zero normal where
+    :math:`S_u \times S_v = 0`)."""
+    s, su, sv = _point_and_tangents(surface, np.asarray(u, float), np.asarray(v, float))
     n = np.cross(su, sv)
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     return s, n

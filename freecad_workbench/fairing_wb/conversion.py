@@ -178,7 +178,7 @@ def face_on_surface(surface, face):
     edges' p-curves (unchanged because fairing keeps the parameter domain) with the
     source's edge tolerances; a face that is still not valid is repaired by OCCT's shape
     fixer (wire order and orientation, edges shorter than the tolerance) within the
-    source face's largest tolerance.
+    source face's largest tolerance.  The result has ``face``'s orientation.
 
     Raises
     ------
@@ -187,7 +187,7 @@ def face_on_surface(surface, face):
     """
     u0, u1, v0, v1 = face.ParameterRange
     if _is_uv_rectangle(face):
-        return surface.toShape(u0, u1, v0, v1)
+        return _oriented_like(surface.toShape(u0, u1, v0, v1), face)
     try:
         wires = [_wire_on_surface(face, wire, surface) for wire in face.Wires]
         result = Part.Face(surface, wires[0])
@@ -199,6 +199,13 @@ def face_on_surface(surface, face):
         raise _not_rebuilt(f"OCCT: {error}") from error
     if result.isNull() or not result.isValid():
         raise _not_rebuilt("the rebuilt face is not valid")
+    return _oriented_like(result, face)
+
+
+def _oriented_like(result, face):
+    """``result`` with ``face``'s orientation (its normal turned the same way)."""
+    if result.Orientation != face.Orientation:
+        result.reverse()
     return result
 
 
@@ -215,8 +222,7 @@ def face_on_edges(surface, face, tolerance):
     for inner in face.Wires:
         if not inner.isSame(face.OuterWire):
             result = Part.Face(result, inner)
-    if result.Orientation != face.Orientation:
-        result.reverse()
+    result = _oriented_like(result, face)
     if not result.isValid():
         result.fix(1e-7, 1e-7, tolerance)
     return result

@@ -15,7 +15,8 @@ from . import conversion, make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 3  # 2: Method "adaptive" and the Objective property; 3: the Borders property
+VERSION = 4  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
+# 4: the Joins and AngleTolerance properties
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -38,6 +39,12 @@ PROPERTIES = (
      "free (plain projection, often a faster search) or pinned", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
+    ("App::PropertyEnumeration", "Joins", "Fairing",
+     "Several faces of one shape: smooth (joins held closed, and smooth where the source "
+     "is), closed (joins held closed) or free (each face alone; joins may open)", False),
+    ("App::PropertyAngle", "AngleTolerance", "Fairing",
+     "A join whose source normals differ by less than this all along it is smooth, "
+     "else a crease", False),
     ("App::PropertyEnumeration", "Search", "Fairing",
      "Tolerance search: linear (fast, seed's iteration), guaranteed (fewest poles), polyfit",
      False),
@@ -52,10 +59,29 @@ PROPERTIES = (
 )
 ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OBJECTIVES,
                 "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES,
-                "Measure": make.MEASURES}
+                "Measure": make.MEASURES, "Joins": make.JOINS}
 
 # Values of newly added properties other than FreeCAD's zero (saved values are kept).
-DEFAULTS = {"Tolerance": 0.01}
+DEFAULTS = {"Tolerance": 0.01, "AngleTolerance": 1.0}
+CLOSED = 1e-7  # relative to the size: joins closer than this are sewn as they are
+
+
+def _sewn_closed(shapes, joins):
+    """The faired faces sewn into one valid shell when every join among them (``joins``,
+    a :class:`~fairing_wb.joins.JoinReport`) is closed within :data:`CLOSED` times the
+    size, else ``None``.  The sewn edges lie on both faces to within their gaps, so their
+    tolerances stay at the faces' own (no source edge is put back on a moved face)."""
+    if joins is None or not joins.found.joins:
+        return None
+    compound = Part.makeCompound(shapes)
+    reach = CLOSED * compound.BoundBox.DiagonalLength
+    if joins.summary()["max_gap"] > reach:
+        return None
+    sewn = compound.copy()
+    sewn.sewShape(reach)
+    if sewn.isValid() and len(sewn.Faces) == len(shapes) and len(sewn.Shells) == 1:
+        return sewn.Shells[0]
+    return None
 
 
 def _sewn(compound, deviation):
@@ -155,8 +181,10 @@ class Fairing:
         obj.PolesBefore = "; ".join(" x ".join(map(str, r.poles_before)) for r in results)
         obj.PolesAfter = "; ".join(" x ".join(map(str, r.poles_after)) for r in results)
         obj.MaxDeviation = max(r.max_deviation for r in results)
-        obj.FairingTime = sum(r.seconds for r in results)
-        obj.Status = "; ".join(["OK"] + [r.note for r in results if r.note])
+        joins = [] if results.joins is None else [results.joins]
+        obj.FairingTime = sum(r.seconds for r in results) + sum(j.seconds for j in joins)
+        obj.Status = "; ".join(["OK"] + [r.note for r in results if r.note]
+                               + [j.line() for j in joins])
 
     @staticmethod
     def settings(obj):
@@ -172,6 +200,12 @@ class Fairing:
         return {"tolerance": None, "target": (obj.TargetU, obj.TargetV), **common}
 
     @staticmethod
+    def join_settings(obj):
+        """Keyword arguments of :func:`make.fair_shapes` for the joins: ``joins``,
+        ``angle_tolerance`` (degrees)."""
+        return {"joins": obj.Joins, "angle_tolerance": obj.AngleTolerance.Value}
+
+    @staticmethod
     def face_settings(obj):
         """Keyword arguments of :func:`make.fair_face` that faces have and edges do not:
         ``boundary``, and ``borders`` (adaptive method only, ignored otherwise)."""
@@ -182,11 +216,13 @@ class Fairing:
         if obj.Source is None:
             raise cf.InvalidInputError("the Fairing has no Source; link faces or edges.")
         source, subs = obj.Source
-        results = make.fair_elements(source, subs, self.settings(obj), self.face_settings(obj))
+        results = make.fair_elements(source, subs, self.settings(obj), self.face_settings(obj),
+                                     **self.join_settings(obj))
         shapes = [r.shape for r in results]
         if len(shapes) == 1:
             return shapes[0], results
-        shell = _shell_on_source_edges(source, subs, results)
+        shell = (_sewn_closed(shapes, results.joins)
+                 or _shell_on_source_edges(source, subs, results))
         if shell is not None:
             return shell, results
         return _sewn(Part.makeCompound(shapes), max(r.max_deviation for r in results)), results

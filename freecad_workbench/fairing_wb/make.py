@@ -24,11 +24,20 @@ from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's d
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
+from .joins import (
+    JOINS,
+    JoinReport,
+    check_join_options,
+    find_joins,
+    held_joins,
+    hold_joins,
+    measure_joins,
+)
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "fair_shapes", "error_sentence",
-           "FairedShape", "MODES", "METHODS",
-           "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES"]
+           "FairedShape", "FairedShapes", "MODES", "METHODS",
+           "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES", "JOINS"]
 
 MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
@@ -56,6 +65,8 @@ class FairedShape:
         Wall time of conversion + fairing + rebuild.
     note : str
         Why the element was kept as it is (``""`` when it was faired).
+    surface : cq_fairing.BSplineSurface or None
+        The faired surface of a faired face (``None`` for an edge or a kept face).
     """
 
     shape: object
@@ -64,6 +75,17 @@ class FairedShape:
     max_deviation: float
     seconds: float
     note: str = ""
+    surface: object = None
+
+
+class FairedShapes(list):
+    """The :class:`FairedShape` of each element, in order (a list), and ``joins``: the
+    :class:`~fairing_wb.joins.JoinReport` of the faces faired together (``None`` with
+    fewer than two faces)."""
+
+    def __init__(self, results, joins=None):
+        super().__init__(results)
+        self.joins = joins
 
 
 def _check_tolerance(tolerance):
@@ -319,11 +341,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
                               borders, uv_range)
     faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
-    both = np.abs(analysis.two_sided_deviation(source, faired, uv_range, DEVIATION_SAMPLES)[1])
-    inside = conversion.inside_mask(
-        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
-    # over the face's trim; a trim too thin to hold a sample falls back on its UV box
-    deviation = float((both[inside] if inside.any() else both).max())
+    deviation = face_deviation(face, source, faired)
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
@@ -331,7 +349,19 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
             "larger tolerance.", tolerance=tolerance, best_deviation=deviation)
     shape = conversion.face_on_surface(conversion.part_surface(faired), face)
     return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
-                       time.perf_counter() - start)
+                       time.perf_counter() - start, surface=faired)
+
+
+def face_deviation(face, source, faired):
+    """Largest two-sided deviation (``analysis.two_sided_deviation``) between ``source``
+    and ``faired`` at ``DEVIATION_SAMPLES`` squared samples of ``face``'s UV box that lie
+    on the face (inside its trim; a trim too thin to hold a sample falls back on its UV
+    box)."""
+    uv_range = conversion.uv_range(face, source)
+    both = np.abs(analysis.two_sided_deviation(source, faired, uv_range, DEVIATION_SAMPLES)[1])
+    inside = conversion.inside_mask(
+        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
+    return float((both[inside] if inside.any() else both).max())
 
 
 def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linear",
@@ -419,8 +449,8 @@ def _clamped_target(target, face):
     return tuple(clamped)
 
 
-def fair_elements(obj, subs, settings, face_settings):
-    """Fair the faces and edges ``subs`` of ``obj`` one by one (feature and task panel).
+def fair_elements(obj, subs, settings, face_settings, joins="smooth", angle_tolerance=1.0):
+    """Fair the faces and edges ``subs`` of ``obj`` (feature and task panel).
 
     Parameters
     ----------
@@ -433,13 +463,16 @@ def fair_elements(obj, subs, settings, face_settings):
         ``objective``).
     face_settings : dict
         Those of faces only: ``boundary``, ``borders``.
+    joins, angle_tolerance
+        How the faces stay together along their joins, see :func:`fair_shapes`.
 
     Returns
     -------
-    list of FairedShape
+    FairedShapes
         One per element, in the order of ``subs`` (see :func:`fair_shapes`).
     """
-    return fair_shapes(named_elements(obj, subs), settings, face_settings)
+    return fair_shapes(named_elements(obj, subs), settings, face_settings, joins=joins,
+                       angle_tolerance=angle_tolerance)
 
 
 def named_elements(obj, subs):
@@ -448,7 +481,8 @@ def named_elements(obj, subs):
     return [(sub, _element(obj, sub)) for sub in subs]
 
 
-def fair_shapes(named, settings, face_settings, progress=None):
+def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
+                angle_tolerance=1.0):
     """Fair the shapes ``named`` (``[(sub, face or edge)]``, from :func:`named_elements`); no
     document access, so it may run in a worker thread.
 
@@ -457,17 +491,30 @@ def fair_shapes(named, settings, face_settings, progress=None):
     tolerance is kept as it is (:func:`_kept`) instead of failing the others.  ``settings``
     and ``face_settings`` as in :func:`fair_elements`.
 
+    Several faces of one shape are faired alone first; in tolerance mode and with
+    ``joins`` other than ``"free"`` they are then projected again together along the
+    edges they share (:mod:`fairing_wb.joins`): closed to round-off, and smooth across
+    the joins that were smooth in the source.  Their joins are measured either way.
+
     Parameters
     ----------
     progress : callable, optional
         ``progress(done, total)`` before each element and after the last; an exception it
         raises stops the fairing there (an element being faired runs to its end).
+    joins : {"smooth", "closed", "free"}
+        ``smooth``: joins closed, and smooth where the source is (normal angle below
+        ``angle_tolerance``); ``closed``: joins closed; ``free``: each face alone (its
+        joins may open by up to about twice the tolerance).
+    angle_tolerance : float
+        Degrees: a join whose source normals differ by less all along it is smooth,
+        else a crease (kept a crease).
 
     Returns
     -------
-    list of FairedShape
-        One per element, in the order of ``named``.
+    FairedShapes
+        One per element, in the order of ``named``, with the joins' report.
     """
+    check_join_options(joins, angle_tolerance)
     target = settings["target"]
     results = []
     for done, (sub, element) in enumerate(named):
@@ -488,7 +535,68 @@ def fair_shapes(named, settings, face_settings, progress=None):
             results.append(fair_edge(element, **{**settings, "target": own}))
     if progress is not None:
         progress(len(named), len(named))
-    return results
+    return _joined(named, results, settings["tolerance"], joins, angle_tolerance)
+
+
+def _joined(named, results, tolerance, joins, angle_tolerance):
+    """``results`` with the joins among the faces of ``named`` held (:func:`_hold`) and
+    measured, as :class:`FairedShapes`."""
+    faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
+    if len(faces) < 2:
+        return FairedShapes(results)
+    start = time.perf_counter()
+    elements = [named[k] for k in faces]
+    found = find_joins([element for _, element in elements], angle_tolerance)
+    alone = [results[k] for k in faces]
+    faired, held = alone, []
+    if joins != "free" and tolerance is not None and found.joins:
+        faired, held = _hold(found, elements, alone, tolerance, joins)
+    out = list(results)
+    for k, result in zip(faces, faired):
+        out[k] = result
+    surfaces = {i: r.surface if r.surface is not None else found.sources[i]
+                for i, r in enumerate(faired)}
+    report = JoinReport(found, measure_joins(found, surfaces), held,
+                        time.perf_counter() - start)
+    return FairedShapes(out, report)
+
+
+def _hold(found, elements, alone, tolerance, joins):
+    """The faces faired ``alone`` projected again together (:func:`joins.hold_joins`):
+    ``(results, held joins)``; a face the joint projection keeps says why."""
+    targets = {i: (r.surface.u_space, r.surface.v_space) for i, r in enumerate(alone)
+               if i in found.readable and r.surface is not None and r.surface.weights is None
+               and r.surface.domain == found.readable[i].domain}
+    measured = {}
+
+    def check(face, surface):
+        measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
+        return measured[face]
+
+    projection = hold_joins(found, targets, dict.fromkeys(range(len(alone)), tolerance),
+                            check, joins)
+    faired = list(alone)
+    for i, surface in projection.surfaces.items():
+        shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
+        faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),
+                            max_deviation=measured[i], surface=surface)
+    for i, deviation in projection.kept.items():
+        faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
+    unchanged = {i for i, r in enumerate(faired) if r.surface is None}
+    return faired, held_joins(projection, unchanged)
+
+
+def _kept_by_joins(element, deviation, tolerance):
+    """:class:`FairedShape` of a face the joint projection keeps as it is: with its joins
+    held it stays ``deviation`` over ``tolerance``, or (``deviation`` ``None``) its joins
+    leave it no net smaller than its source's."""
+    sub, face = element
+    poles = tuple(conversion.surface_from_face(face).shape)
+    why = ("its joins, held where the source has them, leave no net smaller than the "
+           "source's" if deviation is None else
+           f"with its joins held closed it stays {deviation:.4g} mm from its source, over "
+           f"{tolerance:.4g} mm; its neighbours close onto it")
+    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, f"{sub} kept unchanged: {why}")
 
 
 def _kept(face, sub, error):
@@ -534,7 +642,7 @@ def _source_link(source):
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
                  search="linear", measure="parametric", objective="compact", name="Fairing",
-                 doc=None, borders="auto"):
+                 doc=None, borders="auto", joins="smooth", angle_tolerance=1.0):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
 
     Parameters
@@ -554,6 +662,11 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         Accuracy control of tolerance mode, see :func:`fair_face`.
     objective, borders : str
         Of the adaptive method, see :func:`fair_face`.
+    joins : {"smooth", "closed", "free"}
+        How several faces of the source stay together along the edges they share, see
+        :func:`fair_shapes`.
+    angle_tolerance : float
+        Degrees: the smooth/crease threshold of the joins.
 
     Returns
     -------
@@ -567,6 +680,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
     _check_adaptive_only(method, objective, borders)
+    check_join_options(joins, angle_tolerance)
     obj_source, subs = _source_link(source)
     doc = doc or obj_source.Document
     obj = doc.addObject("Part::FeaturePython", name)
@@ -585,6 +699,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
                          else preferences.default_tolerance(obj_source.Shape))
     obj.Method, obj.Boundary, obj.Search, obj.Measure = method, boundary, search, measure
     obj.Objective, obj.Borders = objective, borders
+    obj.Joins, obj.AngleTolerance = joins, angle_tolerance
     obj_source.Visibility = False  # App-level property: undo shows the source again
     if FreeCAD.GuiUp:
         from . import view_provider

@@ -41,9 +41,10 @@ def _is_bspline(element):
     return isinstance(geometry, (Part.BSplineSurface, Part.BSplineCurve))
 
 
-def make_call(link, settings, face):
-    """The scriptable ``make_fairing(...)`` line for a source link, settings and face
-    settings (``boundary``, ``borders``)."""
+def make_call(link, settings, face, joins=None):
+    """The scriptable ``make_fairing(...)`` line for a source link, settings, face
+    settings (``boundary``, ``borders``) and join settings (``joins``,
+    ``angle_tolerance``, named only where they differ from the defaults)."""
     obj, subs = link
     args = [f"(App.ActiveDocument.getObject({obj.Name!r}), {subs!r})"]
     if settings["target"] is not None:
@@ -55,6 +56,8 @@ def make_call(link, settings, face):
         args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
                  f"measure={settings['measure']!r}"]
     args += [f"method={settings['method']!r}", f"boundary={face['boundary']!r}"]
+    defaults = {"joins": make.JOINS[0], "angle_tolerance": 1.0}
+    args += [f"{key}={value!r}" for key, value in (joins or {}).items() if value != defaults[key]]
     return f"fairing_wb.make.make_fairing({', '.join(args)})"
 
 
@@ -65,17 +68,18 @@ class PreviewJob:
     computes.  ``results`` or ``error`` hold the outcome once ``thread`` has ended.
     """
 
-    def __init__(self, named, settings, face_settings):
+    def __init__(self, named, settings, face_settings, join_settings):
         self.stop = threading.Event()
         self.results = self.error = None
         self.done, self.total = 0, len(named)
-        self.thread = threading.Thread(target=self._run, args=(named, settings, face_settings),
-                                       daemon=True)
+        self.thread = threading.Thread(
+            target=self._run, args=(named, settings, face_settings, join_settings), daemon=True)
         self.thread.start()
 
-    def _run(self, named, settings, face_settings):
+    def _run(self, named, settings, face_settings, join_settings):
         try:
-            self.results = make.fair_shapes(named, settings, face_settings, self._step)
+            self.results = make.fair_shapes(named, settings, face_settings, self._step,
+                                            **join_settings)
         except Exception as error:  # reported by the panel
             self.error = error
 
@@ -163,6 +167,10 @@ class FairSurfacePanel:
                                "control points, slower")
         self.measure = _row(layout, "Measure:", QtWidgets.QComboBox(), "fairing_measure")
         self.measure.addItems(list(make.MEASURES))
+        self.joins = _row(layout, "Joins:", QtWidgets.QComboBox(), "fairing_joins")
+        self.joins.addItems(list(make.JOINS))
+        self.joins.setToolTip("Several faces of one shape: smooth (joins held closed, and "
+                              "smooth where the source is), closed, or free (each face alone)")
         self.preview = _row(layout, "", QtWidgets.QPushButton("Preview"), "fairing_preview")
         self.preview.clicked.connect(self.on_preview)
         self.progress = _row(layout, "", QtWidgets.QProgressBar(), "fairing_progress")
@@ -209,6 +217,8 @@ class FairSurfacePanel:
             self.boundary.setCurrentText(f.Boundary)
             self.search.setCurrentText(f.Search)
             self.measure.setCurrentText(f.Measure)
+            self.joins.setCurrentText(f.Joins)
+        self.joins.setEnabled(self.kind == "Face")
         self._mode_changed()
 
     def _mode_changed(self, *_):
@@ -243,10 +253,17 @@ class FairSurfacePanel:
         return {"boundary": self.boundary.currentText(),
                 "borders": self.borders.currentText() if adaptive else "auto"}
 
+    def join_settings(self):
+        """Keyword arguments of :func:`make.fair_shapes` for the joins (the feature's
+        angle tolerance is kept when it is edited)."""
+        angle = self.fairing.AngleTolerance.Value if self.fairing is not None else 1.0
+        return {"joins": self.joins.currentText(), "angle_tolerance": angle}
+
     def run(self):
-        """Fair every selected face/edge; returns the :class:`make.FairedShape` list."""
+        """Fair every selected face/edge; returns the :class:`make.FairedShapes`."""
         obj, subs = self.link
-        return make.fair_elements(obj, subs, self.settings(), self.face_settings())
+        return make.fair_elements(obj, subs, self.settings(), self.face_settings(),
+                                  **self.join_settings())
 
     def on_preview(self):
         """Start fairing in a worker thread (the GUI stays live; a busy bar and Cancel
@@ -259,7 +276,8 @@ class FairSurfacePanel:
         except Exception as error:  # a slot: anything uncaught would be lost
             self._show_error(error)
             return
-        self.job = PreviewJob(named, self.settings(), self.face_settings())
+        self.job = PreviewJob(named, self.settings(), self.face_settings(),
+                              self.join_settings())
         self.figures.setText("")
         self._busy(True)
         self.timer.start()
@@ -314,6 +332,8 @@ class FairSurfacePanel:
                  f"{' x '.join(map(str, r.poles_after))} control points\n"
                  f"max deviation {r.max_deviation:.4g} mm, time {1000 * r.seconds:.0f} ms"
                  for r in results]
+        if results.joins is not None:
+            lines.append(results.joins.line())
         self.figures.setText("\n".join(lines))
 
     def _show_error(self, error):
@@ -334,7 +354,8 @@ class FairSurfacePanel:
                                   "Edit fairing"):
                 if self.fairing is None:
                     FreeCADGui.doCommand("import fairing_wb.make")
-                    FreeCADGui.doCommand(f"fairing = {make_call(self.link, s, face)}")
+                    FreeCADGui.doCommand(
+                        f"fairing = {make_call(self.link, s, face, self.join_settings())}")
                 else:
                     FreeCADGui.doCommand(
                         f"fairing = App.ActiveDocument.getObject({self.fairing.Name!r})")
@@ -358,7 +379,8 @@ class FairSurfacePanel:
         FreeCADGui.doCommand(
             f"fairing.Method = {s['method']!r}; fairing.Objective = {s['objective']!r}; "
             f"fairing.Borders = {face['borders']!r}; fairing.Boundary = {face['boundary']!r}; "
-            f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}")
+            f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}; "
+            f"fairing.Joins = {self.joins.currentText()!r}")
 
     def reject(self):
         self.on_cancel()

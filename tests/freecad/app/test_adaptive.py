@@ -12,7 +12,7 @@ import pytest
 import FreeCAD
 import Part
 import cq_fairing as cf
-from fairing_wb import make
+from fairing_wb import feature, make
 
 import fixtures
 
@@ -175,7 +175,7 @@ def test_document_of_version_1_migrates(doc, noisy, tmp_path):
         again = reopened.getObject("Fairing")
         assert again.getEnumerationsOfProperty("Method") == list(make.METHODS)
         assert (again.Method, again.Objective, again.Borders) == ("wavelet", "compact", "auto")
-        assert again.Proxy.Version == 3
+        assert again.Proxy.Version == feature.VERSION
         again.Method = "adaptive"
         reopened.recompute()
         assert "needs tolerance mode" in again.Status  # target mode, refused in words

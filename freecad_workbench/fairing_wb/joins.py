@@ -1,0 +1,325 @@
+r"""Joins among the faces of one Part shape: read, held closed and smooth, measured.
+
+A *join* is an edge shared by exactly two of the faces being faired: the faces of one
+object's shape share their edge objects (``Part.Shape.isSame``), so the joins are read
+from the faces alone (an edge of three or more faces is non-manifold and not joined; a
+degenerated edge or a seam is no join).  Each side of a join is located on its face
+(:func:`find_joins`, the :class:`~cq_fairing.core.joint_projection.JoinSide` of the
+core): the border of the surface's parameter rectangle its p-curve runs along, its
+border parameters at the edge's ends, and whether it covers the whole side.
+
+A join is measured at ``samples`` edge parameters :math:`t_k`, the midpoints of equal
+sub-ranges of the edge (the ends, a vertex where several faces may meet at a collapsed
+border, are left out: the normal is undefined there): the point
+:math:`P_k = S_0(c_0(t_k))` of face 0 is projected onto face 1's surface inside its
+parameter box, seeded at face 1's p-curve, giving :math:`Q_k`; the gap is
+:math:`|P_k - Q_k|` and the angle is that between the unit normals
+:math:`\pm S_u \times S_v / |S_u \times S_v|` (turned on a reversed face) at
+:math:`P_k` and :math:`Q_k`.  The same is done from face 1 onto face 0, and each sample
+keeps the larger gap and angle.  A join whose largest source angle is below the angle
+tolerance is *smooth*, else a *crease*.
+
+Holding the joins is the core's work
+(:func:`~cq_fairing.core.joint_projection.project_jointly`): :func:`hold_joins` gives it
+the faces read as polynomial, non-periodic B-spline patches and the target spaces of
+each face faired alone.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import cq_fairing as cf
+from cq_fairing.core.joint_projection import Join, JoinSide, border_joins, project_jointly
+
+from . import analysis, conversion
+
+__all__ = ["JOINS", "SAMPLES", "FaceJoins", "JoinReport", "find_joins", "measure_joins",
+           "hold_joins", "held_joins", "check_join_options"]
+
+JOINS = ("smooth", "closed", "free")  # the first is the default
+SAMPLES = 24              # points measured along each join
+BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a p-curve point on a border
+FULL_TOLERANCE = 1e-7     # relative to the model size: a side's end reached in 3-D
+
+
+@dataclass(frozen=True)
+class FaceJoins:
+    """The joins among a list of faces (:func:`find_joins`).
+
+    Attributes
+    ----------
+    joins : list of Join
+        Face indices are positions in the list of faces.
+    samples : list of tuple of numpy.ndarray
+        Per join, the ``(n, 2)`` parameters of the measured points on side 0's and on
+        side 1's face (the faired faces keep their parameter domains, so the same
+        parameters measure them).
+    sources : dict
+        ``{face: BSplineSurface}``: every face's source surface.
+    readable : dict
+        The faces of ``sources`` that are polynomial and not periodic: the patches the
+        joint projection can solve.
+    boxes : dict
+        ``{face: (u0, u1, v0, v1)}``: each face's parameter box.
+    signs : dict
+        ``{face: +1.0 or -1.0}``: ``-1`` on a reversed face (its normal turned).
+    non_manifold : int
+        Edges of three or more of the faces (not joined).
+    """
+
+    joins: list
+    samples: list
+    sources: dict
+    readable: dict
+    boxes: dict
+    signs: dict
+    non_manifold: int = 0
+
+
+def check_join_options(joins, angle_tolerance):
+    """Validate the join options at the public boundary.
+
+    Raises
+    ------
+    cq_fairing.InvalidInputError
+        ``joins`` is not one of :data:`JOINS`, or ``angle_tolerance`` is not an angle
+        strictly between 0 and 90 degrees.
+    """
+    if joins not in JOINS:
+        raise cf.InvalidInputError(
+            f"joins must be one of {JOINS}, got {joins!r}; 'smooth' keeps the joins between "
+            "the faces closed and smooth, 'closed' closed, 'free' fairs each face alone.")
+    if (isinstance(angle_tolerance, bool) or not isinstance(angle_tolerance, (int, float))
+            or not 0 < angle_tolerance < 90):
+        raise cf.InvalidInputError(
+            f"the angle tolerance must be an angle in degrees between 0 and 90, got "
+            f"{angle_tolerance!r}; e.g. 1 for 'smooth below one degree'.")
+
+
+def _shared_edges(faces):
+    """``[(edge, [face indices])]``: every non-degenerated edge of ``faces``, once, with
+    the distinct faces that use it."""
+    by_hash = {}
+    for index, face in enumerate(faces):
+        for edge in face.Edges:
+            if edge.Degenerated:
+                continue
+            bucket = by_hash.setdefault(edge.hashCode(), [])
+            entry = next((e for e in bucket if e[0].isSame(edge)), None)
+            if entry is None:
+                bucket.append((edge, [index]))
+            elif index not in entry[1]:
+                entry[1].append(index)
+    return [entry for bucket in by_hash.values() for entry in bucket]
+
+
+def _uv(face, edge, params):
+    """``(n, 2)`` parameters of ``edge`` on ``face`` at edge parameters ``params``: its
+    p-curve, or its 3-D points projected onto the surface when it has none."""
+    pcurve = face.curveOnSurface(edge)
+    if pcurve is not None:
+        curve = pcurve[0]
+        return np.array([[p.x, p.y] for p in (curve.value(float(t)) for t in params)])
+    return np.array([face.Surface.parameter(edge.valueAt(float(t))) for t in params])
+
+
+def _join_side(face, index, edge, edge_index, size):
+    """The :class:`JoinSide` of ``face``'s ``edge``: the border of the parameter
+    rectangle it runs along, its border parameters at its ends, and whether it covers
+    that whole border (up to the edge's tolerance in 3-D)."""
+    first, last = edge.ParameterRange
+    uv = _uv(face, edge, np.linspace(first, last, 7))
+    u0, u1, v0, v1 = face.Surface.bounds()
+    span = max(u1 - u0, v1 - v0)
+    borders = {"u0": (0, u0, (v0, v1)), "u1": (0, u1, (v0, v1)),
+               "v0": (1, v0, (u0, u1)), "v1": (1, v1, (u0, u1))}
+    for name, (axis, level, ends) in borders.items():
+        if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
+            along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
+            reach = max(edge.Tolerance, FULL_TOLERANCE * size)
+            full = _covers(face.Surface, axis, level, ends, along, reach)
+            return JoinSide(index, edge_index, name, along, full)
+    return JoinSide(index, edge_index)
+
+
+def _covers(surface, axis, level, ends, along, reach):
+    """True when the border parameters ``along`` reach both ``ends`` of the side at
+    ``level`` on ``axis``, up to a shortfall of ``reach`` in 3-D."""
+    def point(t):
+        return surface.value(*((level, t) if axis == 0 else (t, level)))
+    return all((point(end) - point(got)).Length <= reach
+               for end, got in zip(ends, (min(along), max(along))))
+
+
+def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES):
+    """The joins among ``faces`` (B-spline faces of one shape), classified.
+
+    Parameters
+    ----------
+    faces : list of Part.Face
+        Faces of one object's shape (they share their edges).
+    angle_tolerance : float
+        Degrees: a join whose source normals differ by less all along is smooth.
+    samples : int
+        Points measured along each join.
+
+    Returns
+    -------
+    FaceJoins
+    """
+    size = max(f.BoundBox.DiagonalLength for f in faces)
+    sources = {i: conversion.surface_from_face(f) for i, f in enumerate(faces)}
+    readable = {i: s for i, s in sources.items() if s.weights is None
+                and not (faces[i].Surface.isUPeriodic() or faces[i].Surface.isVPeriodic())}
+    boxes = {i: conversion.uv_range(f, sources[i]) for i, f in enumerate(faces)}
+    signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(faces)}
+    drafts, uvs, non_manifold = [], [], 0
+    for edge_index, (edge, owners) in enumerate(_shared_edges(faces)):
+        if len(owners) > 2:
+            non_manifold += 1
+        if len(owners) != 2:
+            continue
+        first, last = edge.ParameterRange
+        params = first + (np.arange(samples) + 0.5) / samples * (last - first)
+        drafts.append(tuple(_join_side(faces[i], i, edge, edge_index, size) for i in owners))
+        uvs.append(tuple(_uv(faces[i], edge, params) for i in owners))
+    found = FaceJoins([Join(sides, "smooth", 0.0, 0.0) for sides in drafts], uvs, sources,
+                      readable, boxes, signs, non_manifold)
+    joins = []
+    for sides, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
+        angle = float(angles.max())
+        joins.append(Join(sides, "smooth" if angle < angle_tolerance else "crease",
+                          float(gaps.max()), angle, angles))
+    return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold)
+
+
+def _angles(n0, n1):
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n0, n1), -1.0, 1.0)))
+
+
+def _one_way(found, sides, uvs, surfaces):
+    """Gaps and angles from side ``a``'s points to side ``b``'s face (module doc)."""
+    (a, b), (uv_a, uv_b) = sides, uvs
+    points, normals = analysis.points_and_normals(surfaces[a], uv_a[:, 0], uv_a[:, 1])
+    feet, across = analysis.foot_points(surfaces[b], points, uv_b[:, 0], uv_b[:, 1],
+                                        found.boxes[b])
+    angles = _angles(found.signs[a] * normals, found.signs[b] * across)
+    return np.linalg.norm(points - feet, axis=1), angles
+
+
+def measure_joins(found, surfaces):
+    """Per join of ``found``, the gaps and the normal angles (degrees) at its samples
+    with the faces' surfaces ``surfaces`` (``{face: BSplineSurface}``, the sources or
+    faired surfaces on the same parameter domains).
+
+    Returns
+    -------
+    list of (numpy.ndarray, numpy.ndarray)
+        ``(gaps, angles)`` per join, sample by sample.
+    """
+    out = []
+    for join, uvs in zip(found.joins, found.samples):
+        faces = join.faces
+        there = _one_way(found, faces, uvs, surfaces)
+        back = _one_way(found, faces[::-1], uvs[::-1], surfaces)
+        out.append((np.maximum(there[0], back[0]), np.maximum(there[1], back[1])))
+    return out
+
+
+def hold_joins(found, targets, tolerances, check, joins="smooth"):
+    """Project the faces of ``found`` together so that their joins stay closed (and,
+    with ``joins="smooth"``, smooth): the core's
+    :func:`~cq_fairing.core.joint_projection.project_jointly` on the border joins
+    between readable faces (:func:`~cq_fairing.core.joint_projection.border_joins`),
+    every other side on a join pinned to its source.
+
+    Parameters
+    ----------
+    found : FaceJoins
+    targets : dict
+        ``{face: (SplineSpace, SplineSpace)}``: the target spaces of each face faired
+        alone onto a polynomial surface on its source's domain.
+    tolerances : dict
+        ``{face: tol}``.
+    check : callable
+        ``check(face, surface) -> float``: the face's two-sided deviation with
+        ``surface``.
+    joins : {"smooth", "closed"}
+        ``"smooth"``: G1 across the smooth joins; ``"closed"``: G0 only.
+
+    Returns
+    -------
+    JointProjection
+    """
+    border = border_joins(found.joins, found.readable, tolerances)
+    return project_jointly(found.readable, targets, found.joins, border, tolerances, check,
+                           continuity="G1" if joins == "smooth" else "G0")
+
+
+def held_joins(projection, unchanged):
+    """The joins held closed: faired across pole for pole, or pinned to the source on
+    every side whose face moved (``unchanged``: the faces left as their sources)."""
+    pinned = [join for join, sides in projection.pinned.items()
+              if all((s.face, s.side) in sides or s.face in unchanged for s in join.sides)]
+    return list(projection.held) + pinned
+
+
+@dataclass(eq=False)
+class JoinReport:
+    """The joins among the faces of one fairing, in the source and faired.
+
+    Attributes
+    ----------
+    found : FaceJoins
+    measures : list of (numpy.ndarray, numpy.ndarray)
+        The faired faces' gaps and angles per join (:func:`measure_joins`).
+    held : list of Join
+        The joins held closed by the joint projection.
+    seconds : float
+        Wall time of reading, holding and measuring the joins.
+    """
+
+    found: FaceJoins
+    measures: list
+    held: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    def rows(self):
+        """One dict per join: ``faces`` (1-based positions), ``kind``, ``held``,
+        ``source_gap``, ``gap``, ``source_angle``, ``angle`` (degrees) and
+        ``angle_excess``: the largest of faired minus source angle at one sample."""
+        held = {id(join) for join in self.held}
+        return [dict(faces=tuple(f + 1 for f in join.faces), kind=join.kind,
+                     held=id(join) in held, source_gap=join.source_gap,
+                     gap=float(gaps.max()), source_angle=join.source_angle,
+                     angle=float(angles.max()),
+                     angle_excess=float(np.max(angles - join.source_angles)))
+                for join, (gaps, angles) in zip(self.found.joins, self.measures)]
+
+    def summary(self):
+        """Counts and extremes: ``joins``, ``held``, ``max_gap``, ``smooth``,
+        ``max_smooth_angle`` and its ``source_max_smooth_angle``, ``max_angle_excess``
+        over the smooth joins, ``creases``, ``non_manifold``."""
+        rows = self.rows()
+        smooth = [r for r in rows if r["kind"] == "smooth"]
+        return dict(
+            joins=len(rows), held=sum(r["held"] for r in rows),
+            max_gap=max((r["gap"] for r in rows), default=0.0), smooth=len(smooth),
+            max_smooth_angle=max((r["angle"] for r in smooth), default=0.0),
+            source_max_smooth_angle=max((r["source_angle"] for r in smooth), default=0.0),
+            max_angle_excess=max((r["angle_excess"] for r in smooth), default=0.0),
+            creases=len(rows) - len(smooth), non_manifold=self.found.non_manifold)
+
+    def line(self):
+        """The summary as one line, worded as the command line's, e.g. ``joins: 14 (12
+        held closed), max gap 2e-12; 12 smooth, max angle 0.01 deg (source 0); 2
+        creases``."""
+        s = self.summary()
+        parts = [f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}",
+                 f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
+                 f"{s['source_max_smooth_angle']:.2g})", f"{s['creases']} creases"] \
+            if s["joins"] else ["joins: none"]
+        if s["non_manifold"]:
+            parts.append(f"{s['non_manifold']} non-manifold edges (not joined)")
+        return "; ".join(parts)
