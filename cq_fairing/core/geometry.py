@@ -6,7 +6,7 @@ user input once and raise :class:`~cq_fairing.errors.InvalidInputError` with a m
 that says what to do.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -34,7 +34,8 @@ COINCIDENT = 1e-9
 CLOSED_MIN_SPANS = 3
 
 __all__ = ["BSplineCurve", "BSplineSurface", "make_curve", "make_surface", "as_poles", "extent",
-           "closed_axes", "fewest_spans", "CLOSED_MIN_SPANS"]
+           "closed_axes", "fewest_spans", "collapsed_rows", "collapse_rows", "collapsed_kept",
+           "CLOSED_MIN_SPANS"]
 
 
 def extent(poles):
@@ -517,3 +518,32 @@ def make_surface(poles: ArrayLike, u_knots: ArrayLike | None = None,
         spaces.append(space)
     return BSplineSurface(P, spaces[0].knots, spaces[1].knots, spaces[0].degree,
                           spaces[1].degree, _as_weights(weights, P.shape[:2]))
+
+
+def collapsed_rows(surface):
+    """``[(axis, end, point)]`` of the border rows whose poles all lie at one point."""
+    size = extent(surface.poles)
+    out = []
+    for axis in (0, 1):
+        rows = np.moveaxis(surface.poles, axis, 0)
+        for end in (0, -1):
+            if np.ptp(rows[end], axis=0).max() <= COINCIDENT * size:
+                out.append((axis, end, rows[end].mean(axis=0)))
+    return out
+
+
+def collapsed_kept(source, faired):
+    """``faired`` with every border row that is collapsed in ``source`` (the pole of a
+    sphere-like face, the nose of a fuselage) put back onto its point: a projection alone
+    spreads it, and a faired face's degenerated edge must stay one point."""
+    return collapse_rows(faired, collapsed_rows(source))
+
+
+def collapse_rows(surface, collapsed):
+    """Put every border row of ``collapsed`` back onto its point (weights unchanged)."""
+    if not collapsed:
+        return surface
+    poles = surface.poles.copy()
+    for axis, end, point in collapsed:
+        np.moveaxis(poles, axis, 0)[end] = point
+    return replace(surface, poles=poles)

@@ -41,6 +41,7 @@ from .spaces import SplineSpace
 
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
+           "held_joins",
            "SOURCE_GAP",
            "REFINEMENTS"]
 
@@ -189,6 +190,15 @@ def _parametric_gap(join, sources, samples=33):
             u, v = u0 + (u1 - u0) * ts, [v0 if side.side[1] == "0" else v1]
             points.append(surface.evaluate_grid(u, v)[:, 0])
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())
+
+
+def held_joins(projection, unchanged):
+    """The joins a :class:`JointProjection` holds closed: faired across pole for pole, or
+    pinned to the source on every side whose face moved (``unchanged``: the faces left
+    as their sources)."""
+    pinned = [join for join, sides in projection.pinned.items()
+              if all((s.face, s.side) in sides or s.face in unchanged for s in join.sides)]
+    return list(projection.held) + pinned
 
 
 def unholdable(joins, sources, moved, selected):

@@ -40,7 +40,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face
 
 from ..core.adaptive_surface import fair_surface_adaptive
 from ..core.fairing import fair_surface
-from ..core.geometry import COINCIDENT, BSplineSurface, closed_axes, extent
+from ..core.geometry import BSplineSurface, closed_axes, collapse_rows, collapsed_rows
 from ..core.options import check_face_options, renamed_value
 from ..core.plans import target_space
 from ..core.results import SurfaceFairResult
@@ -60,7 +60,7 @@ from .trims import face_region
 if TYPE_CHECKING:
     import cadquery
 
-__all__ = ["fair_face", "FaceFairReport", "default_tolerance", "collapsed_kept"]
+__all__ = ["fair_face", "FaceFairReport", "default_tolerance"]
 
 MARGIN = 0.9
 STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-rational",
@@ -558,7 +558,8 @@ def _finisher(surface, periodic, boundary):
       mean (:func:`_tie_rows`), so the seam edge stays shared;
     * a **collapsed** border row (all its poles at one point :math:`c`, the pole of a
       sphere: a degenerated edge) is set back to :math:`c` in the faired net
-      (:func:`_collapse_rows`), so the degenerated edge and its vertex stay exact.
+      (:func:`~cq_fairing.core.geometry.collapse_rows`), so the degenerated edge and its
+      vertex stay exact.
 
     Rows count as coincident or collapsed within ``COINCIDENT`` (1e-9) of the net's extent
     (:func:`~cq_fairing.core.geometry.closed_axes`).
@@ -566,44 +567,15 @@ def _finisher(surface, periodic, boundary):
     """
     closed = closed_axes(surface)
     tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or closed[axis]]
-    collapsed = _collapsed_rows(surface)
+    collapsed = collapsed_rows(surface)
 
     def finish(faired):
         if boundary == "fixed":
             faired = _fix_border(surface, faired)
         for axis in tied:
             faired = _tie_rows(faired, axis)
-        return _collapse_rows(faired, collapsed)
+        return collapse_rows(faired, collapsed)
     return finish
-
-
-def _collapsed_rows(surface):
-    """``[(axis, end, point)]`` of the border rows whose poles all lie at one point."""
-    size = extent(surface.poles)
-    out = []
-    for axis in (0, 1):
-        rows = np.moveaxis(surface.poles, axis, 0)
-        for end in (0, -1):
-            if np.ptp(rows[end], axis=0).max() <= COINCIDENT * size:
-                out.append((axis, end, rows[end].mean(axis=0)))
-    return out
-
-
-def collapsed_kept(source, faired):
-    """``faired`` with every border row that is collapsed in ``source`` (the pole of a
-    sphere-like face) put back onto its point, as :func:`_finisher` does for a face faired
-    alone; the joint projection of :mod:`cq_fairing.occ.joint` uses it too."""
-    return _collapse_rows(faired, _collapsed_rows(source))
-
-
-def _collapse_rows(surface, collapsed):
-    """Put every border row of ``collapsed`` back onto its point (weights unchanged)."""
-    if not collapsed:
-        return surface
-    poles = surface.poles.copy()
-    for axis, end, point in collapsed:
-        np.moveaxis(poles, axis, 0)[end] = point
-    return replace(surface, poles=poles)
 
 
 def _tie_rows(surface, axis):

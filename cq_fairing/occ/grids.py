@@ -32,11 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.geometry import collapsed_kept
 from ..core.joins import BorderJoin
 from ..core.patch_grid import merge_grid, split_grid
 from ..core.patch_layout import find_grids
 from ..errors import FairingError, ToleranceNotMetError
-from .faces import SurfaceSampler, collapsed_kept, target_degrees
+from .faces import SurfaceSampler, target_degrees
 from .search import search_scales
 
 __all__ = ["fair_grids", "GridFairing", "RETRIES", "SHRINK"]

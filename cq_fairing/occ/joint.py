@@ -21,17 +21,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.geometry import collapsed_kept
+from ..core.join_summary import summarize, summary_line
 from ..core.joint_projection import (
     REFINEMENTS,
     SOURCE_GAP,
     border_joins,
+    held_joins,
     project_jointly,
     runs_reversed,
     unholdable,
 )
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
-from .faces import collapsed_kept
 from .grids import fair_grids
 from .networks import fair_networks
 
@@ -101,11 +103,10 @@ def fair_joined(job, adjacency, joins):
                              runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
-    pinned = [j for j, sides in joint.pinned.items()
-              if all((s.face, s.side) in sides or not (job.reports[s.face].faired
-                                                       or s.face in moved)
-                     for s in j.sides)]
-    return JointOutcome(in_grids + joint.held + in_networks + pinned, grids, networks)
+    unchanged = {face for face, report in enumerate(job.reports)
+                 if not report.faired and face not in moved}
+    return JointOutcome(in_grids + held_joins(joint, unchanged) + in_networks, grids,
+                        networks)
 
 
 def _project_jointly(job, adjacency, readable, border, continuity, gridded):
@@ -227,45 +228,19 @@ class JoinReport:
         return out
 
     def summary(self):
-        """Counts and extremes: ``joins``, ``held``, ``max_gap``, ``max_gap_opened``
-        (faired minus source gap), ``smooth``, ``max_smooth_angle`` and its
-        ``source_max_smooth_angle``, ``max_angle_excess`` over the smooth joins,
-        ``creases``, ``grids`` (the shape of each patch grid faired as one surface),
-        ``grid_faces`` (their faces), ``network_faces`` (faces faired together by energy),
-        ``non_manifold``, ``point_contacts``."""
-        rows = self.rows()
-        smooth = [r for r in rows if r["kind"] == "smooth"]
-        return dict(
-            joins=len(rows), held=sum(r["held"] for r in rows),
-            max_gap=max((r["gap"] for r in rows), default=0.0),
-            max_gap_opened=max((r["gap"] - r["source_gap"] for r in rows), default=0.0),
-            smooth=len(smooth),
-            max_smooth_angle=max((r["angle"] for r in smooth), default=0.0),
-            source_max_smooth_angle=max((r["source_angle"] for r in smooth), default=0.0),
-            max_angle_excess=max((r["angle_excess"] for r in smooth), default=0.0),
-            creases=len(rows) - len(smooth),
-            grids=[list(g.shape) for g in self.grids],
+        """Counts and extremes (:func:`~cq_fairing.core.join_summary.summarize`), with
+        ``grids`` (the shape of each patch grid faired as one surface), ``grid_faces``
+        (their faces), ``network_faces`` (faces faired together by energy),
+        ``non_manifold`` and ``point_contacts``."""
+        return summarize(
+            self.rows(), grids=[list(g.shape) for g in self.grids],
             grid_faces=sum(len(g.faces) for g in self.grids),
             network_faces=sum(len(n.moved) for n in self.networks),
             non_manifold=len(self.adjacency.non_manifold),
             point_contacts=len(self.adjacency.point_contacts))
 
     def line(self):
-        """The summary as one line, e.g. ``joins: 14 (12 held closed), max gap 2e-12;
-        12 smooth, max angle 0.01 deg (source 0); 2 creases``; edges of three or more
-        faces and faces that touch at a point only (never joined) are named after it."""
-        s = self.summary()
-        parts = [f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}",
-                 f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
-                 f"{s['source_max_smooth_angle']:.2g})", f"{s['creases']} creases"] \
-            if s["joins"] else ["joins: none"]
-        if s["grids"]:
-            parts.append(f"{len(s['grids'])} patch grids ({s['grid_faces']} faces) faired "
-                         "as one surface each")
-        if s["network_faces"]:
-            parts.append(f"{s['network_faces']} faces at their coarsest faired together")
-        if s["non_manifold"]:
-            parts.append(f"{s['non_manifold']} non-manifold edges (not joined)")
-        if s["point_contacts"]:
-            parts.append(f"{s['point_contacts']} point contacts (not joined)")
-        return "; ".join(parts)
+        """The summary as one line (:func:`~cq_fairing.core.join_summary.summary_line`),
+        e.g. ``joins: 14 (12 held closed), max gap 2e-12; 12 smooth, max angle 0.01 deg
+        (source 0); 2 creases``."""
+        return summary_line(self.summary())

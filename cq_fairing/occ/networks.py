@@ -21,9 +21,9 @@ tolerances, :data:`RETRIES` times at most, and otherwise left as it was.
 
 from dataclasses import dataclass
 
+from ..core.geometry import collapsed_kept
 from ..core.joins import BorderJoin
 from ..core.network import fair_network, network_joinable
-from .faces import collapsed_kept
 
 __all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK"]
 

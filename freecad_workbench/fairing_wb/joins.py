@@ -21,8 +21,8 @@ tolerance is *smooth*, else a *crease*.
 
 Holding the joins is the core's work
 (:func:`~cq_fairing.core.joint_projection.project_jointly`): :func:`hold_joins` gives it
-the faces read as polynomial, non-periodic B-spline patches and the target spaces of
-each face faired alone.
+the faces read as non-periodic B-spline patches and the target spaces of each face
+faired alone.
 """
 
 from dataclasses import dataclass, field
@@ -30,12 +30,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import cq_fairing as cf
+from cq_fairing.core.join_summary import summarize, summary_line
 from cq_fairing.core.joint_projection import Join, JoinSide, border_joins, project_jointly
 
 from . import analysis, conversion
 
 __all__ = ["JOINS", "SAMPLES", "FaceJoins", "JoinReport", "find_joins", "measure_joins",
-           "hold_joins", "held_joins", "check_join_options"]
+           "hold_joins", "check_join_options"]
 
 JOINS = ("smooth", "closed", "free")  # the first is the default
 SAMPLES = 24              # points measured along each join
@@ -58,8 +59,8 @@ class FaceJoins:
     sources : dict
         ``{face: BSplineSurface}``: every face's source surface.
     readable : dict
-        The faces of ``sources`` that are polynomial and not periodic: the patches the
-        joint projection can solve.
+        The faces of ``sources`` that are not periodic: the patches the joint projection
+        can solve (rational ones in homogeneous coordinates).
     boxes : dict
         ``{face: (u0, u1, v0, v1)}``: each face's parameter box.
     signs : dict
@@ -170,8 +171,8 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES):
     """
     size = max(f.BoundBox.DiagonalLength for f in faces)
     sources = {i: conversion.surface_from_face(f) for i, f in enumerate(faces)}
-    readable = {i: s for i, s in sources.items() if s.weights is None
-                and not (faces[i].Surface.isUPeriodic() or faces[i].Surface.isVPeriodic())}
+    readable = {i: s for i, s in sources.items()
+                if not (faces[i].Surface.isUPeriodic() or faces[i].Surface.isVPeriodic())}
     boxes = {i: conversion.uv_range(f, sources[i]) for i, f in enumerate(faces)}
     signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(faces)}
     drafts, uvs, non_manifold = [], [], 0
@@ -257,14 +258,6 @@ def hold_joins(found, targets, tolerances, check, joins="smooth"):
                            continuity="G1" if joins == "smooth" else "G0")
 
 
-def held_joins(projection, unchanged):
-    """The joins held closed: faired across pole for pole, or pinned to the source on
-    every side whose face moved (``unchanged``: the faces left as their sources)."""
-    pinned = [join for join, sides in projection.pinned.items()
-              if all((s.face, s.side) in sides or s.face in unchanged for s in join.sides)]
-    return list(projection.held) + pinned
-
-
 @dataclass(eq=False)
 class JoinReport:
     """The joins among the faces of one fairing, in the source and faired.
@@ -298,28 +291,11 @@ class JoinReport:
                 for join, (gaps, angles) in zip(self.found.joins, self.measures)]
 
     def summary(self):
-        """Counts and extremes: ``joins``, ``held``, ``max_gap``, ``smooth``,
-        ``max_smooth_angle`` and its ``source_max_smooth_angle``, ``max_angle_excess``
-        over the smooth joins, ``creases``, ``non_manifold``."""
-        rows = self.rows()
-        smooth = [r for r in rows if r["kind"] == "smooth"]
-        return dict(
-            joins=len(rows), held=sum(r["held"] for r in rows),
-            max_gap=max((r["gap"] for r in rows), default=0.0), smooth=len(smooth),
-            max_smooth_angle=max((r["angle"] for r in smooth), default=0.0),
-            source_max_smooth_angle=max((r["source_angle"] for r in smooth), default=0.0),
-            max_angle_excess=max((r["angle_excess"] for r in smooth), default=0.0),
-            creases=len(rows) - len(smooth), non_manifold=self.found.non_manifold)
+        """Counts and extremes (:func:`~cq_fairing.core.join_summary.summarize`), with
+        ``non_manifold``."""
+        return summarize(self.rows(), non_manifold=self.found.non_manifold)
 
     def line(self):
-        """The summary as one line, worded as the command line's, e.g. ``joins: 14 (12
-        held closed), max gap 2e-12; 12 smooth, max angle 0.01 deg (source 0); 2
-        creases``."""
-        s = self.summary()
-        parts = [f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}",
-                 f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
-                 f"{s['source_max_smooth_angle']:.2g})", f"{s['creases']} creases"] \
-            if s["joins"] else ["joins: none"]
-        if s["non_manifold"]:
-            parts.append(f"{s['non_manifold']} non-manifold edges (not joined)")
-        return "; ".join(parts)
+        """The summary as one line, worded as the command line's
+        (:func:`~cq_fairing.core.join_summary.summary_line`)."""
+        return summary_line(self.summary())

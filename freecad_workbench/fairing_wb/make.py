@@ -15,24 +15,18 @@ import inspect
 import time
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 import FreeCAD
+import numpy as np
 import Part
+
 import cq_fairing as cf
+from cq_fairing.core.geometry import collapsed_kept
+from cq_fairing.core.joint_projection import held_joins, unholdable
 from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
-from .joins import (
-    JOINS,
-    JoinReport,
-    check_join_options,
-    find_joins,
-    held_joins,
-    hold_joins,
-    measure_joins,
-)
+from .joins import JOINS, JoinReport, check_join_options, find_joins, hold_joins, measure_joins
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "fair_shapes", "error_sentence",
@@ -563,40 +557,59 @@ def _joined(named, results, tolerance, joins, angle_tolerance):
 
 def _hold(found, elements, alone, tolerance, joins):
     """The faces faired ``alone`` projected again together (:func:`joins.hold_joins`):
-    ``(results, held joins)``; a face the joint projection keeps says why."""
-    targets = {i: (r.surface.u_space, r.surface.v_space) for i, r in enumerate(alone)
-               if i in found.readable and r.surface is not None and r.surface.weights is None
+    ``(results, held joins)``; a face the joint projection keeps says why, and so does a
+    face with a join no fairing can hold
+    (:func:`~cq_fairing.core.joint_projection.unholdable`)."""
+    faired = list(alone)
+    moved = {i for i, r in enumerate(alone) if r.surface is not None}
+    for i, neighbours in unholdable(found.joins, found.readable, moved, moved).items():
+        faired[i] = _kept_by_joins(elements[i], neighbours, tolerance)
+    targets = {i: (r.surface.u_space, r.surface.v_space) for i, r in enumerate(faired)
+               if i in found.readable and r.surface is not None
+               and r.surface.is_rational == found.readable[i].is_rational
                and r.surface.domain == found.readable[i].domain}
     measured = {}
 
     def check(face, surface):
-        measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
-        return measured[face]
+        if surface.is_rational and not np.all(surface.weights > 0):
+            return np.inf
+        surface = collapsed_kept(found.sources[face], surface)
+        measured[face] = (surface, face_deviation(elements[face][1], found.sources[face],
+                                                  surface))
+        return measured[face][1]
 
     projection = hold_joins(found, targets, dict.fromkeys(range(len(alone)), tolerance),
                             check, joins)
-    faired = list(alone)
-    for i, surface in projection.surfaces.items():
+    for i in projection.surfaces:
+        surface, deviation = measured[i]
         shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
         faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),
-                            max_deviation=measured[i], surface=surface)
+                            max_deviation=deviation, surface=surface)
     for i, deviation in projection.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
     unchanged = {i for i, r in enumerate(faired) if r.surface is None}
     return faired, held_joins(projection, unchanged)
 
 
-def _kept_by_joins(element, deviation, tolerance):
-    """:class:`FairedShape` of a face the joint projection keeps as it is: with its joins
-    held it stays ``deviation`` over ``tolerance``, or (``deviation`` ``None``) its joins
-    leave it no net smaller than its source's."""
+def _kept_by_joins(element, why, tolerance):
+    """:class:`FairedShape` of a face kept as it is for its joins: ``why`` is the
+    deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
+    all positive), ``None`` where its pinned joins leave it no net smaller than its
+    source's, or the list of neighbours (0-based) whose joins run across its surface."""
     sub, face = element
     poles = tuple(conversion.surface_from_face(face).shape)
-    why = ("its joins, held where the source has them, leave no net smaller than the "
-           "source's" if deviation is None else
-           f"with its joins held closed it stays {deviation:.4g} mm from its source, over "
-           f"{tolerance:.4g} mm; its neighbours close onto it")
-    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, f"{sub} kept unchanged: {why}")
+    if why is None:
+        text = "its joins, held where the source has them, leave no net smaller than the " \
+               "source's"
+    elif isinstance(why, list):
+        text = (f"its joins with faces {[n + 1 for n in why]} of the selection run across "
+                "its surface, where no fairing can hold them (Joins=free fairs it alone)")
+    elif np.isfinite(why):
+        text = (f"with its joins held closed it stays {why:.4g} mm from its source, over "
+                f"{tolerance:.4g} mm; its neighbours close onto it")
+    else:
+        text = "with its joins held closed its weights are not all positive"
+    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, f"{sub} kept unchanged: {text}")
 
 
 def _kept(face, sub, error):
