@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import JointPatch, fair_patches
@@ -29,6 +30,8 @@ from cq_fairing.core.patch_grid import merge_grid, split_grid
 from cq_fairing.core.patch_layout import find_grids
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.occ import read_shape
+from cq_fairing.occ.builders import surface_to_natural_face
+from cq_fairing.occ.convert import face_to_surface, indexed_faces
 from cq_fairing.occ.shapes import fair_shape
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
@@ -117,6 +120,27 @@ def synthetic():
     for tol in (0.005, 0.01):
         network = fair_network(grid.patches, grid.joins, tol)
         print(grid_row(f"12 x 12, network by energy, tol {tol:g}", network.surfaces, grid))
+    for tol in (0.005, 0.01):
+        faired = _fair_shell(grid, tol)
+        print(grid_row(f"fair_shape (default) on the sewn shell, tol {tol:g}: "
+                       f"{' / '.join(f'{s.shape[0]} x {s.shape[1]}' for s in faired)}",
+                       faired, grid))
+
+
+def _fair_shell(grid, tol):
+    """The grid as an OCCT shell (its faces sewn) faired by ``fair_shape`` with the
+    defaults (its joins turn by up to 16 deg in the source: smooth below 20); the faired
+    surfaces in patch order."""
+    sewing = BRepBuilderAPI_Sewing(1e-5)
+    for patch in grid.patches:
+        sewing.Add(surface_to_natural_face(patch))
+    sewing.Perform()
+    shell = sewing.SewedShape()
+    order = [int(np.argmin([np.abs(face_to_surface(f)[0].poles - p.poles).max()
+                            if face_to_surface(f)[0].shape == p.shape else np.inf
+                            for f in indexed_faces(shell)])) for p in grid.patches]
+    faired = indexed_faces(fair_shape(shell, tol=tol, angle_tol=20.0).shape)
+    return [face_to_surface(faired[k])[0] for k in order]
 
 
 def _merged(grid, n):

@@ -105,6 +105,8 @@ def test_package_xml_is_complete_for_the_addon_manager():
     assert (meta.Name, meta.Version) == ("Fairing", version)
     assert meta.Maintainer and all(m["name"] for m in meta.Maintainer)
     assert [license["name"] for license in meta.License] == ["LGPL-2.1-or-later"]
+    assert all((REPO / license["file"]).read_text().lstrip().startswith(
+        "GNU LESSER GENERAL PUBLIC LICENSE") for license in meta.License)
     assert meta.FreeCADMin.startswith("0.20")
     assert {d["package"] for d in meta.Depend} == {"numpy", "scipy"}
     assert (REPO / meta.Icon).is_file()
