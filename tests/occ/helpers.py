@@ -7,16 +7,25 @@ from OCP.BRepGProp import BRepGProp
 from OCP.BRepTools import BRepTools
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GProp import GProp_GProps
-from OCP.TopAbs import TopAbs_FACE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Compound
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 
 def faces_of(shape):
-    fmap = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
-    return [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
+    return _sub_shapes(shape, TopAbs_FACE, TopoDS.Face_s)
+
+
+def edges_of(shape):
+    return _sub_shapes(shape, TopAbs_EDGE, TopoDS.Edge_s)
+
+
+def _sub_shapes(shape, kind, cast):
+    """The distinct sub-shapes of ``kind`` in ``TopExp`` map order, cast by ``cast``."""
+    shapes = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, kind, shapes)
+    return [cast(shapes.FindKey(i)) for i in range(1, shapes.Extent() + 1)]
 
 
 def uv_box_grid(face, nu=7, nv=9):

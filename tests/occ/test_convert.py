@@ -9,7 +9,7 @@ from OCP.BRepTools import BRepTools
 
 from cq_fairing.errors import InvalidInputError, UnsupportedGeometryError
 from cq_fairing.occ import face_to_surface, list_faces, surface_to_face
-from tests.occ.helpers import area, faces_of, occ_points, uv_box_grid
+from tests.occ.helpers import area, edges_of, faces_of, occ_points, uv_box_grid
 
 MODELS = ["terrain.brep", "IEA_15MW_CFD.stp", "impeller.igs", "testtoler.brep",
           "ring_nurbs.brep", "linkrods.step"]
@@ -49,6 +49,35 @@ def test_surface_to_face_round_trip_keeps_trim_and_geometry(real, name):
         u, v = uv_box_grid(face)
         np.testing.assert_allclose(occ_points(rebuilt, u, v), occ_points(face, u, v),
                                    atol=1e-9 * max(1.0, np.abs(occ_points(face, u, v)).max()))
+
+
+def test_rebuilt_edges_span_exactly_their_range(real):
+    """The terrain face on a cubic net of 217 x 282 equal spans over its domain
+    ([82100, 89825] x [80300, 88300], spans of 28.37 that no binary fraction holds):
+    OCCT's rebuilt boundary curves would end up to 2e-9 short of their edges' ranges,
+    which BRepCheck rejects (InvalidRange above 1e-9).  They span the ranges exactly, the
+    face is valid and evaluates like the net."""
+    from OCP.BRep import BRep_Tool
+
+    from cq_fairing import BSplineSurface
+
+    face, = faces_of(real("terrain.brep"))
+    source, _ = face_to_surface(face)
+
+    def clamped(lo, hi, spans):
+        return np.r_[[lo] * 3, np.linspace(lo, hi, spans + 1), [hi] * 3]
+
+    u_knots, v_knots = clamped(*source.domain[0], 217), clamped(*source.domain[1], 282)
+    greville = [np.convolve(k[1:-1], np.ones(3) / 3, "valid") for k in (u_knots, v_knots)]
+    surface = BSplineSurface(source.evaluate_grid(*greville), u_knots, v_knots, 3, 3)
+    rebuilt = surface_to_face(surface, face)
+    assert BRepCheck_Analyzer(rebuilt).IsValid()
+    for edge in edges_of(rebuilt):
+        curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+        assert (curve.FirstParameter(), curve.LastParameter()) == BRep_Tool.Range_s(edge)
+    u, v = uv_box_grid(rebuilt)
+    np.testing.assert_allclose(occ_points(rebuilt, u, v), surface.evaluate_grid(u, v),
+                               rtol=0, atol=1e-9 * np.abs(surface.poles).max())
 
 
 def test_inventory_matches_sources_md(real):
