@@ -68,14 +68,16 @@ CLOSED = 1e-7  # relative to the size: joins closer than this are sewn as they a
 
 def _sewn_closed(shapes, joins):
     """The faired faces sewn into one valid shell when every join among them (``joins``,
-    a :class:`~fairing_wb.joins.JoinReport`) is closed within :data:`CLOSED` times the
-    size, else ``None``.  The sewn edges lie on both faces to within their gaps, so their
-    tolerances stay at the faces' own (no source edge is put back on a moved face)."""
-    if joins is None or not joins.found.joins:
+    a :class:`~fairing_wb.joins.JoinReport`, whose faces after the faired ones are their
+    fixed neighbours) is closed within :data:`CLOSED` times the size, else ``None``.  The
+    sewn edges lie on both faces to within their gaps, so their tolerances stay at the
+    faces' own (no source edge is put back on a moved face)."""
+    if joins is None:
         return None
     compound = Part.makeCompound(shapes)
     reach = CLOSED * compound.BoundBox.DiagonalLength
-    if joins.summary()["max_gap"] > reach:
+    among = [row["gap"] for row in joins.rows() if max(row["faces"]) <= len(compound.Faces)]
+    if not among or max(among) > reach:
         return None
     sewn = compound.copy()
     sewn.sewShape(reach)

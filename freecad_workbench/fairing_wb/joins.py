@@ -1,12 +1,16 @@
 r"""Joins among the faces of one Part shape: read, held closed and smooth, measured.
 
-A *join* is an edge shared by exactly two of the faces being faired: the faces of one
-object's shape share their edge objects (``Part.Shape.isSame``), so the joins are read
-from the faces alone (an edge of three or more faces is non-manifold and not joined; a
-degenerated edge or a seam is no join).  Each side of a join is located on its face
-(:func:`find_joins`, the :class:`~cq_fairing.core.joint_projection.JoinSide` of the
-core): the border of the surface's parameter rectangle its p-curve runs along, its
-border parameters at the edge's ends, and whether it covers the whole side.
+A *join* is an edge shared by exactly two faces of one object's shape, at least one of
+them being faired: the faces of one shape share their edge objects
+(``Part.Shape.isSame``), so the joins are read from the faces alone (an edge of three or
+more faces is non-manifold and not joined; a degenerated edge or a seam is no join).
+The faces not faired that share an edge with a faired one, its *neighbours*, take part
+as fixed faces: they keep their joins as the source has them.  Each side of a join is
+located on its face (:func:`find_joins`, the
+:class:`~cq_fairing.core.joint_projection.JoinSide` of the core): the border of the
+surface's parameter rectangle its p-curve runs along, its border parameters at the
+edge's ends, and whether it covers the whole side (no border on a surface that is not a
+B-spline: a plane, a cylinder).
 
 A join is measured at ``samples`` edge parameters :math:`t_k`, the midpoints of equal
 sub-ranges of the edge (the ends, a vertex where several faces may meet at a collapsed
@@ -16,18 +20,24 @@ parameter box, seeded at face 1's p-curve, giving :math:`Q_k`; the gap is
 :math:`|P_k - Q_k|` and the angle is that between the unit normals
 :math:`\pm S_u \times S_v / |S_u \times S_v|` (turned on a reversed face) at
 :math:`P_k` and :math:`Q_k`.  The same is done from face 1 onto face 0, and each sample
-keeps the larger gap and angle.  A join whose largest source angle is below the angle
+keeps the larger gap and angle.  A neighbour whose surface is not a B-spline is
+evaluated and projected onto by FreeCAD's Part (``Surface.value``, ``Surface.normal``,
+``Surface.parameter``).  A join whose largest source angle is below the angle
 tolerance is *smooth*, else a *crease*.
 
 Holding the joins is the core's work
 (:func:`~cq_fairing.core.joint_projection.project_jointly`): :func:`hold_joins` gives it
 the faces read as non-periodic B-spline patches and the target spaces of each face
-faired alone.
+faired alone; a neighbour has no target, so it is kept and its border constrains the
+faired face across the join, and a faired face's side on a join with a face that is no
+such patch is pinned to its source.
 """
 
 from dataclasses import dataclass, field
 
+import FreeCAD
 import numpy as np
+import Part
 
 import cq_fairing as cf
 from cq_fairing.core.join_summary import summarize, summary_line
@@ -51,13 +61,14 @@ class FaceJoins:
     Attributes
     ----------
     joins : list of Join
-        Face indices are positions in the list of faces.
+        Face indices are positions in the list of faces, then of the neighbours.
     samples : list of tuple of numpy.ndarray
         Per join, the ``(n, 2)`` parameters of the measured points on side 0's and on
         side 1's face (the faired faces keep their parameter domains, so the same
         parameters measure them).
     sources : dict
-        ``{face: BSplineSurface}``: every face's source surface.
+        ``{face: BSplineSurface}``: every B-spline face's source surface (every faired
+        face, the B-spline neighbours).
     readable : dict
         The faces of ``sources`` that are not periodic: the patches the joint projection
         can solve (rational ones in homogeneous coordinates).
@@ -66,7 +77,10 @@ class FaceJoins:
     signs : dict
         ``{face: +1.0 or -1.0}``: ``-1`` on a reversed face (its normal turned).
     non_manifold : int
-        Edges of three or more of the faces (not joined).
+        Edges of three or more faces, one of them faired (not joined).
+    analytic : dict
+        ``{face: Part.Face}``: the neighbours whose surface is not a B-spline (measured
+        through Part).
     """
 
     joins: list
@@ -76,6 +90,7 @@ class FaceJoins:
     boxes: dict
     signs: dict
     non_manifold: int = 0
+    analytic: dict = field(default_factory=dict)
 
 
 def check_join_options(joins, angle_tolerance):
@@ -125,10 +140,20 @@ def _uv(face, edge, params):
     return np.array([face.Surface.parameter(edge.valueAt(float(t))) for t in params])
 
 
+def _inside(uv, box):
+    """``uv`` (n, 2) clipped to ``box`` ``(u0, u1, v0, v1)``: a p-curve may leave its
+    B-spline surface's domain by round-off, where the core does not evaluate."""
+    u0, u1, v0, v1 = box
+    return np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+
+
 def _join_side(face, index, edge, edge_index, size):
     """The :class:`JoinSide` of ``face``'s ``edge``: the border of the parameter
     rectangle it runs along, its border parameters at its ends, and whether it covers
-    that whole border (up to the edge's tolerance in 3-D)."""
+    that whole border (up to the edge's tolerance in 3-D); no border on a surface that
+    is not a B-spline."""
+    if not _is_bspline(face):
+        return JoinSide(index, edge_index)
     first, last = edge.ParameterRange
     uv = _uv(face, edge, np.linspace(first, last, 7))
     u0, u1, v0, v1 = face.Surface.bounds()
@@ -153,8 +178,26 @@ def _covers(surface, axis, level, ends, along, reach):
                for end, got in zip(ends, (min(along), max(along))))
 
 
-def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES):
-    """The joins among ``faces`` (B-spline faces of one shape), classified.
+def _is_bspline(face):
+    return isinstance(face.Surface, Part.BSplineSurface)
+
+
+def _sources(faces):
+    """``{face: BSplineSurface}``: the faces' B-spline surfaces that read as core
+    surfaces (any other face is measured through Part and holds no border)."""
+    out = {}
+    for index, face in enumerate(faces):
+        if _is_bspline(face):
+            try:
+                out[index] = conversion.surface_from_face(face)
+            except cf.FairingError:
+                continue
+    return out
+
+
+def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
+    """The joins of ``faces`` (B-spline faces of one shape) among themselves and with
+    their ``neighbours``, classified.
 
     Parameters
     ----------
@@ -164,47 +207,83 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES):
         Degrees: a join whose source normals differ by less all along is smooth.
     samples : int
         Points measured along each join.
+    neighbours : sequence of Part.Face
+        Faces of the same shape not faired, any surface: their joins with ``faces`` are
+        read (they are faces ``len(faces)``, ``len(faces) + 1``, ...), not those among
+        themselves.
 
     Returns
     -------
     FaceJoins
     """
-    size = max(f.BoundBox.DiagonalLength for f in faces)
-    sources = {i: conversion.surface_from_face(f) for i, f in enumerate(faces)}
+    every = list(faces) + list(neighbours)
+    size = max(f.BoundBox.DiagonalLength for f in every)
+    sources = _sources(every)
     readable = {i: s for i, s in sources.items()
-                if not (faces[i].Surface.isUPeriodic() or faces[i].Surface.isVPeriodic())}
-    boxes = {i: conversion.uv_range(f, sources[i]) for i, f in enumerate(faces)}
-    signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(faces)}
+                if not (every[i].Surface.isUPeriodic() or every[i].Surface.isVPeriodic())}
+    boxes = {i: conversion.uv_range(f, sources[i]) if i in sources else f.ParameterRange
+             for i, f in enumerate(every)}
+    signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(every)}
+    analytic = {i: f for i, f in enumerate(every) if i not in sources}
     drafts, uvs, non_manifold = [], [], 0
-    for edge_index, (edge, owners) in enumerate(_shared_edges(faces)):
+    for edge_index, (edge, owners) in enumerate(_shared_edges(every)):
+        if min(owners) >= len(faces):
+            continue
         if len(owners) > 2:
             non_manifold += 1
         if len(owners) != 2:
             continue
         first, last = edge.ParameterRange
         params = first + (np.arange(samples) + 0.5) / samples * (last - first)
-        drafts.append(tuple(_join_side(faces[i], i, edge, edge_index, size) for i in owners))
-        uvs.append(tuple(_uv(faces[i], edge, params) for i in owners))
+        drafts.append(tuple(_join_side(every[i], i, edge, edge_index, size) for i in owners))
+        uvs.append(tuple(_inside(_uv(every[i], edge, params), boxes[i]) if i in sources
+                         else _uv(every[i], edge, params) for i in owners))
     found = FaceJoins([Join(sides, "smooth", 0.0, 0.0) for sides in drafts], uvs, sources,
-                      readable, boxes, signs, non_manifold)
+                      readable, boxes, signs, non_manifold, analytic)
     joins = []
     for sides, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
         angle = float(angles.max())
         joins.append(Join(sides, "smooth" if angle < angle_tolerance else "crease",
                           float(gaps.max()), angle, angles))
-    return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold)
+    return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold, analytic)
 
 
 def _angles(n0, n1):
     return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n0, n1), -1.0, 1.0)))
 
 
+def _part_points_and_normals(surface, uv):
+    """Points and unit normals of a Part surface at parameters ``uv`` (n, 2)."""
+    points = [surface.value(float(u), float(v)) for u, v in uv]
+    normals = [surface.normal(float(u), float(v)) for u, v in uv]
+    return np.array([tuple(p) for p in points]), np.array([tuple(n) for n in normals])
+
+
+def _points_and_normals(found, surfaces, face, uv):
+    """Points and unit normals of ``face`` at ``uv``: its B-spline surface in
+    ``surfaces``, else its Part surface."""
+    if face in surfaces:
+        return analysis.points_and_normals(surfaces[face], uv[:, 0], uv[:, 1])
+    return _part_points_and_normals(found.analytic[face].Surface, uv)
+
+
+def _feet(found, surfaces, face, points, uv):
+    """Closest points on ``face`` from ``points`` (seeded at ``uv``), and the normals
+    there: the core's on a B-spline surface inside its box, Part's projection on any
+    other surface."""
+    if face in surfaces:
+        return analysis.foot_points(surfaces[face], points, uv[:, 0], uv[:, 1],
+                                    found.boxes[face])
+    surface = found.analytic[face].Surface
+    feet = [surface.parameter(FreeCAD.Vector(*map(float, p))) for p in points]
+    return _part_points_and_normals(surface, np.array(feet, dtype=float))
+
+
 def _one_way(found, sides, uvs, surfaces):
     """Gaps and angles from side ``a``'s points to side ``b``'s face (module doc)."""
     (a, b), (uv_a, uv_b) = sides, uvs
-    points, normals = analysis.points_and_normals(surfaces[a], uv_a[:, 0], uv_a[:, 1])
-    feet, across = analysis.foot_points(surfaces[b], points, uv_b[:, 0], uv_b[:, 1],
-                                        found.boxes[b])
+    points, normals = _points_and_normals(found, surfaces, a, uv_a)
+    feet, across = _feet(found, surfaces, b, points, uv_b)
     angles = _angles(found.signs[a] * normals, found.signs[b] * across)
     return np.linalg.norm(points - feet, axis=1), angles
 
@@ -212,7 +291,8 @@ def _one_way(found, sides, uvs, surfaces):
 def measure_joins(found, surfaces):
     """Per join of ``found``, the gaps and the normal angles (degrees) at its samples
     with the faces' surfaces ``surfaces`` (``{face: BSplineSurface}``, the sources or
-    faired surfaces on the same parameter domains).
+    faired surfaces on the same parameter domains; a face of ``found.analytic`` through
+    Part).
 
     Returns
     -------

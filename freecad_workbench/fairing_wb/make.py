@@ -29,7 +29,7 @@ from . import analysis, conversion
 from .joins import JOINS, JoinReport, check_join_options, find_joins, hold_joins, measure_joins
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
-           "fair_shapes", "error_sentence",
+           "neighbour_faces", "fair_shapes", "error_sentence",
            "FairedShape", "FairedShapes", "MODES", "METHODS",
            "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES", "JOINS"]
 
@@ -466,7 +466,8 @@ def fair_elements(obj, subs, settings, face_settings, joins="smooth", angle_tole
         One per element, in the order of ``subs`` (see :func:`fair_shapes`).
     """
     return fair_shapes(named_elements(obj, subs), settings, face_settings, joins=joins,
-                       angle_tolerance=angle_tolerance)
+                       angle_tolerance=angle_tolerance,
+                       neighbours=neighbour_faces(obj, subs))
 
 
 def named_elements(obj, subs):
@@ -475,8 +476,25 @@ def named_elements(obj, subs):
     return [(sub, _element(obj, sub)) for sub in subs]
 
 
+def neighbour_faces(obj, subs):
+    """``[(sub, Part.Face)]``: the faces of ``obj``'s shape, any surface, that share a
+    non-degenerated edge with a face of ``subs`` and are not among ``subs``, in the
+    shape's order; read in the thread that owns the document, as
+    :func:`named_elements`."""
+    faces = obj.Shape.Faces
+    chosen = {int(sub[len("Face"):]) - 1 for sub in subs if sub.startswith("Face")}
+    near = set()
+    for index in chosen:
+        for edge in faces[index].Edges:
+            if edge.Degenerated:
+                continue
+            for owner in obj.Shape.ancestorsOfType(edge, Part.Face):
+                near.update(k for k, face in enumerate(faces) if face.isSame(owner))
+    return [(f"Face{k + 1}", faces[k]) for k in sorted(near - chosen)]
+
+
 def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
-                angle_tolerance=1.0):
+                angle_tolerance=1.0, neighbours=()):
     """Fair the shapes ``named`` (``[(sub, face or edge)]``, from :func:`named_elements`); no
     document access, so it may run in a worker thread.
 
@@ -488,7 +506,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     Several faces of one shape are faired alone first; in tolerance mode and with
     ``joins`` other than ``"free"`` they are then projected again together along the
     edges they share (:mod:`fairing_wb.joins`): closed to round-off, and smooth across
-    the joins that were smooth in the source.  Their joins are measured either way.
+    the joins that were smooth in the source.  Their joins are measured either way.  The
+    ``neighbours``, faces of the same shape not faired, take part as fixed faces: a
+    faired face's join with one stays as the source has it.
 
     Parameters
     ----------
@@ -502,6 +522,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     angle_tolerance : float
         Degrees: a join whose source normals differ by less all along it is smooth,
         else a crease (kept a crease).
+    neighbours : sequence of (str, Part.Face)
+        The faces of the shape that share an edge with a face of ``named`` and are not
+        faired (:func:`neighbour_faces`); none: only the joins among ``named``.
 
     Returns
     -------
@@ -529,18 +552,21 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             results.append(fair_edge(element, **{**settings, "target": own}))
     if progress is not None:
         progress(len(named), len(named))
-    return _joined(named, results, settings["tolerance"], joins, angle_tolerance)
+    return _joined(named, results, settings["tolerance"], joins, angle_tolerance,
+                   list(neighbours))
 
 
-def _joined(named, results, tolerance, joins, angle_tolerance):
-    """``results`` with the joins among the faces of ``named`` held (:func:`_hold`) and
-    measured, as :class:`FairedShapes`."""
+def _joined(named, results, tolerance, joins, angle_tolerance, neighbours):
+    """``results`` with the joins of the faces of ``named``, among themselves and with
+    their ``neighbours`` (fixed), held (:func:`_hold`) and measured, as
+    :class:`FairedShapes`."""
     faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
     if len(faces) < 2:
         return FairedShapes(results)
     start = time.perf_counter()
-    elements = [named[k] for k in faces]
-    found = find_joins([element for _, element in elements], angle_tolerance)
+    elements = [named[k] for k in faces] + neighbours
+    found = find_joins([named[k][1] for k in faces], angle_tolerance,
+                       neighbours=[face for _, face in neighbours])
     alone = [results[k] for k in faces]
     faired, held = alone, []
     if joins != "free" and tolerance is not None and found.joins:
@@ -548,8 +574,8 @@ def _joined(named, results, tolerance, joins, angle_tolerance):
     out = list(results)
     for k, result in zip(faces, faired):
         out[k] = result
-    surfaces = {i: r.surface if r.surface is not None else found.sources[i]
-                for i, r in enumerate(faired)}
+    surfaces = {**found.sources,
+                **{i: r.surface for i, r in enumerate(faired) if r.surface is not None}}
     report = JoinReport(found, measure_joins(found, surfaces), held,
                         time.perf_counter() - start)
     return FairedShapes(out, report)
@@ -559,11 +585,13 @@ def _hold(found, elements, alone, tolerance, joins):
     """The faces faired ``alone`` projected again together (:func:`joins.hold_joins`):
     ``(results, held joins)``; a face the joint projection keeps says why, and so does a
     face with a join no fairing can hold
-    (:func:`~cq_fairing.core.joint_projection.unholdable`)."""
+    (:func:`~cq_fairing.core.joint_projection.unholdable`).  ``elements`` are the faces
+    faired then their neighbours (fixed: no tolerance, no target)."""
     faired = list(alone)
     moved = {i for i, r in enumerate(alone) if r.surface is not None}
     for i, neighbours in unholdable(found.joins, found.readable, moved, moved).items():
-        faired[i] = _kept_by_joins(elements[i], neighbours, tolerance)
+        faired[i] = _kept_by_joins(elements[i], [elements[n][0] for n in neighbours],
+                                   tolerance)
     targets = {i: (r.surface.u_space, r.surface.v_space) for i, r in enumerate(faired)
                if i in found.readable and r.surface is not None
                and r.surface.is_rational == found.readable[i].is_rational
@@ -587,7 +615,8 @@ def _hold(found, elements, alone, tolerance, joins):
                             max_deviation=deviation, surface=surface)
     for i, deviation in projection.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
-    unchanged = {i for i, r in enumerate(faired) if r.surface is None}
+    unchanged = ({i for i, r in enumerate(faired) if r.surface is None}
+                 | set(range(len(alone), len(elements))))
     return faired, held_joins(projection, unchanged)
 
 
@@ -595,15 +624,15 @@ def _kept_by_joins(element, why, tolerance):
     """:class:`FairedShape` of a face kept as it is for its joins: ``why`` is the
     deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
     all positive), ``None`` where its pinned joins leave it no net smaller than its
-    source's, or the list of neighbours (0-based) whose joins run across its surface."""
+    source's, or the names of the neighbours whose joins run across its surface."""
     sub, face = element
     poles = tuple(conversion.surface_from_face(face).shape)
     if why is None:
         text = "its joins, held where the source has them, leave no net smaller than the " \
                "source's"
     elif isinstance(why, list):
-        text = (f"its joins with faces {[n + 1 for n in why]} of the selection run across "
-                "its surface, where no fairing can hold them (Joins=free fairs it alone)")
+        text = (f"its joins with {', '.join(why)} run across its surface, where no "
+                "fairing can hold them (Joins=free fairs it alone)")
     elif np.isfinite(why):
         text = (f"with its joins held closed it stays {why:.4g} mm from its source, over "
                 f"{tolerance:.4g} mm; its neighbours close onto it")

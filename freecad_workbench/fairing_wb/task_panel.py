@@ -273,11 +273,12 @@ class FairSurfacePanel:
         self.error.setText("")
         try:
             named = make.named_elements(*self.link)
+            neighbours = make.neighbour_faces(*self.link)
         except Exception as error:  # a slot: anything uncaught would be lost
             self._show_error(error)
             return
         self.job = PreviewJob(named, self.settings(), self.face_settings(),
-                              self.join_settings())
+                              {**self.join_settings(), "neighbours": neighbours})
         self.figures.setText("")
         self._busy(True)
         self.timer.start()

@@ -3,7 +3,9 @@ FreeCAD (no mocks).
 
 The fuselage (8 bicubic patches, 14 shared edges: 12 tangent joins and 2 creases where
 the fin's faces meet) is checked with OCCT's own projection and normals through Part,
-independently of the workbench's measure (the core's closest points).
+independently of the workbench's measure (the core's closest points).  With some faces
+selected, the others take part as fixed faces: the fuselage's B-spline faces, and the
+cylinder and torus next to linkrods' trimmed B-spline faces.
 """
 
 import numpy as np
@@ -152,6 +154,102 @@ def test_feature_holds_joins_by_default_and_reports_them(doc, fuselage):
         e.Tolerance for e in fuselage.Shape.Edges)
 
 
+def _to_neighbours(source, selected, faired, count=9):
+    """Per shared edge of ``source`` between a face of ``selected`` (0-based indices) and
+    a face not selected: that face's index, and the largest gap from the selected face's
+    source, and from its faired face ``faired[k]`` (same order as ``selected``), to the
+    other face's source surface, by OCCT's projection at ``count`` interior points."""
+    rows = []
+    for edge, i, j in _shared_edges(source):
+        if (i in selected) == (j in selected):
+            continue
+        mine, other = (i, j) if i in selected else (j, i)
+        first, last = edge.ParameterRange
+        before, after = [], []
+        for t in first + (np.arange(count) + 0.5) / count * (last - first):
+            u, v = source.Faces[mine].Surface.parameter(edge.valueAt(t))
+            for gaps, face in ((before, source.Faces[mine]),
+                               (after, faired[selected.index(mine)])):
+                point = face.Surface.value(u, v)
+                a, b = source.Faces[other].Surface.parameter(point)
+                gaps.append((source.Faces[other].Surface.value(a, b) - point).Length)
+        rows.append((other, max(before), max(after)))
+    return rows
+
+
+def test_joins_with_faces_not_selected_stay_as_the_source_has_them(fuselage):
+    """Two faces of eight faired: their joins with the six others are held where the
+    source has them (the faces not selected are fixed); Joins=free opens them."""
+    source = fuselage.Shape
+    size = source.BoundBox.DiagonalLength
+    subs = ["Face5", "Face6"]
+    assert [sub for sub, _ in make.neighbour_faces(fuselage, subs)] == [
+        "Face1", "Face2", "Face7", "Face8"]
+    smooth = make.fair_elements(fuselage, subs, SETTINGS, FACE_SETTINGS, joins="smooth")
+    free = make.fair_elements(fuselage, subs, SETTINGS, FACE_SETTINGS, joins="free")
+    assert all(r.note == "" and r.max_deviation <= TOL for r in smooth)  # both faired
+    held = _to_neighbours(source, [4, 5], [r.shape for r in smooth])
+    assert len(held) == 4
+    assert all(after <= before + 1e-9 * size for _, before, after in held), held
+    opened = _to_neighbours(source, [4, 5], [r.shape for r in free])
+    assert max(after for _, _, after in opened) > 1e-3
+    # the report counts the joins with the neighbours: 4, and the 2 between the faces
+    assert smooth.joins.summary()["joins"] == free.joins.summary()["joins"] == 6
+    assert smooth.joins.summary()["held"] == 6 and free.joins.summary()["held"] == 0
+    assert smooth.joins.summary()["max_gap"] <= 1e-9 * size
+
+
+def test_joins_with_analytic_neighbours_are_measured_through_part(doc):
+    """Linkrods Face18 and Face20 are trimmed along a cylinder (Face2): those joins run
+    across their surfaces, so Joins=smooth keeps both faces and every join, with the
+    cylinder and the torus too, measures as the source; Joins=free fairs them alone and
+    opens the joins, the cylinder's measured as OCCT measures them."""
+    rods = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "linkrods.step")), "Rods")
+    doc.recompute()
+    source = rods.Shape
+    subs = ["Face18", "Face20"]
+    neighbours = make.neighbour_faces(rods, subs)
+    kinds = {sub: type(face.Surface).__name__ for sub, face in neighbours}
+    assert kinds["Face2"] == "Cylinder" and kinds["Face16"] == "Toroid"
+    settings = {**SETTINGS, "tolerance": 0.01}
+    smooth = make.fair_elements(rods, subs, settings, FACE_SETTINGS, joins="smooth")
+    assert all("Face2" in r.note and "run across its surface" in r.note for r in smooth)
+    rows = smooth.joins.rows()
+    assert len(rows) == 10 and all(r["gap"] == r["source_gap"] for r in rows)
+    free = make.fair_elements(rods, subs, settings, FACE_SETTINGS, joins="free")
+    assert all(r.note == "" for r in free)
+    assert max(after for _, _, after in _to_neighbours(
+        source, [17, 19], [r.shape for r in free])) > 1e-4
+    cylinder = [sub for sub, _ in neighbours].index("Face2") + 3  # 1-based, after 2 faces
+    measured = [r for r in free.joins.rows() if cylinder in r["faces"]]
+    assert len(measured) == 2
+    for row in measured:
+        k = row["faces"][0] - 1
+        low, high = _cylinder_gap_bounds(source, (17, 19)[k], free[k].shape)
+        assert low * (1 - 1e-6) <= row["gap"] <= high + row["source_gap"], (row, low, high)
+
+
+def _cylinder_gap_bounds(source, index, faired, samples=joins.SAMPLES):
+    """Bounds on the gap between ``faired`` (of source face ``index``) and linkrods'
+    cylinder (Face2) along their edge, at the workbench's sample parameters: below, the
+    larger of OCCT's unbounded projections of the faired points onto the cylinder and
+    of the edge's points onto the faired surface; above, the distance from the edge's
+    points to the faired surface at the source's parameters of those points (a point of
+    the faired face, not the closest)."""
+    cylinder, face = source.Faces[1], source.Faces[index]
+    (edge,) = [e for e in face.Edges if any(e.isSame(c) for c in cylinder.Edges)]
+    first, last = edge.ParameterRange
+    low = high = 0.0
+    for t in first + (np.arange(samples) + 0.5) / samples * (last - first):
+        point = edge.valueAt(t)
+        on_faired = faired.Surface.value(*face.Surface.parameter(point))
+        foot = cylinder.Surface.value(*cylinder.Surface.parameter(on_faired))
+        back = faired.Surface.value(*faired.Surface.parameter(point))
+        low = max(low, (foot - on_faired).Length, (back - point).Length)
+        high = max(high, (on_faired - point).Length)
+    return low, high
+
+
 def test_bad_join_options_are_refused_in_words(fuselage):
     with pytest.raises(cf.InvalidInputError, match="joins must be one of"):
         make.make_fairing(fuselage, tolerance=TOL, joins="tight")
@@ -170,4 +268,4 @@ def test_document_without_join_properties_migrates(doc, fuselage, tmp_path):
         assert again.getEnumerationsOfProperty("Joins") == list(make.JOINS)
         assert again.Proxy.Version == feature.VERSION
         reopened.recompute()
-        assert again.isValid() and "; joins: 2 (" in again.Status, again.Status
+        assert again.isValid() and "; joins: 6 (" in again.Status, again.Status
