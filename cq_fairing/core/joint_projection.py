@@ -7,18 +7,21 @@ Part module in the workbench).  After each face was faired alone (its tolerance 
 chose its target spaces), :func:`project_jointly` projects the faces again together
 with :func:`~cq_fairing.core.joins.fair_patches`:
 
-* a **border join** (:func:`border_joins`: both faces polynomial B-spline patches
-  meeting along whole sides of their parameter rectangles, whose borders agree at equal
-  normalised parameters within :data:`SOURCE_GAP` times the tolerance) is faired once
-  and both faces take its border pole for pole: closed to round-off, and G1 across a
-  smooth join;
+* a **border join** (:func:`border_joins`: both faces B-spline patches, rational ones
+  solved in homogeneous coordinates, meeting along whole sides of their parameter
+  rectangles, whose borders agree at equal normalised parameters within
+  :data:`SOURCE_GAP` times the tolerance) is faired once and both faces take its border
+  pole for pole: closed to round-off, and G1 across a smooth join;
 * every other side of a face on a join (a neighbour parametrized differently along it,
-  analytic, rational or trimmed there; a side shared by several neighbours) is
+  analytic or trimmed there; a side shared by several neighbours) is
   **pinned** (:func:`~cq_fairing.core.joins.pinning_patch`): the face keeps its source's
   border curve there and, across a smooth join, its source's tangent plane, exactly; the
   join keeps the source's gap and angle wherever its other side is pinned or unchanged;
 * faces that carry one and the same surface (one surface split into faces by its trims)
-  are one patch, faired once for all of them.
+  are one patch, faired once for all of them;
+* a face with a join that runs across its surface (a trimmed face's inner edge), or a
+  periodic one, can be neither joined nor pinned: :func:`unholdable` names it, and the
+  caller keeps it before the projection.
 
 Each solved face is then checked against its own tolerance by the backend's two-sided
 measure (``check``).  A face over its tolerance gets its targets refined (every span
@@ -164,8 +167,8 @@ def join_tolerance(join, tolerances):
 
 def border_joins(joins, sources, tolerances):
     """The joins of ``joins`` that :func:`project_jointly` can fair across pole for pole:
-    border joins (:func:`is_border_join`) between faces of ``sources`` (polynomial,
-    non-periodic B-spline surfaces ``{face: BSplineSurface}``) whose borders, at equal
+    border joins (:func:`is_border_join`) between faces of ``sources`` (non-periodic
+    B-spline surfaces ``{face: BSplineSurface}``) whose borders, at equal
     normalised parameters, lie within :data:`SOURCE_GAP` times the join's tolerance
     (:func:`join_tolerance`) of each other.  A wider source gap is the source's, and
     borders that run along one curve with different parametrizations would pull each
@@ -207,9 +210,8 @@ def unholdable(joins, sources, moved, selected):
     surface (``side`` ``None``: a trimmed face's inner edge) or the face is not among
     ``sources`` (not read as a B-spline net with borders, a periodic face).  A join
     between two faces of ``selected`` that carry one surface is held by fairing that
-    surface once.  The
-    caller keeps these faces as they are, so that their joins stay as the source has
-    them."""
+    surface once.  The caller keeps these faces as they are, so that their joins stay as
+    the source has them."""
     out = {}
     for join in joins:
         a, b = join.faces
@@ -229,8 +231,8 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
     Parameters
     ----------
     sources : dict
-        ``{face: BSplineSurface}``: the faces read as polynomial, non-periodic B-spline
-        patches (any others stay out, as analytic faces do).
+        ``{face: BSplineSurface}``: the faces read as non-periodic B-spline patches,
+        polynomial or rational (any others stay out, as analytic faces do).
     targets : dict
         ``{face: (SplineSpace, SplineSpace)}``: each face that may move, with the target
         spaces its own tolerance search chose (on its source's domain).  A face of
