@@ -47,7 +47,12 @@ def row(model, method, tol):
     return (f"| {model} | {method} | {s['faces_faired']} ({rational}) | "
             f"{s['faces_unchanged']} | {s['faces_tolerance_not_met'] + s['faces_failed']} | "
             f"{s['faces_skipped']} | {s['poles_before']} -> {s['poles_after']} | "
-            f"{s['worst_deviation']:.4g} | {wall:.1f} |")
+            f"{_figure(s['worst_deviation'])} | {wall:.1f} |")
+
+
+def _figure(value):
+    """A deviation, or "-" where no face was faired."""
+    return "-" if value is None else f"{value:.4g}"
 
 
 def _rational(face):
