@@ -241,12 +241,14 @@ def _check_boundary(source, boundary):
             "'free' for it.")
 
 
-def _search_keywords(search, measure):
+def _search_keywords(search, measure, method="wavelet"):
+    """The core's ``search`` and ``measure`` keywords, validated; none for the adaptive
+    and energy methods, which do not use them (the core refuses them there)."""
     if search not in SEARCHES or measure not in MEASURES:
         raise cf.InvalidInputError(
             f"search must be one of {SEARCHES} and measure one of {MEASURES}, got "
             f"{search!r} and {measure!r}.")
-    return {"strategy": search, "deviation": measure}
+    return {"search": search, "measure": measure} if method == "wavelet" else {}
 
 
 def fair_surface_net(source, tolerance=None, target=None, method="wavelet", search="linear",
@@ -273,7 +275,8 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
                                u_knots=source.u_knots, v_knots=source.v_knots,
                                degree=(source.u_degree, source.v_degree),
                                weights=source.weights,
-                               **_search_keywords(search, measure), **keywords, **box)
+                               **_search_keywords(search, measure, method), **keywords,
+                               **box)
     n = _target_spans(target, source.shape, (source.u_degree, source.v_degree), "face")
     # A target equal to the source's pole count keeps that direction as it is.
     n = tuple(None if t == k else m for t, k, m in zip(target, source.shape, n))
@@ -375,7 +378,7 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
     if tolerance is not None:
         _require_accuracy_control()
         result = cf.fair_curve(source.poles, tol=_check_tolerance(tolerance), **common,
-                               **_search_keywords(search, measure))
+                               **_search_keywords(search, measure, method))
     else:
         target = (target,) if np.ndim(target) == 0 else tuple(target)[:1]
         (n,) = _target_spans(target, (source.n_poles,), (source.degree,), "curve")
