@@ -57,3 +57,8 @@ def quasi_uniform_knots(n, degree=3):
 def random_clamped_knots(rng, k, degree):
     inner = np.sort(rng.uniform(0.02, 0.98, k - degree - 1))
     return np.concatenate([np.zeros(degree + 1), inner, np.ones(degree + 1)])
+
+
+def trapezoid(y, x):
+    """The trapezoidal rule: np.trapezoid on numpy >= 2, np.trapz on FreeCAD's numpy 1.24."""
+    return (np.trapezoid if hasattr(np, "trapezoid") else np.trapz)(y, x)
