@@ -535,7 +535,8 @@ def collapsed_rows(surface):
 def collapsed_kept(source, faired):
     """``faired`` with every border row that is collapsed in ``source`` (the pole of a
     sphere-like face, the nose of a fuselage) put back onto its point: a projection alone
-    spreads it, and a faired face's degenerated edge must stay one point."""
+    spreads it, and a faired face's degenerated edge must stay one point (a STEP file
+    of faces that meet at such a point reads back with unclosed wires otherwise)."""
     return collapse_rows(faired, collapsed_rows(source))
 
 

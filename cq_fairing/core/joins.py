@@ -74,7 +74,8 @@ from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
-           "pinning_patch", "turned_patches", "mirror_ratio", "UnionFind", "SIDES", "ANGLE_SLACK"]
+           "pinning_patch", "side_parameters", "turned_patches", "mirror_ratio", "UnionFind",
+           "SIDES", "ANGLE_SLACK"]
 
 SIDES = ("u0", "u1", "v0", "v1")
 SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
@@ -227,6 +228,15 @@ def _reflection_scale(border_weights, weights):
     return 1.0 if not len(limits) or limits.min() > 2.0 else 0.5 * float(limits.min())
 
 
+def side_parameters(surface, side, t):
+    """``(u, v)`` grid arguments of the points of ``side`` at the normalised parameters
+    ``t`` along it (one of them a single border value)."""
+    (u0, u1), (v0, v1) = surface.domain
+    if side[0] == "u":
+        return [u0 if side[1] == "0" else u1], v0 + (v1 - v0) * np.asarray(t)
+    return u0 + (u1 - u0) * np.asarray(t), [v0 if side[1] == "0" else v1]
+
+
 def join_angles(surfaces, join, t):
     """Angle (degrees) between the two patches' normals at the normalised parameters
     ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count)."""
@@ -234,11 +244,7 @@ def join_angles(surfaces, join, t):
     for index, side, along in ((join.a, join.side_a, t),
                                (join.b, join.side_b, 1.0 - t if join.reversed else t)):
         surface = surfaces[index]
-        (u0, u1), (v0, v1) = surface.domain
-        if side[0] == "u":
-            u, v = [u0 if side[1] == "0" else u1], v0 + (v1 - v0) * along
-        else:
-            u, v = u0 + (u1 - u0) * along, [v0 if side[1] == "0" else v1]
+        u, v = side_parameters(surface, side, along)
         n = np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
         n = n.reshape(-1, 3)
         normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300))

@@ -39,17 +39,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .joins import BorderJoin, JointPatch, fair_patches, pinning_patch, turned_patches
+from .geometry import collapsed_kept
+from .joins import (
+    BorderJoin,
+    JointPatch,
+    fair_patches,
+    pinning_patch,
+    side_parameters,
+    turned_patches,
+)
 from .spaces import SplineSpace
 
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
-           "held_joins",
-           "SOURCE_GAP",
-           "REFINEMENTS"]
+           "held_joins", "joint_targets", "locate_side", "SOURCE_GAP", "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 REFINEMENTS = 2    # span halvings of a face over its tolerance before it is kept
+BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a p-curve sample on a border
+FULL_TOLERANCE = 1e-7     # relative to the model size: an edge's end this close to a side's
+                          # end in 3-D (or within the edge's tolerance) covers the side there
 
 
 @dataclass(frozen=True)
@@ -129,7 +138,7 @@ class JointProjection:
     ----------
     surfaces : dict
         ``{face: BSplineSurface}`` of every face solved (each face of a group that
-        shares one surface gets that surface).
+        shares one surface gets that surface), as checked.
     kept : dict
         ``{face: deviation}`` of the faces kept as they were: the deviation they stayed
         at with their joins closed (over their tolerance after :data:`REFINEMENTS`), or
@@ -145,6 +154,49 @@ class JointProjection:
     kept: dict
     held: list
     pinned: dict
+
+
+def locate_side(face, edge, uv, bounds, point, edge_tolerance, size):
+    """The :class:`JoinSide` of a face's edge, from its p-curve.
+
+    Parameters
+    ----------
+    face, edge : int
+        The backend's indices of the face and of its edge.
+    uv : numpy.ndarray
+        ``(n, 2)`` p-curve samples from the edge's start to its end.
+    bounds : tuple of float
+        ``(u0, u1, v0, v1)``: the surface's parameter rectangle.
+    point : callable
+        ``point(u, v)``: the surface's 3-D point, as three numbers.
+    edge_tolerance, size : float
+        The edge's tolerance and the model's size.
+
+    Returns
+    -------
+    JoinSide
+        The border the samples lie on (within :data:`BORDER_TOLERANCE` of the parameter
+        span), its border parameters at the edge's ends, and ``full`` when the edge
+        covers the side: where it stops short of a side's end, the surface points there
+        lie within the edge's tolerance, or :data:`FULL_TOLERANCE` times ``size``, of
+        each other (a file's edges often stop a hair inside the surface's bounds).  No
+        border when the samples leave it (a trimmed face's inner edge).
+    """
+    u0, u1, v0, v1 = bounds
+    span = max(u1 - u0, v1 - v0)
+    borders = {"u0": (0, u0, (v0, v1)), "u1": (0, u1, (v0, v1)),
+               "v0": (1, v0, (u0, u1)), "v1": (1, v1, (u0, u1))}
+    for name, (axis, level, ends) in borders.items():
+        if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
+            along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
+            reach = max(edge_tolerance, FULL_TOLERANCE * size)
+
+            def at(t, axis=axis, level=level):
+                return np.asarray(point(*((level, t) if axis == 0 else (t, level))), float)
+            full = all(np.linalg.norm(at(end) - at(got)) <= reach
+                       for end, got in zip(ends, (min(along), max(along))))
+            return JoinSide(face, edge, name, along, bool(full))
+    return JoinSide(face, edge)
 
 
 def is_border_join(join):
@@ -185,14 +237,19 @@ def _parametric_gap(join, sources, samples=33):
     points = []
     for side, ts in zip(join.sides, (t, 1.0 - t if runs_reversed(join) else t)):
         surface = sources[side.face]
-        (u0, u1), (v0, v1) = surface.domain
-        if side.side[0] == "u":
-            u, v = [u0 if side.side[1] == "0" else u1], v0 + (v1 - v0) * ts
-            points.append(surface.evaluate_grid(u, v)[0])
-        else:
-            u, v = u0 + (u1 - u0) * ts, [v0 if side.side[1] == "0" else v1]
-            points.append(surface.evaluate_grid(u, v)[:, 0])
+        points.append(surface.evaluate_grid(*side_parameters(surface, side.side, ts))
+                      .reshape(samples, -1))
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())
+
+
+def joint_targets(sources, faired):
+    """``{face: (u space, v space)}``: the targets of the faces of ``faired`` (``{face:
+    surface faired alone}``) that :func:`project_jointly` may move: on their source's
+    domain, and rational where the source is (a rational face faired onto a polynomial
+    approximation stays out)."""
+    return {face: (s.u_space, s.v_space) for face, s in faired.items()
+            if face in sources and s.is_rational == sources[face].is_rational
+            and s.domain == sources[face].domain}
 
 
 def held_joins(projection, unchanged):
@@ -212,10 +269,10 @@ def unholdable(joins, sources, moved, selected):
     between two faces of ``selected`` that carry one surface is held by fairing that
     surface once.  The caller keeps these faces as they are, so that their joins stay as
     the source has them."""
-    out = {}
+    out, selected_sources = {}, set(sources) & set(selected)
     for join in joins:
         a, b = join.faces
-        if a == b or ({a, b} <= set(sources) & set(selected)
+        if a == b or ({a, b} <= selected_sources
                       and surface_key(sources[a]) == surface_key(sources[b])):
             continue
         for side, other in zip(join.sides, (b, a)):
@@ -246,8 +303,10 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
         ``{face: tol}`` of the faces selected.
     check : callable
         ``check(face, surface) -> float``: the face's two-sided deviation from its source
-        with ``surface`` under its trim (the backend's measure; the last call for a face
-        is its final surface).
+        with ``surface`` under its trim (the backend's measure).  The surfaces checked
+        already have the source's collapsed border rows put back on their points
+        (:func:`~cq_fairing.core.geometry.collapsed_kept`); one with weights that are
+        not all positive is not checked: it counts as over the tolerance.
     continuity : {"G1", "G0"}
         ``"G1"``: tangent planes held across smooth joins, and pinned there too.
     excluded : set of int
@@ -268,8 +327,9 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
     refined = dict.fromkeys(faces, 0)
     while True:
         solve = _solve(sources, targets, faces, kept, refined, border, group, pins, continuity)
-        deviations = {m: check(m, solve.result.surfaces[k]) for k, face in enumerate(faces)
-                      if face not in kept for m in members[face]}
+        solved = {m: collapsed_kept(sources[m], solve.result.surfaces[k])
+                  for k, face in enumerate(faces) if face not in kept for m in members[face]}
+        deviations = {m: check(m, s) if _positive(s) else np.inf for m, s in solved.items()}
         over = sorted({group[m] for m, d in deviations.items() if d > tolerances[m]})
         turned = [i for i in _turned(solve, faces, kept) if refined[i] < REFINEMENTS
                   and i not in over]
@@ -284,13 +344,11 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
             refined[face] += 1
         if not over and not turned and not grown:
             break
-    surfaces = {m: solve.result.surfaces[k] for k, face in enumerate(faces) if face not in kept
-                for m in members[face]}
     inside = [j for j in joins if j.faces[0] != j.faces[1]
               and group.get(j.faces[0], -1) == group.get(j.faces[1], -2)
               and group[j.faces[0]] not in kept]
     pinned = {(face, side) for face, side in solve.pinned if face not in kept}
-    return JointProjection(surfaces, {m: d for face, d in kept.items() if face in targets
+    return JointProjection(solved, {m: d for face, d in kept.items() if face in targets
                                       for m in members[face]},
                            solve.imposed + inside, _pinned_joins(joins, border, group, pinned))
 
@@ -417,6 +475,11 @@ def _turned(solve, faces, kept):
     turned = turned_patches(solve.result.surfaces, [p.source for p in solve.patches],
                             solve.result.joins, moved)
     return [faces[k] for k in turned]
+
+
+def _positive(surface):
+    """False for a rational surface with a weight that is not positive."""
+    return not surface.is_rational or bool(np.all(surface.weights > 0))
 
 
 def _grown(result, sources, faces, kept, pins):

@@ -46,16 +46,13 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 from scipy.spatial import cKDTree
 
-from ..core.joint_projection import Join, JoinSide
+from ..core.joint_projection import Join, JoinSide, locate_side
 from ..errors import InvalidInputError
 from .convert import as_shape, indexed_faces
 
 __all__ = ["JoinSide", "Join", "JoinMeasure", "Adjacency", "find_joins", "measure_joins"]
 
 SIDES = ("u0", "u1", "v0", "v1")
-BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a pcurve sample on a border
-FULL_TOLERANCE = 1e-7     # relative to the model size: an edge's end this close to a side's
-                          # end in 3-D (or within the edge's tolerance) covers the side there
 COINCIDENCE = 1e-4        # default coincidence, relative to the bounding-box diagonal
 EDGE_SHARE = 1e-2         # ... and at most this share of the shorter edge's length
 EDGE_PROBES = 5           # samples per free edge when matching loose boundaries
@@ -255,38 +252,20 @@ def _uv(model, edge, face_index, params):
 
 
 def _join_side(model, face_index, edge_index):
-    """The :class:`JoinSide` of a face's edge: which border of the parameter rectangle."""
+    """The :class:`JoinSide` of a face's edge: which border of the parameter rectangle
+    (:func:`~cq_fairing.core.joint_projection.locate_side`)."""
     edge = model.edge(edge_index)
     surface = model.surface(face_index)[0]
     curve, first, last = _pcurve(model, edge, face_index)
     if curve is None or not isinstance(surface, (Geom_BSplineSurface, Geom_BezierSurface)):
         return JoinSide(face_index, edge_index)
     uv = np.array([curve.Value(float(t)).Coord() for t in np.linspace(first, last, 7)])
-    u0, u1, v0, v1 = surface.Bounds()
-    bounds = {"u0": (0, u0, v0, v1), "u1": (0, u1, v0, v1),
-              "v0": (1, v0, u0, u1), "v1": (1, v1, u0, u1)}
-    for name, (axis, level, lo, hi) in bounds.items():
-        span = max(u1 - u0, v1 - v0)
-        if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
-            along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
-            reach = max(BRep_Tool.Tolerance_s(edge), FULL_TOLERANCE * model.size)
-            full = _covers(surface, axis, level, (lo, hi), along, reach)
-            return JoinSide(face_index, edge_index, name, along, full)
-    return JoinSide(face_index, edge_index)
+    return locate_side(face_index, edge_index, uv, surface.Bounds(),
+                       lambda u, v: surface.Value(u, v).Coord(),
+                       BRep_Tool.Tolerance_s(edge), model.size)
 
 
 # -- measurement ---------------------------------------------------------------------------
-def _covers(surface, axis, level, ends, along, reach):
-    """True when the border parameters ``along`` reach both ``ends`` of the side at
-    ``level`` on ``axis``, up to a shortfall of ``reach`` in 3-D."""
-    def point(t):
-        uv = (level, t) if axis == 0 else (t, level)
-        return np.array(surface.Value(*uv).Coord())
-    reached = (min(along), max(along))
-    return all(np.linalg.norm(point(end) - point(got)) <= reach
-               for end, got in zip(ends, reached))
-
-
 def _evaluate(surface, uv):
     """Points, :math:`S_u`, :math:`S_v` (each (n, 3)) of ``surface`` at ``uv`` (n, 2)."""
     out = np.empty((len(uv), 3, 3))

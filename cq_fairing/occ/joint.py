@@ -11,23 +11,20 @@ pinned to its source), and the faces already at their coarsest are faired togeth
 energy (:mod:`cq_fairing.occ.networks`).  This module supplies the OCCT side: the faces
 read as B-spline patches, each face's target, and OCCT's two-sided deviation of each
 solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`); it installs the
-results and names, in each kept face's report, the joins that bind it.  A border row
-collapsed in the source (the nose of a fuselage, where several faces meet at one point)
-is put back onto its point: the projection alone spreads it, and a STEP file of such
-faces read back as unclosed wires.
+results and names, in each kept face's report, the joins that bind it.
 """
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.geometry import collapsed_kept
 from ..core.join_summary import summarize, summary_line
 from ..core.joint_projection import (
     REFINEMENTS,
     SOURCE_GAP,
     border_joins,
     held_joins,
+    joint_targets,
     project_jointly,
     runs_reversed,
     unholdable,
@@ -90,16 +87,14 @@ def fair_joined(job, adjacency, joins):
     _keep_unholdable(job, adjacency, readable)
     border = border_joins(adjacency.joins, readable, job.tol)
     polynomial = {face: s for face, s in readable.items() if not s.is_rational}
-    within = [j for j in border if set(j.faces) <= set(polynomial)]
-    grids = fair_grids(job, adjacency, polynomial, within, runs_reversed,
-                       lambda tol: SOURCE_GAP * tol)
+    grids = fair_grids(job, adjacency, polynomial, _between(border, polynomial),
+                       runs_reversed, lambda tol: SOURCE_GAP * tol)
     gridded = {face for grid in grids for face in grid.faces}
-    in_grids = [j for j in border if set(j.faces) <= gridded]
+    in_grids = _between(border, gridded)
     border = [j for j in border if not set(j.faces) & gridded]
     continuity = "G1" if joins == "smooth" else "G0"
     joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
-    networks = fair_networks(job, adjacency, polynomial,
-                             [j for j in border if set(j.faces) <= set(polynomial)],
+    networks = fair_networks(job, adjacency, polynomial, _between(border, polynomial),
                              runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
@@ -109,17 +104,20 @@ def fair_joined(job, adjacency, joins):
                         networks)
 
 
+def _between(joins, faces):
+    """The joins of ``joins`` with both faces among ``faces``."""
+    return [j for j in joins if set(j.faces) <= set(faces)]
+
+
 def _project_jointly(job, adjacency, readable, border, continuity, gridded):
     """The core's joint projection of the faces faired alone, measured by OCCT; installs
     the solved faces and keeps those it returns kept."""
-    targets = {face: (job.reports[face].surface.u_space, job.reports[face].surface.v_space)
-               for face in readable if _fairable(job.reports[face], readable[face])}
+    targets = joint_targets(readable, {face: report.surface for face, report
+                                       in enumerate(job.reports) if report.faired})
     measured = {}
 
     def check(face, surface):
-        if surface.is_rational and not np.all(surface.weights > 0):
-            return np.inf
-        measured[face] = job.measured(face, collapsed_kept(readable[face], surface))
+        measured[face] = job.measured(face, surface)
         return measured[face][2]["max"]
 
     joint = project_jointly(readable, targets, adjacency.joins, border, job.tol, check,
@@ -156,14 +154,6 @@ def _readable_faces(job, indices):
         if not info.unperiodized:
             out[index] = surface
     return out
-
-
-def _fairable(report, source):
-    """True when the face was faired alone onto targets on its own domain, rational where
-    its source is (a rational face faired onto a polynomial approximation stays out)."""
-    return (report.faired and report.surface is not None
-            and report.surface.is_rational == source.is_rational
-            and report.surface.domain == source.domain)
 
 
 def _install(report, face, surface, deviation):

@@ -41,7 +41,13 @@ import Part
 
 import cq_fairing as cf
 from cq_fairing.core.join_summary import summarize, summary_line
-from cq_fairing.core.joint_projection import Join, JoinSide, border_joins, project_jointly
+from cq_fairing.core.joint_projection import (
+    Join,
+    JoinSide,
+    border_joins,
+    locate_side,
+    project_jointly,
+)
 
 from . import analysis, conversion
 
@@ -50,8 +56,6 @@ __all__ = ["JOINS", "SAMPLES", "FaceJoins", "JoinReport", "find_joins", "measure
 
 JOINS = ("smooth", "closed", "free")  # the first is the default
 SAMPLES = 24              # points measured along each join
-BORDER_TOLERANCE = 1e-7   # relative to the parameter span: a p-curve point on a border
-FULL_TOLERANCE = 1e-7     # relative to the model size: a side's end reached in 3-D
 
 
 @dataclass(frozen=True)
@@ -148,34 +152,19 @@ def _inside(uv, box):
 
 
 def _join_side(face, index, edge, edge_index, size):
-    """The :class:`JoinSide` of ``face``'s ``edge``: the border of the parameter
-    rectangle it runs along, its border parameters at its ends, and whether it covers
-    that whole border (up to the edge's tolerance in 3-D); no border on a surface that
+    """The :class:`JoinSide` of ``face``'s ``edge``
+    (:func:`~cq_fairing.core.joint_projection.locate_side`); no border on a surface that
     is not a B-spline."""
     if not _is_bspline(face):
         return JoinSide(index, edge_index)
     first, last = edge.ParameterRange
     uv = _uv(face, edge, np.linspace(first, last, 7))
-    u0, u1, v0, v1 = face.Surface.bounds()
-    span = max(u1 - u0, v1 - v0)
-    borders = {"u0": (0, u0, (v0, v1)), "u1": (0, u1, (v0, v1)),
-               "v0": (1, v0, (u0, u1)), "v1": (1, v1, (u0, u1))}
-    for name, (axis, level, ends) in borders.items():
-        if np.all(np.abs(uv[:, axis] - level) <= BORDER_TOLERANCE * span):
-            along = (float(uv[0, 1 - axis]), float(uv[-1, 1 - axis]))
-            reach = max(edge.Tolerance, FULL_TOLERANCE * size)
-            full = _covers(face.Surface, axis, level, ends, along, reach)
-            return JoinSide(index, edge_index, name, along, full)
-    return JoinSide(index, edge_index)
+    return locate_side(index, edge_index, uv, face.Surface.bounds(),
+                       lambda u, v: _xyz(face.Surface.value(u, v)), edge.Tolerance, size)
 
 
-def _covers(surface, axis, level, ends, along, reach):
-    """True when the border parameters ``along`` reach both ``ends`` of the side at
-    ``level`` on ``axis``, up to a shortfall of ``reach`` in 3-D."""
-    def point(t):
-        return surface.value(*((level, t) if axis == 0 else (t, level)))
-    return all((point(end) - point(got)).Length <= reach
-               for end, got in zip(ends, (min(along), max(along))))
+def _xyz(vector):
+    return vector.x, vector.y, vector.z
 
 
 def _is_bspline(face):

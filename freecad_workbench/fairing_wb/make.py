@@ -20,8 +20,7 @@ import numpy as np
 import Part
 
 import cq_fairing as cf
-from cq_fairing.core.geometry import collapsed_kept
-from cq_fairing.core.joint_projection import held_joins, unholdable
+from cq_fairing.core.joint_projection import held_joins, joint_targets, unholdable
 from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
 from cq_fairing.core.plans import largest_resolved_scale
 
@@ -595,27 +594,20 @@ def _hold(found, elements, alone, tolerance, joins):
     for i, neighbours in unholdable(found.joins, found.readable, moved, moved).items():
         faired[i] = _kept_by_joins(elements[i], [elements[n][0] for n in neighbours],
                                    tolerance)
-    targets = {i: (r.surface.u_space, r.surface.v_space) for i, r in enumerate(faired)
-               if i in found.readable and r.surface is not None
-               and r.surface.is_rational == found.readable[i].is_rational
-               and r.surface.domain == found.readable[i].domain}
+    targets = joint_targets(found.readable, {i: r.surface for i, r in enumerate(faired)
+                                             if r.surface is not None})
     measured = {}
 
     def check(face, surface):
-        if surface.is_rational and not np.all(surface.weights > 0):
-            return np.inf
-        surface = collapsed_kept(found.sources[face], surface)
-        measured[face] = (surface, face_deviation(elements[face][1], found.sources[face],
-                                                  surface))
-        return measured[face][1]
+        measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
+        return measured[face]
 
     projection = hold_joins(found, targets, dict.fromkeys(range(len(alone)), tolerance),
                             check, joins)
-    for i in projection.surfaces:
-        surface, deviation = measured[i]
+    for i, surface in projection.surfaces.items():
         shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
         faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),
-                            max_deviation=deviation, surface=surface)
+                            max_deviation=measured[i], surface=surface)
     for i, deviation in projection.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
     unchanged = ({i for i, r in enumerate(faired) if r.surface is None}
