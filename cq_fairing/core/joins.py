@@ -38,17 +38,26 @@ constraints that make the joins hold:
    patches share the join's knots and degree along it, so with one :math:`\mu` their
    cross derivatives are parallel along the whole join, not only at the poles: the
    tangent planes agree exactly (a ratio that varies from pole to pole would leave them
-   apart between the poles: 0.10-0.19 deg on the 2 x 2 example grid, against
-   0.05-0.06 with one ratio, where what remains lies in the spans next to the inner
-   vertex).
+   apart between the poles: 0.10-0.19 deg on the 2 x 2 example grid).
    The rows are linear and act on each coordinate alike: one joint, regularised KKT
-   system over all patches, one factorization for x, y and z.  Around an inner vertex
-   the rows next to it close a cycle that is singular where :math:`\prod\mu = 1` (the
-   vertex enclosure condition of G1 patch complexes); the row that would close it is
-   left out, the vertex keeping its tangent plane through its edges (step 2).
+   system over all patches, one factorization for x, y and z.
    Normal-plane conditions :math:`n_k\cdot\partial_\perp S(t_k) = 0` at Greville
    points, the obvious alternative, leave the tangent planes free between the points
    (several degrees on a curved 2 x 2 grid), and more points collapse the cross rows.
+6. **Vertices where joins cross.**  Around an inner vertex the rows next to it close a
+   cycle (the twist poles of the patches around it), singular where the ratios'
+   product is 1: the vertex enclosure condition of G1 patch complexes.  At a *crossing*
+   (four solved patches around the vertex, four smooth joins, each patch in two of
+   them: a vertex of a patch grid) the cycle is made consistent, as it is in one
+   surface cut into four: the two joins opposite each other share one ratio (the
+   geometric mean over each line of joins through crossings), and the two edges of a
+   line run straight through the vertex, :math:`(x_a - V) + \mu (x_b - V) = 0` for
+   their poles next to it, with the ratio of a join crossing them (its mirrored row at
+   the vertex).  These rows enter the edges' projection (step 3, one system over all
+   edges), and the tangent planes then agree at the crossing too (to 1e-4 deg, tested).
+   At other vertices (three or five patches, a kept patch, a crease) the row that would
+   close the cycle is left out, the vertex keeping its tangent plane through its edges
+   (step 2); the planes may turn in the spans next to it.
 
 Rational patches are solved in homogeneous coordinates :math:`(w c, w)`: where any
 patch is rational, every net is lifted (weights 1 for a polynomial patch), the
@@ -61,6 +70,7 @@ a patch whose weights are not all positive.  This module imports numpy and scipy
 """
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -185,11 +195,20 @@ def fair_patches(patches, joins, *, continuity="G1"):
     chords, joins, dropped = _chords(patches, joins)
     spaces = _spaces(patches, chords)
     lifted = any(p.source.is_rational for p in patches)
-    held = _held_rows(patches, joins, spaces, chords, _vertices(patches, joins, lifted), lifted)
-    work = _Patchwork(patches, spaces, held, lifted)
+    vertices = _vertices(patches, joins, lifted)
+    edges = _edges(patches, joins, spaces, chords, vertices, lifted)
+    work = _Patchwork(patches, spaces, _held_rows(patches, edges, _solved_edges(edges)),
+                      lifted)
     surfaces, rows = work.surfaces(_separate(work)), 0
     if continuity == "G1" and any(j.smooth for j in joins):
-        c, d = _mirror_rows(work, joins, chords, surfaces)
+        ratios = _mirror_ratios(work, joins, chords, surfaces)
+        crossings = _crossings(patches, joins, edges)
+        if crossings:
+            ratios = _straightened(ratios, crossings)
+            lines = _line_rows(crossings, ratios)
+            work = _Patchwork(patches, spaces,
+                              _held_rows(patches, edges, _solved_edges(edges, lines)), lifted)
+        c, d = _mirror_rows(work, joins, chords, ratios)
         surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
     return JointResult(surfaces, joins, dropped, rows)
 
@@ -464,7 +483,7 @@ def _side_ends(side):
 
 
 def _vertices(patches, joins, lifted):
-    """``{(patch, corner): (point, normal)}`` of every corner tied by a join.
+    """``{(patch, corner): _Vertex}`` of every corner tied by a join.
 
     The point is the mean of the vertex's corners (a kept patch's corner where there is
     one).  The normal is the mean unit normal of the corners' sources (signs aligned), or
@@ -489,8 +508,17 @@ def _vertices(patches, joins, lifted):
         smooth = root not in creased_roots
         normal = _vertex_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
             if smooth and not lifted else None
-        out.update({key: (point, normal) for key in members})
+        out.update({key: _Vertex(point, normal, root) for key in members})
     return out
+
+
+class _Vertex(NamedTuple):
+    """Where the corners of a vertex meet, the normal of its tangent plane (``None``:
+    free) and the vertex's id."""
+
+    point: np.ndarray
+    normal: np.ndarray
+    root: tuple
 
 
 def _corner_normal(surface, corner):
@@ -526,24 +554,49 @@ def _unit_curve(space, poles, flip):
     return SplineSpace(space.degree, knots), (poles[::-1] if flip else poles)
 
 
-def _held_rows(patches, joins, spaces, chords, vertices, lifted):
-    """``{patch: {side: border poles in the patch's own along order}}`` of every join."""
-    held = {}
+@dataclass(frozen=True)
+class _Edge:
+    """The border curve problem of one join: its class space on [0, 1] (``unit``), the
+    border it projects (``curve``: space and poles, on [0, 1]), its two end points and
+    vertex normals and the vertex ids of its ends (``roots``), all in the chord's root
+    order; ``flips``: each side's reversal against that order."""
+
+    join: BorderJoin
+    unit: SplineSpace
+    curve: tuple
+    ends: np.ndarray
+    normals: list
+    roots: tuple
+    flips: dict
+
+
+def _edges(patches, joins, spaces, chords, vertices, lifted):
+    """One :class:`_Edge` per join, in the joins' order."""
+    out = []
     for join in joins:
-        root_flip = {}
-        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
-            root_flip[index, side] = chords.find((index, _along(side)))[1]
-        unit = _unit_space(spaces, _solved_side(patches, join), root_flip)
+        flips = {(i, s): chords.find((i, _along(s)))[1]
+                 for i, s in ((join.a, join.side_a), (join.b, join.side_b))}
+        unit = _unit_space(spaces, _solved_side(patches, join), flips)
         index, side = (join.b, join.side_b) if patches[join.b].kept else (join.a, join.side_a)
         space, poles = _border(patches[index].source, _net(patches[index].source, lifted), side)
-        curve = _unit_curve(space, poles, root_flip[index, side])
         ends = [vertices[join.a, c] for c in _side_ends(join.side_a)]
-        if root_flip[join.a, join.side_a]:
+        if flips[join.a, join.side_a]:
             ends = ends[::-1]
-        edge = _edge_poles(unit, curve, np.array([p for p, _ in ends]), [n for _, n in ends])
+        out.append(_Edge(join, unit, _unit_curve(space, poles, flips[index, side]),
+                         np.array([e.point for e in ends]), [e.normal for e in ends],
+                         tuple(e.root for e in ends), flips))
+    return out
+
+
+def _held_rows(patches, edges, poles):
+    """``{patch: {side: border poles in the patch's own along order}}`` of every join,
+    from the edges' ``poles`` (root order)."""
+    held = {}
+    for edge, x in zip(edges, poles):
+        join = edge.join
         for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
             if not patches[index].kept:
-                held.setdefault(index, {})[side] = edge[::-1] if root_flip[index, side] else edge
+                held.setdefault(index, {})[side] = x[::-1] if edge.flips[index, side] else x
     return held
 
 
@@ -560,37 +613,88 @@ def _unit_space(spaces, solved, flips):
     return SplineSpace(space.degree, _normalised_knots(space, flips[solved]))
 
 
-def _edge_poles(unit, curve, ends, normals):
-    r"""Poles on ``unit`` of the L2 projection of ``curve`` ``(space, poles)`` with both
-    ``ends`` held and each end tangent in its vertex's plane (``normals``, ``None``:
-    free): minimise :math:`x^T G x - 2 x^T m`, :math:`m = \langle\Phi|\Phi_S\rangle c`,
-    over the interior poles under :math:`n_0\cdot(x_1 - x_0) = 0` and
-    :math:`n_1\cdot(x_{k-2} - x_{k-1}) = 0`."""
-    gram = gram_matrix(unit).toarray()
-    space, poles = curve
-    moments = gram_matrix(unit, space) @ poles
-    x = np.empty_like(moments)
-    x[0], x[-1] = ends
-    k = unit.dimension
-    if k <= 2:
-        return x
-    rhs = moments[1:-1] - gram[1:-1][:, [0, -1]] @ ends
-    factor = sla.cho_factor(gram[1:-1, 1:-1])
-    x[1:-1] = sla.cho_solve(factor, rhs)
-    rows, values = [], []
-    for normal, inner, end in ((normals[0], 0, ends[0]), (normals[1], k - 3, ends[1])):
-        if normal is not None:
-            row = np.zeros((k - 2, x.shape[1]))
-            row[inner] = normal
-            rows.append(row)
-            values.append(normal @ end)
-    if rows:   # Lagrange multipliers by the Schur complement S = C G^-1 C^T (at most 2 x 2)
-        solved = [sla.cho_solve(factor, row) for row in rows]
-        schur = np.array([[np.sum(a * b) for b in solved] for a in rows])
-        residual = np.array([np.sum(a * x[1:-1]) for a in rows]) - np.array(values)
-        multipliers = sla.lstsq(schur, residual)[0]
-        x[1:-1] -= sum(m * z for m, z in zip(multipliers, solved))
-    return x
+def _solved_edges(edges, lines=()):
+    r"""Poles (root order) of every edge: the L2 projection of its border onto its class
+    space with both ends held, each end tangent in its vertex's plane
+    (:math:`n\cdot(x_1 - x_0) = 0`), and the ``lines`` rows (:func:`_line_rows`) tying
+    the end tangents of edges that cross at a vertex.  One system over the interior
+    poles of all edges, :math:`\min \sum_e x_e^T G_e x_e - 2 x_e^T m_e`,
+    :math:`m_e = \langle\Phi|\Phi_S\rangle c_e`, under those rows (:func:`_kkt_solve`);
+    without rows each edge is solved on its own."""
+    if not edges:
+        return []
+    dimension = edges[0].ends.shape[1]
+    blocks, rhs, offsets, offset = [], [], [], 0
+    for edge in edges:
+        gram = gram_matrix(edge.unit).toarray()
+        space, poles = edge.curve
+        moments = gram_matrix(edge.unit, space) @ poles
+        blocks.append(gram[1:-1, 1:-1])
+        rhs.append(moments[1:-1] - gram[1:-1][:, [0, -1]] @ edge.ends)
+        offsets.append(offset)
+        offset += max(edge.unit.dimension - 2, 0) * dimension
+    rows = _normal_rows(edges, offsets, dimension)
+    for line in lines:
+        rows += _line_row(edges, offsets, dimension, line)
+    if rows:
+        free = _kkt_solve(sp.kron(sp.block_diag([sp.csr_matrix(b) for b in blocks]),
+                                  sp.identity(dimension)),
+                          _row_matrix(rows, offset), np.concatenate([r.ravel() for r in rhs]),
+                          np.array([value for _, value in rows]))
+    else:
+        free = np.concatenate([sla.solve(b, r, assume_a="pos").ravel() if b.size else r.ravel()
+                               for b, r in zip(blocks, rhs)])
+    out = []
+    for edge, start in zip(edges, offsets):
+        x = np.empty((edge.unit.dimension, dimension))
+        x[0], x[-1] = edge.ends
+        x[1:-1] = free[start: start + (len(x) - 2) * dimension].reshape(-1, dimension)
+        out.append(x)
+    return out
+
+
+def _interior(edges, offsets, dimension, edge, end):
+    """Flat index of the first coordinate of the interior pole next to ``end`` of edge
+    ``edge`` (``None`` if the edge has no interior pole)."""
+    count = edges[edge].unit.dimension - 2
+    if count <= 0:
+        return None
+    return offsets[edge] + (0 if end == 0 else count - 1) * dimension
+
+
+def _normal_rows(edges, offsets, dimension):
+    r"""Rows :math:`n\cdot x_1 = n\cdot x_0` of every end with a vertex normal."""
+    rows = []
+    for e, edge in enumerate(edges):
+        for end, normal in enumerate(edge.normals):
+            first = _interior(edges, offsets, dimension, e, end)
+            if normal is not None and first is not None:
+                rows.append(([(first + c, normal[c]) for c in range(dimension)],
+                             float(normal @ edge.ends[end])))
+    return rows
+
+
+def _line_row(edges, offsets, dimension, line):
+    r"""Rows :math:`(x_a - V) + \mu (x_b - V) = 0` per coordinate of one crossing
+    line ``((edge, end), (edge, end), mu)`` (empty where an edge has no interior pole)."""
+    (ea, end_a), (eb, end_b), mu = line
+    first_a = _interior(edges, offsets, dimension, ea, end_a)
+    first_b = _interior(edges, offsets, dimension, eb, end_b)
+    if first_a is None or first_b is None:
+        return []
+    point = edges[ea].ends[end_a]
+    return [([(first_a + c, 1.0), (first_b + c, mu)], (1.0 + mu) * point[c])
+            for c in range(dimension)]
+
+
+def _row_matrix(rows, count):
+    """Sparse matrix of ``rows`` (``[(entries, value)]``) over ``count`` unknowns."""
+    r, c, v = [], [], []
+    for k, (entries, _) in enumerate(rows):
+        r += [k] * len(entries)
+        c += [i for i, _ in entries]
+        v += [w for _, w in entries]
+    return sp.csr_matrix((v, (r, c)), shape=(len(rows), count))
 
 
 # -- patch solves --------------------------------------------------------------------------
@@ -733,52 +837,124 @@ def mirror_ratio(wa, wb):
     return float(np.exp(np.mean(np.log(np.maximum(mu, 1e-300)))))
 
 
-def _mirror_rows(work, joins, chords, surfaces):
-    r"""Rows :math:`w_{a,i} + \mu_i w_{b,i} = 0` (per coordinate) of every smooth join:
-    the cross rows of both patches mirror each other across the shared border, so the
-    cross derivatives are parallel and the tangent planes agree.  A row that would close
-    a cycle of rows (around an inner vertex; module notes, step 5) is left out: each
-    row ties its one or two free inner poles, a row with one to the held poles.  Returns the sparse matrix over the free
-    poles and the right-hand sides (rows, 3) from held poles."""
-    rows_, cols, vals, rhs = [], [], [], []
+def _mirror_ratios(work, joins, chords, surfaces):
+    """``{join index: mu}`` of every smooth join, from the cross rows of ``surfaces``
+    (the separate solve): :func:`mirror_ratio`."""
+    out = {}
+    for k, join in enumerate(joins):
+        if join.smooth:
+            sides = _cross_rows(work, join, chords)
+            out[k] = mirror_ratio(*(_cross_vectors(work, surfaces, side) for side in sides))
+    return out
+
+
+def _mirror_rows(work, joins, chords, ratios):
+    r"""Rows :math:`w_{a,i} + \mu w_{b,i} = 0` (per coordinate) of every smooth join,
+    ``mu`` from ``ratios``: the cross rows of both patches mirror each other across the
+    shared border, so the cross derivatives are parallel and the tangent planes agree.
+    A row that would close a cycle of rows (around an inner vertex; module notes,
+    step 5) is left out: each row ties its one or two free inner poles, a row with one
+    to the held poles.  Returns the sparse matrix over the free poles and the right-hand
+    sides (rows, 3) from held poles."""
+    rows = []
     linked = UnionFind()   # free inner poles (and -1, the held ones) tied by a row
-    for join in (j for j in joins if j.smooth):
+    for k, join in enumerate(joins):
+        if not join.smooth:
+            continue
         sides = _cross_rows(work, join, chords)
-        wa, wb = (_cross_vectors(work, surfaces, side) for side in sides)
-        mu = np.full(len(wa), mirror_ratio(wa, wb))
-        for k in range(len(mu)):
+        known_rows = [side[1] if isinstance(side[1], np.ndarray) else None for side in sides]
+        for i in range(len(sides[0][1])):       # poles along the join
             entries, known = [], np.zeros(work.dimension)
-            for (index, rows), weight, w in zip(sides, (1.0, mu[k]), (wa, wb)):
-                if isinstance(rows, np.ndarray):    # a kept patch: its cross row is known
-                    known -= weight * w[k]
+            for (index, pairs), weight, w in zip(sides, (1.0, ratios[k]), known_rows):
+                if w is not None:                  # a kept patch: its cross row is known
+                    known -= weight * w[i]
                     continue
-                for pole, sign in zip(rows[k], (-1.0, 1.0)):
+                for pole, sign in zip(pairs[i], (-1.0, 1.0)):
                     position, value = work.pole(index, *pole)
                     if position >= 0:
                         entries.append((position, sign * weight))
                     else:
                         known -= sign * weight * value
             if entries and linked.tie(*([e[0] for e in entries] + [-1])[:2]) is None:
-                row = len(rhs)
-                rows_ += [row] * len(entries)
-                cols += [e[0] for e in entries]
-                vals += [e[1] for e in entries]
-                rhs.append(known)
-    matrix = sp.csr_matrix((vals, (rows_, cols)), shape=(len(rhs), work.count))
-    return matrix, np.array(rhs).reshape(-1, work.dimension)
+                rows.append((entries, known))
+    return (_row_matrix(rows, work.count),
+            np.array([value for _, value in rows]).reshape(-1, work.dimension))
 
 
 def _joint(work, c, d):
-    r"""Free poles of the joint projection under :math:`C x = d`: the regularised KKT
-    system :math:`\begin{bmatrix}A & sC^T\\ sC & -\varepsilon I\end{bmatrix}`,
-    :math:`A` block-diagonal over the patches, one factorization for the three
-    coordinates; ``s`` scales the rows to :math:`A`'s diagonal and
-    :math:`\varepsilon = ` :data:`KKT_EPS` ``s`` lets dependent rows (where mirrored
-    rows meet at a vertex) through."""
+    r"""Free poles of the joint projection under :math:`C x = d`, :math:`A`
+    block-diagonal over the patches, one factorization for the three coordinates
+    (:func:`_kkt_solve`)."""
     a = sp.block_diag([sp.kron(sp.csr_matrix(a_u), sp.csr_matrix(a_v))
                        for a_u, a_v in work.blocks], format="csc")
+    return _kkt_solve(a, c, np.concatenate(work.rhs), d)
+
+
+def _kkt_solve(a, c, b, d):
+    r"""Minimiser of :math:`x^T A x - 2 x^T b` under :math:`C x = d` (``b``, ``d``: one
+    column per right-hand side): the regularised KKT system
+    :math:`\begin{bmatrix}A & sC^T\\ sC & -\varepsilon I\end{bmatrix}`; ``s`` scales
+    the rows to :math:`A`'s diagonal and :math:`\varepsilon = ` :data:`KKT_EPS` ``s``
+    lets dependent rows (where mirrored rows meet at a vertex) through."""
+    a = sp.csc_matrix(a)
     scale = float(a.diagonal().mean())
     kkt = sp.bmat([[a, scale * c.T], [scale * c, -KKT_EPS * scale * sp.identity(c.shape[0])]],
                   format="csc")
-    rhs = np.concatenate([np.concatenate(work.rhs), scale * d])
-    return spla.splu(kkt).solve(rhs)[: work.count]
+    return spla.splu(kkt).solve(np.concatenate([b, scale * d]))[: a.shape[0]]
+
+
+# -- G1 at crossings: regular inner vertices -----------------------------------------------
+def _crossings(patches, joins, edges):
+    """Regular inner vertices: four solved patches around a vertex, joined by four smooth
+    joins, each patch in two of them.  Per such vertex the list of ``(join, (edge, end),
+    (edge, end))``: for each join ``T`` of the four, the end at the vertex of the other
+    join of ``T.a`` and of the other join of ``T.b``."""
+    at = {}
+    for e, edge in enumerate(edges):
+        if edge.roots[0] != edge.roots[1]:
+            for end, root in enumerate(edge.roots):
+                at.setdefault(root, []).append((e, end))
+    out = []
+    for ends in at.values():
+        around = [joins[e] for e, _ in ends]
+        members = [p for j in around for p in (j.a, j.b)]
+        if (len(ends) != 4 or not all(j.smooth for j in around)
+                or any(members.count(p) != 2 or patches[p].kept for p in members)):
+            continue
+        other = {}
+        for (e, end), join in zip(ends, around):
+            for p in (join.a, join.b):
+                other.setdefault(p, []).append((e, end))
+        out.append([(e, *(next(x for x in other[p] if x[0] != e) for p in (join.a, join.b)))
+                    for (e, _), join in zip(ends, around)])
+    return out
+
+
+def _straightened(ratios, crossings):
+    """``ratios`` with the two joins opposite each other at a crossing given one ratio
+    (the geometric mean of their class, oriented): the cross rows at the vertex then
+    close around it (module notes, step 5)."""
+    lines = UnionFind()
+    for crossing in crossings:
+        for t, (ea, _), (eb, _) in crossing:
+            for s, (sa, _), _ in crossing:
+                if s not in (t, ea, eb):     # s faces t: its side a is t.a's neighbour
+                    lines.tie(t, s, parity=(sa != ea))   # unless it is t.b's
+    out = dict(ratios)
+    for group in lines.members().values():
+        mean = np.mean([-np.log(ratios[k]) if flip else np.log(ratios[k]) for k, flip in group])
+        out.update({k: float(np.exp(-mean if flip else mean)) for k, flip in group})
+    return out
+
+
+def _line_rows(crossings, ratios):
+    """Per crossing, one row per pair of opposite edges: ``((edge, end), (edge, end),
+    mu)`` with the ratio of a join crossing them (the k = 0 mirrored row of that join)."""
+    out = []
+    for crossing in crossings:
+        seen = set()
+        for t, a, b in crossing:
+            if frozenset((a[0], b[0])) not in seen:
+                seen.add(frozenset((a[0], b[0])))
+                out.append((a, b, ratios[t]))
+    return out
