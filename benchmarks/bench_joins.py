@@ -2,7 +2,7 @@
 
 1. The synthetic 2 x 2 grid of ``cq_fairing.core.examples.patch_grid`` (noisy patches of
    one surface) faired onto quasi-uniform bicubic targets by ``fair_patches``: alone,
-   G0 and G1; and merged into one surface on as many poles per patch, cut back into its
+   G0, G1 and G2; and merged into one surface on as many poles per patch, cut back into its
    patches (what ``fair_shape`` does with a grid that forms a whole model); and faired
    as a network by energy on the sources' own spaces (``fair_network``, what
    ``fair_shape`` does with faces at their coarsest); gap and normal angle at 101
@@ -112,7 +112,7 @@ def synthetic():
         patches = [JointPatch(p, (target, target)) for p in grid.patches]
         alone = [fair_patches([p], []).surfaces[0] for p in patches]
         print(grid_row(f"{n + 3} x {n + 3}, alone", alone, grid))
-        for continuity in ("G0", "G1"):
+        for continuity in ("G0", "G1", "G2"):
             result = fair_patches(patches, grid.joins, continuity=continuity)
             print(grid_row(f"{n + 3} x {n + 3}, {continuity}", result.surfaces, grid))
         print(grid_row(f"{2 * n + 3} x {2 * n + 3} merged, cut into 4", _merged(grid, 2 * n),

@@ -3,7 +3,16 @@ errors, argument types and the fairing options of ``fair`` and ``batch``."""
 
 import argparse
 
-from .core.options import APPLIES, BORDERS, BOUNDARIES, DEFAULTS, METHOD_DOES, METHODS, OBJECTIVES
+from .core.options import (
+    APPLIES,
+    BORDERS,
+    BOUNDARIES,
+    DEFAULTS,
+    JOINS,
+    METHOD_DOES,
+    METHODS,
+    OBJECTIVES,
+)
 from .errors import InvalidInputError
 
 EXIT_OK, EXIT_TOLERANCE, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERNAL = 0, 1, 2, 3, 4, 5
@@ -62,10 +71,11 @@ def add_fairing_options(parser):
                         help="with --method adaptive: the target's border rows; auto = "
                              "pinned (corners kept) where that gives fewer poles (default), "
                              "free = plain projection (often faster), pinned = always")
-    parser.add_argument("--joins", choices=("smooth", "closed", "free"), default="smooth",
+    parser.add_argument("--joins", choices=JOINS, default=JOINS[0],
                         help="smooth = faces that meet along whole borders are faired together, "
-                             "joins closed and tangent where the source was (default); closed = "
-                             "closed only; free = each face alone")
+                             "joins closed and tangent where the source was (default); "
+                             "curvature = also curvature-continuous (G2) where the source "
+                             "was; closed = closed only; free = each face alone")
     parser.add_argument("--angle-tol", type=float, default=1.0, metavar="DEG",
                         help="a join whose source normals differ by less is smooth, else a "
                              "crease (default 1 degree)")

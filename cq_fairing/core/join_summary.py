@@ -17,7 +17,7 @@ def summarize(rows, **counts):
     ``max_gap_opened`` (faired minus source gap), ``smooth``, ``max_smooth_angle`` and its
     ``source_max_smooth_angle``, ``max_angle_excess`` over the smooth joins, ``creases``;
     ``counts`` (e.g. ``non_manifold``, ``point_contacts``, ``grids``, ``grid_faces``,
-    ``network_faces``) are added as given."""
+    ``network_faces``, ``curved``) are added as given."""
     smooth = [r for r in rows if r["kind"] == "smooth"]
     return dict(
         joins=len(rows), held=sum(r["held"] for r in rows),
@@ -32,14 +32,16 @@ def summarize(rows, **counts):
 
 def summary_line(summary):
     """:func:`summarize`'s figures as one line, e.g. ``joins: 14 (12 held closed), max gap
-    2e-12; 12 smooth, max angle 0.01 deg (source 0); 2 creases``; patch grids, faces
-    faired together by energy, non-manifold edges and point contacts are named after it
-    when there are any."""
+    2e-12; 12 smooth, max angle 0.01 deg (source 0); 2 creases``; joins held
+    curvature-continuous, patch grids, faces faired together by energy, non-manifold
+    edges and point contacts are named after it when there are any."""
     s = summary
     parts = [f"joins: {s['joins']} ({s['held']} held closed), max gap {s['max_gap']:.2g}",
              f"{s['smooth']} smooth, max angle {s['max_smooth_angle']:.2g} deg (source "
              f"{s['source_max_smooth_angle']:.2g})", f"{s['creases']} creases"] \
         if s["joins"] else ["joins: none"]
+    if s.get("curved"):
+        parts.append(f"G2 across {s['curved']} (short of vertices where other joins meet)")
     if s.get("grids"):
         parts.append(f"{len(s['grids'])} patch grids ({s['grid_faces']} faces) faired as "
                      "one surface each")

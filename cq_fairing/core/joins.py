@@ -69,7 +69,7 @@ planes (step 2) are then not imposed, and the weights are not checked: the calle
 a patch whose weights are not all positive.  This module imports numpy and scipy only.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -85,13 +85,18 @@ from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
            "pinning_patch", "side_parameters", "turned_patches", "mirror_ratio", "UnionFind",
-           "SIDES", "ANGLE_SLACK"]
+           "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
+           "holds_curvature", "CURVATURE_SLACK"]
 
 SIDES = ("u0", "u1", "v0", "v1")
+CONTINUITIES = ("G0", "G1", "G2")
 SNAP = 0.25        # knots of a chord's members closer than this x the finest span merge
 KKT_EPS = 1e-12    # regularisation of the joint system's constraint block (relative)
 ANGLE_SLACK = 0.05  # degrees a smooth join may turn beyond the source's angle
 ANGLE_SAMPLES = 33  # samples along a join for that check
+CURVATURE_SLACK = 0.1  # relative curvature jump below which a source join counts as G2
+FLAT = 1e-3         # curvature x patch size below which a join counts as flat (G2)
+DEGENERATE = 1e-6   # cross speed, relative to its largest, below which a border collapses
 
 
 @dataclass(frozen=True)
@@ -136,6 +141,9 @@ class BorderJoin:
     smooth : bool
         Hold the tangent planes together (G1); otherwise only the border (G0), as at a
         crease.
+    curvature : bool
+        With ``continuity="G2"``, also the normal curvature across a smooth join (G2);
+        ``False`` where the curvature jumps by design (a fillet meeting a plane).
     """
 
     a: int
@@ -144,6 +152,7 @@ class BorderJoin:
     side_b: str
     reversed: bool = False
     smooth: bool = True
+    curvature: bool = True
 
 
 @dataclass(frozen=True)
@@ -160,14 +169,18 @@ class JointResult:
     dropped : list of (BorderJoin, str)
         Joins left out, with the reason.
     g1_rows : int
-        Mirrored cross-row conditions imposed (one per pole along each smooth join,
-        each for the three coordinates).
+        Cross-row conditions imposed (G1: one per pole along each smooth join; G2: up to
+        one more), each for every coordinate.
+    curved : list of BorderJoin
+        The joins held in G2 (``continuity="G2"``): smooth, ``curvature`` set, and with
+        three rows across on each side that no other join's conditions use.
     """
 
     surfaces: list
     joins: list
     dropped: list
     g1_rows: int = 0
+    curved: list = field(default_factory=list)
 
 
 def fair_patches(patches, joins, *, continuity="G1"):
@@ -178,8 +191,9 @@ def fair_patches(patches, joins, *, continuity="G1"):
     patches : sequence of JointPatch
     joins : sequence of BorderJoin
         Each side of a patch in at most one join.
-    continuity : {"G0", "G1"}
-        ``"G1"`` also holds the tangent planes together across the smooth joins.
+    continuity : {"G0", "G1", "G2"}
+        ``"G1"`` also holds the tangent planes together across the smooth joins,
+        ``"G2"`` also the normal curvature across those with ``curvature`` set.
 
     Returns
     -------
@@ -199,18 +213,19 @@ def fair_patches(patches, joins, *, continuity="G1"):
     edges = _edges(patches, joins, spaces, chords, vertices, lifted)
     work = _Patchwork(patches, spaces, _held_rows(patches, edges, _solved_edges(edges)),
                       lifted)
-    surfaces, rows = work.surfaces(_separate(work)), 0
-    if continuity == "G1" and any(j.smooth for j in joins):
+    surfaces, rows, curved = work.surfaces(_separate(work)), 0, {}
+    if continuity != "G0" and any(j.smooth for j in joins):
         ratios = _mirror_ratios(work, joins, chords, surfaces)
         crossings = _crossings(patches, joins, edges)
+        curved = _curved(work, joins, edges, crossings, continuity)
         if crossings:
             ratios = _straightened(ratios, crossings)
-            lines = _line_rows(crossings, ratios)
+            lines = _line_rows(work, joins, crossings, ratios, curved)
             work = _Patchwork(patches, spaces,
                               _held_rows(patches, edges, _solved_edges(edges, lines)), lifted)
-        c, d = _mirror_rows(work, joins, chords, ratios)
+        c, d = _condition_rows(work, joins, chords, ratios, curved)
         surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
-    return JointResult(surfaces, joins, dropped, rows)
+    return JointResult(surfaces, joins, dropped, rows, [joins[k] for k in sorted(curved)])
 
 
 def pinning_patch(source, side):
@@ -271,6 +286,49 @@ def join_angles(surfaces, join, t):
     return np.degrees(np.arccos(cos))
 
 
+def cross_curvatures(surfaces, join, t):
+    r"""Normal curvatures :math:`\kappa = n\cdot S_{cc} / |S_c|^2` of the two patches of
+    ``join`` in their cross directions (:math:`c`), at the normalised parameters ``t``
+    along it, the second patch's normal turned to the first's: ``(kappa_a, kappa_b)``;
+    NaN where the cross derivative vanishes (below :data:`DEGENERATE` of its largest
+    along the join: a collapsed border).
+    The curve that crosses a curvature-continuous (G2) join has one normal curvature
+    there, whichever way it runs, so the two agree."""
+    out, reference = [], None
+    for index, side, along in ((join.a, join.side_a, t),
+                               (join.b, join.side_b, 1.0 - t if join.reversed else t)):
+        surface = surfaces[index]
+        u, v = side_parameters(surface, side, along)
+        order = (1, 0) if side[0] == "u" else (0, 1)
+        su, sv, cross, second = (surface.evaluate_grid(u, v, *d).reshape(-1, 3) for d in
+                                 ((1, 0), (0, 1), order, (2 * order[0], 2 * order[1])))
+        normal = np.cross(su, sv)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        if reference is not None:
+            normal *= np.where(np.sum(normal * reference, axis=1) < 0, -1.0, 1.0)[:, None]
+        reference = normal
+        speed = np.sum(cross * cross, axis=1)
+        degenerate = speed <= DEGENERATE ** 2 * speed.max()
+        out.append(np.where(degenerate, np.nan,
+                            np.sum(normal * second, axis=1) / np.where(degenerate, 1.0, speed)))
+    return tuple(out)
+
+
+def holds_curvature(sources, join):
+    """Whether the sources are curvature-continuous across ``join``: the cross normal
+    curvatures of its two sides (:func:`cross_curvatures`, :data:`ANGLE_SAMPLES`
+    samples) differ nowhere by more than :data:`CURVATURE_SLACK` of the larger curvature
+    along it, or both stay below :data:`FLAT` over the larger patch's size (flat)."""
+    ka, kb = cross_curvatures(sources, join, np.linspace(0.0, 1.0, ANGLE_SAMPLES))
+    both = ~(np.isnan(ka) | np.isnan(kb))
+    if not both.any():
+        return False
+    ka, kb = ka[both], kb[both]
+    largest = max(np.abs(ka).max(), np.abs(kb).max())
+    size = max(sources[join.a].size, sources[join.b].size)
+    return bool(largest * size <= FLAT or np.abs(ka - kb).max() <= CURVATURE_SLACK * largest)
+
+
 def turned_patches(surfaces, sources, joins, moved):
     """The patches of ``moved`` on a smooth join of ``joins`` whose normals turn,
     somewhere along it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle
@@ -287,10 +345,10 @@ def turned_patches(surfaces, sources, joins, moved):
 
 # -- input ---------------------------------------------------------------------------------
 def _checked(patches, joins, continuity):
-    if continuity not in ("G0", "G1"):
+    if continuity not in CONTINUITIES:
         raise InvalidInputError(
-            f"continuity must be 'G0' or 'G1', got {continuity!r}; 'G1' keeps smooth joins "
-            "smooth, 'G0' only closed.")
+            f"continuity must be one of {CONTINUITIES}, got {continuity!r}; 'G1' keeps "
+            "smooth joins smooth, 'G2' also their curvature, 'G0' only closed.")
     patches, joins = list(patches), list(joins)
     for i, patch in enumerate(patches):
         if not isinstance(patch, JointPatch):
@@ -653,13 +711,13 @@ def _solved_edges(edges, lines=()):
     return out
 
 
-def _interior(edges, offsets, dimension, edge, end):
-    """Flat index of the first coordinate of the interior pole next to ``end`` of edge
-    ``edge`` (``None`` if the edge has no interior pole)."""
+def _interior(edges, offsets, dimension, edge, end, k=0):
+    """Flat index of the first coordinate of the ``k``-th interior pole from ``end`` of
+    edge ``edge`` (``None`` if the edge has fewer interior poles)."""
     count = edges[edge].unit.dimension - 2
-    if count <= 0:
+    if k >= count:
         return None
-    return offsets[edge] + (0 if end == 0 else count - 1) * dimension
+    return offsets[edge] + (k if end == 0 else count - 1 - k) * dimension
 
 
 def _normal_rows(edges, offsets, dimension):
@@ -675,16 +733,22 @@ def _normal_rows(edges, offsets, dimension):
 
 
 def _line_row(edges, offsets, dimension, line):
-    r"""Rows :math:`(x_a - V) + \mu (x_b - V) = 0` per coordinate of one crossing
-    line ``((edge, end), (edge, end), mu)`` (empty where an edge has no interior pole)."""
-    (ea, end_a), (eb, end_b), mu = line
-    first_a = _interior(edges, offsets, dimension, ea, end_a)
-    first_b = _interior(edges, offsets, dimension, eb, end_b)
-    if first_a is None or first_b is None:
-        return []
+    r"""Rows (per coordinate) of one condition at a crossing (:func:`_line_rows`):
+    :math:`\sum_k \alpha_k x_{a,k} + \sum_k \beta_k x_{b,k} = 0`, :math:`x_{\cdot,k}`
+    the k-th pole of an edge from the vertex (the vertex itself for k = 0, known); empty
+    where an edge has too few interior poles."""
+    (ea, end_a), (eb, end_b), wa, wb = line
+    entries = [[] for _ in range(dimension)]
     point = edges[ea].ends[end_a]
-    return [([(first_a + c, 1.0), (first_b + c, mu)], (1.0 + mu) * point[c])
-            for c in range(dimension)]
+    value = -(wa[0] + wb[0]) * point
+    for edge, end, weights in ((ea, end_a, wa), (eb, end_b, wb)):
+        for k, weight in enumerate(weights[1:]):
+            first = _interior(edges, offsets, dimension, edge, end, k)
+            if first is None:
+                return []
+            for c in range(dimension):
+                entries[c].append((first + c, weight))
+    return [(entries[c], value[c]) for c in range(dimension)]
 
 
 def _row_matrix(rows, count):
@@ -785,12 +849,13 @@ def _separate(work):
     return free
 
 
-# -- G1: mirrored cross-boundary rows -----------------------------------------------------
-def _cross_rows(work, join, chords):
-    """Per side of a join: ``(patch, pairs)`` with the (border, inner) pole indices of a
-    solved patch for each pole along the join (chord root order), or ``(patch, w)``
-    with a kept patch's cross row :math:`w = c_{inner} - c_{border}` on the join's class
-    space (its two rows projected there: exact, the class space holds them)."""
+# -- G1 and G2: conditions on the rows next to a join ----------------------------------
+def _cross_rows(work, join, chords, depth=2):
+    """Per side of a join: ``(patch, rows)``.  For a solved patch, per pole along the
+    join (chord root order), the indices of its first ``depth`` rows from the border
+    (border, inner, second inner); for a kept patch those rows themselves, as curves
+    projected onto the join's class space (exact: it holds the patch's along space),
+    shape ``(depth, poles along, dimension)``."""
     solved = _solved_side(work.patches, join)
     flips = {(i, s): chords.find((i, _along(s)))[1]
              for i, s in ((join.a, join.side_a), (join.b, join.side_b))}
@@ -798,36 +863,38 @@ def _cross_rows(work, join, chords):
     out = []
     for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
         flip = flips[index, side]
+        rows = (0, 1, 2)[:depth] if side[1] == "0" else (-1, -2, -3)[:depth]
         if work.patches[index].kept:
-            out.append((index, _kept_cross_row(work.patches[index].source, side, unit, flip,
-                                               work.lifted)))
+            out.append((index, _kept_rows(work.patches[index].source, side, unit, flip,
+                                          work.lifted, rows)))
             continue
         along = np.arange(unit.dimension)[::-1] if flip else np.arange(unit.dimension)
-        end, inner = (0, 1) if side[1] == "0" else (-1, -2)
-        out.append((index, [((end, i), (inner, i)) if side[0] == "u" else ((i, end), (i, inner))
+        out.append((index, [tuple((r, i) if side[0] == "u" else (i, r) for r in rows)
                             for i in along]))
     return out
 
 
-def _kept_cross_row(surface, side, unit, flip, lifted):
-    """A kept patch's cross row on ``unit`` (root order): the difference of its first
-    inner and border rows, as a curve, projected onto ``unit`` (exact: the class space
-    holds the patch's along space)."""
+def _kept_rows(surface, side, unit, flip, lifted, rows):
+    """A kept patch's ``rows`` (indices from its border) along ``side``, each projected
+    onto ``unit`` (root order)."""
     space = surface.v_space if side[0] == "u" else surface.u_space
     net = _net(surface, lifted) if side[0] == "u" else np.swapaxes(_net(surface, lifted), 0, 1)
-    end, inner = (0, 1) if side[1] == "0" else (-1, -2)
-    row_space, row = _unit_curve(space, net[inner] - net[end], flip)
-    return sla.solve(gram_matrix(unit).toarray(), gram_matrix(unit, row_space) @ row,
-                     assume_a="pos")
+    gram = gram_matrix(unit).toarray()
+    out = []
+    for r in rows:
+        row_space, row = _unit_curve(space, net[r], flip)
+        out.append(sla.solve(gram, gram_matrix(unit, row_space) @ row, assume_a="pos"))
+    return np.array(out)
 
 
 def _cross_vectors(work, surfaces, side_rows):
-    """The cross row ``w`` of one side from ``surfaces`` (the separate solve)."""
+    """The cross row :math:`w = c_{inner} - c_{border}` of one side from ``surfaces``
+    (the separate solve)."""
     index, rows = side_rows
     if isinstance(rows, np.ndarray):
-        return rows
+        return rows[1] - rows[0]
     net = _net(surfaces[index], work.lifted)
-    return np.array([net[q] - net[b] for b, q in rows])
+    return np.array([net[q[1]] - net[q[0]] for q in rows])
 
 
 def mirror_ratio(wa, wb):
@@ -848,37 +915,97 @@ def _mirror_ratios(work, joins, chords, surfaces):
     return out
 
 
-def _mirror_rows(work, joins, chords, ratios):
-    r"""Rows :math:`w_{a,i} + \mu w_{b,i} = 0` (per coordinate) of every smooth join,
-    ``mu`` from ``ratios``: the cross rows of both patches mirror each other across the
-    shared border, so the cross derivatives are parallel and the tangent planes agree.
-    A row that would close a cycle of rows (around an inner vertex; module notes,
-    step 5) is left out: each row ties its one or two free inner poles, a row with one
-    to the held poles.  Returns the sparse matrix over the free poles and the right-hand
-    sides (rows, 3) from held poles."""
+def _conditions(work, join, mu, curvature):
+    r"""The conditions of a smooth join as weights of the rows next to it, one tuple
+    per side (border row first): :math:`\sum_k \alpha_k c_{a,k} + \sum_k \beta_k
+    c_{b,k} = 0` at every pole along the join.
+
+    G1: :math:`w_a + \mu w_b = 0`, weights :math:`(-1, 1)` and :math:`(-\mu, \mu)`.
+    G2 (``curvature``: the join is in :func:`_curved`) adds the second inward
+    derivatives: with the first inward derivative :math:`D_1 = p\,w / h_1` (:math:`h_1`
+    the first cross span), G1 reads :math:`D_{1,a} = -\kappa D_{1,b}`,
+    :math:`\kappa = \mu h_{1,b} / h_{1,a}`, the parameter scale between the two
+    sides; the joined cross curves are then :math:`C^2` in one parameter where
+    :math:`D_{2,a} = \kappa^2 D_{2,b}` (:func:`_second_derivative`).  With the first
+    condition this holds the normal curvature across the join."""
+    out = [((-1.0, 1.0), (-mu, mu))]
+    if not curvature:
+        return out
+    (da, ha), (db, hb) = (_second_derivative(_cross_space(work, index, side), side)
+                          for index, side in ((join.a, join.side_a), (join.b, join.side_b)))
+    kappa = mu * hb / ha
+    scale = np.abs(da).max()
+    out.append((tuple(da / scale), tuple(-kappa ** 2 * db / scale)))
+    return out
+
+
+def _cross_space(work, index, side):
+    """The space across ``side`` of a patch (its target, or its own if kept)."""
+    spaces = work.spaces[index] if not work.patches[index].kept else \
+        (work.patches[index].source.u_space, work.patches[index].source.v_space)
+    return spaces[1 - _along(side)]
+
+
+def _second_derivative(space, side):
+    r"""``(coefficients, h1)``: the second inward derivative at ``side`` as weights of the
+    border, inner and second inner rows,
+    :math:`D_2 = \frac{p(p-1)}{h_1}\left(\frac{c_2 - c_1}{h_2} - \frac{c_1 - c_0}{h_1}
+    \right)` (:math:`h_1, h_2` the distances of the first two interior knots from the
+    border, clamped knots), and :math:`h_1`; ``None`` below three rows or degree 2."""
+    p, t = space.degree, space.knots
+    if p < 2 or space.dimension < 3:
+        return None
+    h1, h2 = (t[p + 1] - t[p], t[p + 2] - t[p]) if side[1] == "0" else \
+        (t[-p - 1] - t[-p - 2], t[-p - 1] - t[-p - 3])
+    f = p * (p - 1) / h1
+    return np.array([f / h1, -f * (1.0 / h1 + 1.0 / h2), f / h2]), h1
+
+
+def _condition_rows(work, joins, chords, ratios, curved):
+    r"""Rows (per coordinate) of every smooth join's conditions (:func:`_conditions`) at
+    every pole along it: the cross rows of both patches mirror each other across the
+    shared border (G1), and, at the joins of ``curved`` (:func:`_curved`), their second
+    differences match (G2), at the two poles next to an end only where that end is a
+    crossing held in G2 all round.  A G1 row that would
+    close a cycle of rows around a vertex other than a crossing (module notes, step 6)
+    is left out: each row ties its one or two free inner poles, a row with one to the
+    held poles.  Returns the sparse matrix over the free poles and the right-hand sides
+    ``(rows, dimension)`` from held poles."""
     rows = []
-    linked = UnionFind()   # free inner poles (and -1, the held ones) tied by a row
+    linked = UnionFind()   # free inner poles (and -1, the held ones) tied by a G1 row
     for k, join in enumerate(joins):
         if not join.smooth:
             continue
-        sides = _cross_rows(work, join, chords)
-        known_rows = [side[1] if isinstance(side[1], np.ndarray) else None for side in sides]
-        for i in range(len(sides[0][1])):       # poles along the join
-            entries, known = [], np.zeros(work.dimension)
-            for (index, pairs), weight, w in zip(sides, (1.0, ratios[k]), known_rows):
-                if w is not None:                  # a kept patch: its cross row is known
-                    known -= weight * w[i]
+        conditions = _conditions(work, join, ratios[k], k in curved)
+        sides = _cross_rows(work, join, chords, depth=max(len(c[0]) for c in conditions))
+        along = next(len(r) for _, r in sides if not isinstance(r, np.ndarray))
+        for order, weights in enumerate(conditions):
+            for i in range(along):                  # poles along the join
+                if order and not ((i >= 2 or curved[k][0]) and (i < along - 2 or curved[k][1])):
                     continue
-                for pole, sign in zip(pairs[i], (-1.0, 1.0)):
-                    position, value = work.pole(index, *pole)
-                    if position >= 0:
-                        entries.append((position, sign * weight))
-                    else:
-                        known -= sign * weight * value
-            if entries and linked.tie(*([e[0] for e in entries] + [-1])[:2]) is None:
-                rows.append((entries, known))
+                entries, known = _condition_row(work, sides, weights, i)
+                if entries and (order or linked.tie(*([e[0] for e in entries] + [-1])[:2])
+                                is None):
+                    rows.append((entries, known))
     return (_row_matrix(rows, work.count),
             np.array([value for _, value in rows]).reshape(-1, work.dimension))
+
+
+def _condition_row(work, sides, weights, i):
+    """Free-pole entries and the known right-hand side of one condition at pole ``i``
+    along a join."""
+    entries, known = [], np.zeros(work.dimension)
+    for (index, rows), coefficients in zip(sides, weights):
+        if isinstance(rows, np.ndarray):       # a kept patch: its rows are known
+            known -= np.asarray(coefficients) @ rows[:len(coefficients), i]
+            continue
+        for pole, c in zip(rows[i], coefficients):
+            position, value = work.pole(index, *pole)
+            if position >= 0:
+                entries.append((position, c))
+            else:
+                known -= c * value
+    return entries, known
 
 
 def _joint(work, c, d):
@@ -914,8 +1041,8 @@ def _crossings(patches, joins, edges):
         if edge.roots[0] != edge.roots[1]:
             for end, root in enumerate(edge.roots):
                 at.setdefault(root, []).append((e, end))
-    out = []
-    for ends in at.values():
+    out = {}
+    for root, ends in at.items():
         around = [joins[e] for e, _ in ends]
         members = [p for j in around for p in (j.a, j.b)]
         if (len(ends) != 4 or not all(j.smooth for j in around)
@@ -925,9 +1052,45 @@ def _crossings(patches, joins, edges):
         for (e, end), join in zip(ends, around):
             for p in (join.a, join.b):
                 other.setdefault(p, []).append((e, end))
-        out.append([(e, *(next(x for x in other[p] if x[0] != e) for p in (join.a, join.b)))
-                    for (e, _), join in zip(ends, around)])
+        out[root] = [(e, *(next(x for x in other[p] if x[0] != e) for p in (join.a, join.b)))
+                     for (e, _), join in zip(ends, around)]
     return out
+
+
+def _curved(work, joins, edges, crossings, continuity):
+    """``{join: (end 0, end 1)}``: the joins held in G2 (``continuity="G2"``, smooth,
+    ``curvature`` set, degree 2 or more across on both sides), less those whose patches
+    have too few rows across for the conditions at both their ends (three rows for a
+    G2 side, two for G1, one for a border held); per end, whether the G2 conditions
+    reach it: where no other join ends there, or at a crossing whose four joins are all
+    held in G2 (the conditions close around the vertex).  Next to any other vertex they
+    would fight the G1 rows of the join beside it, so they stop two poles short of it."""
+    if continuity != "G2":
+        return {}
+    candidates = {k for k, j in enumerate(joins) if j.smooth and j.curvature and all(
+        _second_derivative(_cross_space(work, i, s), s) is not None for i, s in _join_sides(j))}
+    need = {}
+    for k, join in enumerate(joins):
+        for index, side in _join_sides(join):
+            need[index, 1 - _along(side), side[1]] = 3 if k in candidates else 2 \
+                if join.smooth else 1
+    for k in list(candidates):
+        if any(not work.patches[i].kept and need.get((i, 1 - _along(s), "0"), 0)
+               + need.get((i, 1 - _along(s), "1"), 0) > _cross_space(work, i, s).dimension
+               for i, s in _join_sides(joins[k])):
+            candidates.discard(k)
+    ending = {}
+    for edge in edges:
+        for root in set(edge.roots):
+            ending[root] = ending.get(root, 0) + 1
+    open_ = {root for root, count in ending.items() if count == 1} | {
+        root for root, entries in crossings.items() if _full(candidates, entries)}
+    return {k: tuple(root in open_ for root in edges[k].roots) for k in candidates}
+
+
+def _join_sides(join):
+    """``((a, side_a), (b, side_b))``."""
+    return (join.a, join.side_a), (join.b, join.side_b)
 
 
 def _straightened(ratios, crossings):
@@ -935,7 +1098,7 @@ def _straightened(ratios, crossings):
     (the geometric mean of their class, oriented): the cross rows at the vertex then
     close around it (module notes, step 5)."""
     lines = UnionFind()
-    for crossing in crossings:
+    for crossing in crossings.values():
         for t, (ea, _), (eb, _) in crossing:
             for s, (sa, _), _ in crossing:
                 if s not in (t, ea, eb):     # s faces t: its side a is t.a's neighbour
@@ -947,14 +1110,22 @@ def _straightened(ratios, crossings):
     return out
 
 
-def _line_rows(crossings, ratios):
-    """Per crossing, one row per pair of opposite edges: ``((edge, end), (edge, end),
-    mu)`` with the ratio of a join crossing them (the k = 0 mirrored row of that join)."""
+def _line_rows(work, joins, crossings, ratios, curved):
+    """Per crossing and pair of opposite edges, the conditions (:func:`_conditions`) of a
+    join crossing them at the vertex, where its rows are those edges' poles:
+    ``((edge, end), (edge, end), weights_a, weights_b)``; G2 where the crossing's four
+    joins are held in G2 (:func:`_curved`)."""
     out = []
-    for crossing in crossings:
+    for crossing in crossings.values():
         seen = set()
         for t, a, b in crossing:
             if frozenset((a[0], b[0])) not in seen:
                 seen.add(frozenset((a[0], b[0])))
-                out.append((a, b, ratios[t]))
+                out += [(a, b, wa, wb) for wa, wb in
+                        _conditions(work, joins[t], ratios[t], _full(curved, crossing))]
     return out
+
+
+def _full(curved, crossing):
+    """Whether the four joins of a crossing are all among ``curved``."""
+    return all(t in curved for t, _, _ in crossing)

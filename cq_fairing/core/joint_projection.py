@@ -11,11 +11,14 @@ with :func:`~cq_fairing.core.joins.fair_patches`:
   solved in homogeneous coordinates, meeting along whole sides of their parameter
   rectangles, whose borders agree at equal normalised parameters within
   :data:`SOURCE_GAP` times the tolerance) is faired once and both faces take its border
-  pole for pole: closed to round-off, and G1 across a smooth join;
+  pole for pole: closed to round-off, and G1 across a smooth join (with
+  ``continuity="G2"`` also G2 where the sources are curvature-continuous across it,
+  :func:`~cq_fairing.core.joins.holds_curvature`);
 * every other side of a face on a join (a neighbour parametrized differently along it,
   analytic or trimmed there; a side shared by several neighbours) is
   **pinned** (:func:`~cq_fairing.core.joins.pinning_patch`): the face keeps its source's
-  border curve there and, across a smooth join, its source's tangent plane, exactly; the
+  border curve there and, across a smooth join, its source's tangent plane (not its
+  curvature), exactly; the
   join keeps the source's gap and angle wherever its other side is pinned or unchanged;
 * faces that carry one and the same surface (one surface split into faces by its trims)
   are one patch, faired once for all of them;
@@ -35,7 +38,7 @@ its source's is kept: nothing is left to fair.
 This module imports numpy only (and the core).
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -44,6 +47,7 @@ from .joins import (
     BorderJoin,
     JointPatch,
     fair_patches,
+    holds_curvature,
     pinning_patch,
     side_parameters,
     turned_patches,
@@ -148,12 +152,15 @@ class JointProjection:
         one shared surface).
     pinned : dict
         ``{join: {(face, side)}}``: the other joins with a side pinned to its source.
+    curved : list of Join
+        The joins of ``held`` also held curvature-continuous (``continuity="G2"``).
     """
 
     surfaces: dict
     kept: dict
     held: list
     pinned: dict
+    curved: list = field(default_factory=list)
 
 
 def locate_side(face, edge, uv, bounds, point, edge_tolerance, size):
@@ -307,8 +314,10 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
         already have the source's collapsed border rows put back on their points
         (:func:`~cq_fairing.core.geometry.collapsed_kept`); one with weights that are
         not all positive is not checked: it counts as over the tolerance.
-    continuity : {"G1", "G0"}
-        ``"G1"``: tangent planes held across smooth joins, and pinned there too.
+    continuity : {"G1", "G0", "G2"}
+        ``"G1"``: tangent planes held across smooth joins, and pinned there too;
+        ``"G2"``: also the normal curvature across the smooth joins whose sources are
+        curvature-continuous (:func:`~cq_fairing.core.joins.holds_curvature`).
     excluded : set of int
         Faces faired otherwise (patch grids): neither solved nor pinned.
 
@@ -350,7 +359,8 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
     pinned = {(face, side) for face, side in solve.pinned if face not in kept}
     return JointProjection(solved, {m: d for face, d in kept.items() if face in targets
                                       for m in members[face]},
-                           solve.imposed + inside, _pinned_joins(joins, border, group, pinned))
+                           solve.imposed + inside, _pinned_joins(joins, border, group, pinned),
+                           solve.curved)
 
 
 def surface_key(surface):
@@ -392,7 +402,7 @@ def _shared_surfaces(sources, targets, joins, border, tolerances):
 def _pins(sources, targets, joins, border, group, tolerances, excluded, continuity):
     """``{face: {side: smooth}}``: the sides of the faces that may move that lie on a join
     off ``border`` (a side on a border join is joined instead); a smooth join pins the
-    tangent plane too (``continuity="G1"``)."""
+    tangent plane too (``continuity`` G1 or G2)."""
     in_border = {id(j) for j in border}
     joined = {(group.get(s.face, s.face), s.side) for j in border for s in j.sides}
     out = {}
@@ -405,7 +415,7 @@ def _pins(sources, targets, joins, border, group, tolerances, excluded, continui
                     or face in excluded or tolerances.get(face) is None
                     or (face, side.side) in joined):
                 continue
-            smooth = continuity == "G1" and join.kind == "smooth"
+            smooth = continuity != "G0" and join.kind == "smooth"
             sides = out.setdefault(face, {})
             sides[side.side] = sides.get(side.side, False) or smooth
     return out
@@ -431,6 +441,7 @@ class _Solve:
     patches: list
     imposed: list
     pinned: set
+    curved: list
 
 
 def _solve(sources, targets, faces, kept, refined, border, group, pins, continuity):
@@ -440,18 +451,24 @@ def _solve(sources, targets, faces, kept, refined, border, group, pins, continui
     position = {face: k for k, face in enumerate(faces)}
     patches = [JointPatch(sources[i], None if i in kept else _targets(targets[i], refined[i]))
                for i in faces]
-    core_joins = {BorderJoin(position[group[a.face]], a.side, position[group[b.face]],
-                             b.side, runs_reversed(join), join.kind == "smooth"): join
-                  for join in border for a, b in [join.sides]}
+    core_joins = {}
+    for join in border:
+        a, b = join.sides
+        core = BorderJoin(position[group[a.face]], a.side, position[group[b.face]], b.side,
+                          runs_reversed(join), join.kind == "smooth")
+        curvature = continuity == "G2" and core.smooth and holds_curvature(
+            [p.source for p in patches], core)
+        core_joins[replace(core, curvature=curvature)] = join
     pinning = []
     for face in faces:
         for side, smooth in pins.get(face, {}).items() if face not in kept else ():
-            pinning.append(BorderJoin(position[face], side, len(patches), side, False, smooth))
+            pinning.append(BorderJoin(position[face], side, len(patches), side, False, smooth,
+                                      curvature=False))
             patches.append(pinning_patch(sources[face], side))
     result = fair_patches(patches, list(core_joins) + pinning, continuity=continuity)
     pinned = {(faces[j.a], j.side_a) for j in result.joins if j.b >= len(faces)}
     return _Solve(result, patches, [core_joins[j] for j in result.joins if j in core_joins],
-                  pinned)
+                  pinned, [core_joins[j] for j in result.curved if j in core_joins])
 
 
 def _pinned_joins(joins, border, group, pinned):

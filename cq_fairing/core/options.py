@@ -46,6 +46,13 @@ The options
     ``"wavelet"`` with ``tol`` in the core.
 ``schedule`` : {"auto", "direct", "hybrid"}, default "auto"
     Spaces the core's projection visits (:mod:`cq_fairing.core.schedule`).  ``"wavelet"``.
+``joins`` : {"smooth", "curvature", "closed", "free"}, default "smooth"
+    Models (occ shapes, the workbench): how faces that meet hold their joins.
+    ``"smooth"``: closed, and one tangent plane across the joins that were smooth in the
+    source (G1); ``"curvature"``: also the normal curvature across the smooth joins
+    whose source was curvature-continuous (G2); ``"closed"``: closed only (G0);
+    ``"free"``: each face faired alone.  ``angle_tol`` (degrees, default 1) is the source
+    normal angle below which a join counts as smooth.
 ``window`` : (u0, u1, v0, v1), default the whole domain
     Parameter box the deviation is measured in (a trimmed face's UV box); core surfaces,
     ``tol`` with ``"wavelet"`` or ``"adaptive"``.
@@ -70,10 +77,10 @@ import numpy as np
 from ..errors import InvalidInputError, InvalidToleranceError
 
 __all__ = ["METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "FACE_SEARCHES",
-           "MEASURES", "SCHEDULES", "DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED",
-           "RENAMED_VALUES", "tolerance_method", "check_applies", "check_search_options", "checked_choice",
-           "checked_objective", "check_borders", "checked_target_degree", "checked_order",
-           "check_order",
+           "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY", "DEFAULTS", "APPLIES",
+           "METHOD_DOES", "RENAMED", "RENAMED_VALUES", "tolerance_method", "check_applies",
+           "check_search_options", "checked_choice", "check_joins", "checked_objective",
+           "check_borders", "checked_target_degree", "checked_order", "check_order",
            "renamed_keywords", "renamed_value", "check_face_options"]
 
 #: How the geometry is faired (``"wavelet"`` first: the default).
@@ -92,6 +99,10 @@ FACE_SEARCHES = ("local",) + SEARCHES
 MEASURES = ("geometric", "parametric")
 #: Spaces visited by the core's projection.
 SCHEDULES = ("auto", "direct", "hybrid")
+#: How a model's faces hold their joins (``"smooth"`` first: the default).
+JOINS = ("smooth", "curvature", "closed", "free")
+#: The continuity the joint projection holds for each of :data:`JOINS` but ``"free"``.
+JOIN_CONTINUITY = {"smooth": "G1", "curvature": "G2", "closed": "G0"}
 
 #: Default of each option (``search`` of an occ face: ``"local"``).
 DEFAULTS = {"method": "wavelet", "objective": "compact", "borders": "auto",
@@ -195,6 +206,22 @@ def checked_choice(name, value, choices):
     if not isinstance(value, str) or value not in choices:
         raise InvalidInputError(f"{name} must be one of {choices}, got {value!r}.")
     return value
+
+
+def check_joins(joins, angle_tol):
+    """Refuse a ``joins`` not in :data:`JOINS` and an ``angle_tol`` that is not an angle
+    strictly between 0 and 90 degrees."""
+    if not isinstance(joins, str) or joins not in JOINS:
+        raise InvalidInputError(
+            f"joins must be one of {JOINS}, got {joins!r}; 'smooth' (default) keeps joins "
+            "closed and smooth, 'curvature' also their curvature, 'closed' closed, 'free' "
+            "fairs each face alone.")
+    if (isinstance(angle_tol, bool) or not isinstance(angle_tol, (int, float, np.integer,
+                                                                  np.floating))
+            or not np.isfinite(angle_tol) or not 0 < angle_tol < 90):
+        raise InvalidInputError(
+            f"angle_tol must be an angle in degrees between 0 and 90, got {angle_tol!r}; "
+            "e.g. 1.0 for 'smooth below one degree'.")
 
 
 def checked_objective(value):

@@ -29,14 +29,13 @@ from ..core.joint_projection import (
     runs_reversed,
     unholdable,
 )
+from ..core.options import JOIN_CONTINUITY
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
 from .grids import fair_grids
 from .networks import fair_networks
 
-__all__ = ["fair_joined", "JointOutcome", "JoinReport", "JOINS"]
-
-JOINS = ("smooth", "closed", "free")
+__all__ = ["fair_joined", "JointOutcome", "JoinReport"]
 
 
 @dataclass(frozen=True)
@@ -52,11 +51,14 @@ class JointOutcome:
     networks : list of NetworkFairing
         The faces at their coarsest faired together by energy
         (:mod:`cq_fairing.occ.networks`).
+    curved : list of Join
+        The joins held curvature-continuous by the joint projection (``"curvature"``).
     """
 
     joins: list
     grids: list
     networks: list
+    curved: list = field(default_factory=list)
 
 
 def fair_joined(job, adjacency, joins):
@@ -75,8 +77,10 @@ def fair_joined(job, adjacency, joins):
         the faces solved together are replaced here.
     adjacency : Adjacency
         The source's joins.
-    joins : {"smooth", "closed"}
-        ``"smooth"``: G0 everywhere and G1 across the smooth joins; ``"closed"``: G0.
+    joins : {"smooth", "curvature", "closed"}
+        ``"smooth"``: G0 everywhere and G1 across the smooth joins; ``"curvature"``:
+        also G2 where the source is curvature-continuous (energy networks keep G1);
+        ``"closed"``: G0 (:data:`~cq_fairing.core.options.JOIN_CONTINUITY`).
 
     Returns
     -------
@@ -92,16 +96,16 @@ def fair_joined(job, adjacency, joins):
     gridded = {face for grid in grids for face in grid.faces}
     in_grids = _between(border, gridded)
     border = [j for j in border if not set(j.faces) & gridded]
-    continuity = "G1" if joins == "smooth" else "G0"
+    continuity = JOIN_CONTINUITY[joins]
     joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
     networks = fair_networks(job, adjacency, polynomial, _between(border, polynomial),
-                             runs_reversed, continuity)
+                             runs_reversed, "G0" if continuity == "G0" else "G1")
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
     unchanged = {face for face, report in enumerate(job.reports)
                  if not report.faired and face not in moved}
     return JointOutcome(in_grids + held_joins(joint, unchanged) + in_networks, grids,
-                        networks)
+                        networks, [j for j in joint.curved if set(j.faces) <= set(joint.surfaces)])
 
 
 def _between(joins, faces):
@@ -194,6 +198,8 @@ class JoinReport:
         The patch grids faired as one surface each.
     networks : list of NetworkFairing
         The networks of faces faired together by energy.
+    curved : list of Join
+        The joins held curvature-continuous (G2) by the joint projection.
     """
 
     adjacency: object
@@ -201,6 +207,7 @@ class JoinReport:
     closed_edges: set = field(default_factory=set)
     grids: list = field(default_factory=list)
     networks: list = field(default_factory=list)
+    curved: list = field(default_factory=list)
 
     def rows(self):
         """One dict per join: ``faces`` (1-based), ``kind``, ``held`` (closed by
@@ -220,12 +227,14 @@ class JoinReport:
     def summary(self):
         """Counts and extremes (:func:`~cq_fairing.core.join_summary.summarize`), with
         ``grids`` (the shape of each patch grid faired as one surface), ``grid_faces``
-        (their faces), ``network_faces`` (faces faired together by energy),
+        (their faces), ``network_faces`` (faces faired together by energy), ``curved``
+        (joins held curvature-continuous),
         ``non_manifold`` and ``point_contacts``."""
         return summarize(
             self.rows(), grids=[list(g.shape) for g in self.grids],
             grid_faces=sum(len(g.faces) for g in self.grids),
             network_faces=sum(len(n.moved) for n in self.networks),
+            curved=len(self.curved),
             non_manifold=len(self.adjacency.non_manifold),
             point_contacts=len(self.adjacency.point_contacts))
 

@@ -43,7 +43,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
-from ..core.options import check_face_options
+from ..core.options import check_face_options, check_joins
 from ..errors import InvalidInputError
 from .adjacency import find_joins, measure_joins
 from .congruence import compose, congruence_classes, inverse
@@ -60,7 +60,7 @@ from .deviation import sample_face_deviation
 from .engine import ProcessFaces
 from .face_tasks import fair_one_face, kept_face_report
 from .faces import FaceFairReport, default_tolerance
-from .joint import JOINS, JoinReport, fair_joined
+from .joint import JoinReport, fair_joined
 
 __all__ = ["fair_shape", "fair_one_face", "ShapeFairResult", "edge_gaps", "free_edge_count"]
 
@@ -180,13 +180,17 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         ``jobs=1``); a face over the limit is reported ``'failed'`` ("time limit S s
         exceeded; kept the original"), keeps its original surface, and its worker is
         killed.  Default: no limit.
-    joins : {"smooth", "closed", "free"}, optional
-        How faces that meet stay together (default ``"smooth"``).  ``"smooth"`` and
-        ``"closed"`` fair the faces that meet along whole borders of their parameter
-        rectangles together (:mod:`cq_fairing.occ.joint`): each shared border is faired
-        once and both faces take it exactly (closed to round-off), and with
-        ``"smooth"`` the faces keep one tangent plane across the joins that were smooth
-        in the source (normal angle below ``angle_tol``); a crease stays a crease.
+    joins : {"smooth", "curvature", "closed", "free"}, optional
+        How faces that meet stay together (default ``"smooth"``).  ``"smooth"``,
+        ``"curvature"`` and ``"closed"`` fair the faces that meet along whole borders of
+        their parameter rectangles together (:mod:`cq_fairing.occ.joint`): each shared
+        border is faired once and both faces take it exactly (closed to round-off), and
+        with ``"smooth"`` the faces keep one tangent plane across the joins that were
+        smooth in the source (normal angle below ``angle_tol``); a crease stays a
+        crease.  ``"curvature"`` also holds the normal curvature (G2) across the smooth
+        joins whose source is curvature-continuous
+        (:func:`~cq_fairing.core.joins.holds_curvature`; faces at their coarsest,
+        faired by energy, keep G1).
         ``"free"`` fairs each face alone (its joins may open by up to about ``2 tol``,
         held to ``max_gap`` by re-fairing).  Joins elsewhere (a trimmed face's inner
         edge, part of a side, a rational or analytic neighbour) are faired as with
@@ -227,7 +231,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     shape = as_shape(shape)
     check_face_options(tol, n, method, boundary, objective, borders,
                        target_degree=target_degree)
-    _check_joins(joins, angle_tol)
+    check_joins(joins, angle_tol)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
     if in_place and convert:
@@ -254,7 +258,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         adjacency = find_joins(source, angle_tol=angle_tol)
         if joins != "free" and tol is not None:
             joint = fair_joined(job, adjacency, joins)
-            job.grids, job.networks = joint.grids, joint.networks
+            job.grids, job.networks, job.curved = joint.grids, joint.networks, joint.curved
             job.closed_edges = {side.edge for join in joint.joins for side in join.sides}
             job.joined_faces = {side.face for join in joint.joins for side in join.sides}
         copy, gaps = job.build()
@@ -269,20 +273,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
         tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps,
         JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges,
-                   job.grids, job.networks))
-
-
-def _check_joins(joins, angle_tol):
-    if joins not in JOINS:
-        raise InvalidInputError(
-            f"joins must be one of {JOINS}, got {joins!r}; 'smooth' (default) keeps joins "
-            "closed and smooth, 'closed' closed, 'free' fairs each face alone.")
-    if (isinstance(angle_tol, bool) or not isinstance(angle_tol, (int, float, np.integer,
-                                                                  np.floating))
-            or not np.isfinite(angle_tol) or not 0 < angle_tol < 90):
-        raise InvalidInputError(
-            f"angle_tol must be an angle in degrees between 0 and 90, got {angle_tol!r}; "
-            "e.g. angle_tol=1.0.")
+                   job.grids, job.networks, job.curved))
 
 
 def _checked_max_gap(max_gap, tol, n):
@@ -346,6 +337,7 @@ class _Job:
         self.joined_faces = set()   # their faces: the gap loop leaves them as they are
         self.grids = []             # patch grids faired as one surface each
         self.networks = []          # faces at their coarsest faired together by energy
+        self.curved = []            # joins held curvature-continuous (joins="curvature")
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""

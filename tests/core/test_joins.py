@@ -143,14 +143,103 @@ def test_lines_of_joins_through_several_vertices_stay_smooth(seed, sizes):
     assert _joins_measured([p.source for p in patches], joins)[1] > 0.1   # the source turns
 
 
-def test_a_kept_patch_constrains_its_neighbours_exactly():
+def _cross_curvature(surface, side, t):
+    """Normal curvature of ``surface`` in its cross direction along ``side`` (the
+    curvature of the iso-line that crosses it, projected on the normal), by scipy's
+    basis."""
+    (u0, u1), (v0, v1) = surface.domain
+    fixed = np.full_like(t, {"u0": u0, "u1": u1, "v0": v0, "v1": v1}[side])
+    u, v = (fixed, v0 + (v1 - v0) * t) if side[0] == "u" else (u0 + (u1 - u0) * t, fixed)
+    du, dv = (1, 0) if side[0] == "u" else (0, 1)
+    first = [np.einsum("ka,abd,kb->kd", basis_matrix(surface.u_knots, 3, u, nu),
+                       surface.poles, basis_matrix(surface.v_knots, 3, v, nv))
+             for nu, nv in ((1, 0), (0, 1), (du, dv), (2 * du, 2 * dv))]
+    su, sv, cross, second = first
+    normal = np.cross(su, sv)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    return np.abs(np.sum(normal * second, axis=1)) / np.sum(cross * cross, axis=1)
+
+
+def _curvature_jump(surfaces, joins):
+    """Largest difference of the cross normal curvatures of the two sides of any join,
+    and the largest such curvature."""
+    jump = largest = 0.0
+    for join in joins:
+        ka = _cross_curvature(surfaces[join.a], join.side_a, SAMPLES)
+        kb = _cross_curvature(surfaces[join.b], join.side_b,
+                              1 - SAMPLES if join.reversed else SAMPLES)
+        jump, largest = max(jump, np.abs(ka - kb).max()), max(largest, ka.max(), kb.max())
+    return jump, largest
+
+
+@given(st.lists(st.integers(1, 6), min_size=8, max_size=8), st.integers(0, 50))
+def test_g2_holds_the_normal_curvature_across_every_join(sizes, seed):
+    """The second rows of both sides match too (the cross curves C2 in one parameter):
+    the normal curvature across each join is the same on both sides, to round-off,
+    at the inner vertex too; with G1 alone it jumps."""
+    patches, joins = _grid(seed=seed)
+    targets = [JointPatch(p, (SplineSpace.quasi_uniform(nu, 3), SplineSpace.quasi_uniform(nv, 3)))
+               for p, nu, nv in zip(patches, sizes[::2], sizes[1::2])]
+    g2 = fair_patches(targets, joins, continuity="G2").surfaces
+    gap, angle = _joins_measured(g2, joins)
+    jump, largest = _curvature_jump(g2, joins)
+    assert gap <= 1e-9 * 2.0 and angle < 1e-4
+    assert jump <= 1e-7 * max(largest, 1.0)
+
+
+def test_g2_is_what_g1_leaves_open():
     patches, joins = _grid()
     targets = _targets(patches)
-    targets[0] = JointPatch(patches[0])
+    g1, g2 = (fair_patches(targets, joins, continuity=c).surfaces for c in ("G1", "G2"))
+    assert _curvature_jump(g1, joins)[0] > 0.5
+    assert _curvature_jump(g2, joins)[0] < 1e-9
+    assert _deviation(g2, patches) < 1.5 * _deviation(g1, patches)
+
+
+@given(st.integers(0, 50), st.lists(st.tuples(st.integers(3, 5), st.integers(3, 5)),
+                                    min_size=9, max_size=9))
+def test_g2_along_lines_of_joins_through_several_vertices(seed, sizes):
+    """The middle patch has G2 joins on all four sides: with six poles or more across,
+    three rows at each end, all are held."""
+    patches, joins = _three_by_three(seed, sizes)
+    result = fair_patches(patches, joins, continuity="G2")
+    jump, largest = _curvature_jump(result.surfaces, joins)
+    assert len(result.curved) == len(joins)
+    assert _joins_measured(result.surfaces, joins)[1] < 1e-4
+    assert jump <= 1e-7 * max(largest, 1.0)
+
+
+def test_g2_is_left_out_where_a_patch_has_too_few_rows_across():
+    """One span across the middle row of patches (four poles in u: the joins along u
+    share their knots) cannot carry three rows for each of two opposite G2 joins: the
+    joins across u stay G1, and say so; those across v are G2."""
+    sizes = [(4, 4)] * 3 + [(1, 4)] * 3 + [(4, 4)] * 3
+    patches, joins = _three_by_three(0, sizes)
+    result = fair_patches(patches, joins, continuity="G2")
+    across_u = [j for j in joins if j.side_a[0] == "u"]
+    assert len(across_u) == 6 and not set(across_u) & set(result.curved)
+    assert set(result.curved) == set(joins) - set(across_u)
+    assert _joins_measured(result.surfaces, joins)[1] < 1e-4
+
+
+@pytest.mark.parametrize("kept", [0, 3])   # side a of both its joins; side b of both
+def test_a_kept_patch_constrains_its_neighbours_exactly(kept):
+    """The neighbours take the kept patch's borders and mirror its cross rows: closed
+    and G1 along the joins (away from the inner vertex, which is no crossing with a
+    patch kept)."""
+    patches, joins = _grid()
+    targets = _targets(patches)
+    targets[kept] = JointPatch(patches[kept])
     result = fair_patches(targets, joins)
-    assert result.surfaces[0] is patches[0]
-    gap, _ = _joins_measured(result.surfaces, joins[:2])
-    assert gap <= 1e-9 * 2.0
+    assert result.surfaces[kept] is patches[kept]
+    for join in (j for j in joins if kept in (j.a, j.b)):
+        pa, na = _border(result.surfaces[join.a], join.side_a, SAMPLES)
+        pb, nb = _border(result.surfaces[join.b], join.side_b,
+                         1 - SAMPLES if join.reversed else SAMPLES)
+        assert np.linalg.norm(pa - pb, axis=1).max() <= 1e-9 * 2.0
+        far = np.linalg.norm(pa[:, :2] - 1.0, axis=1) > 0.76
+        cos = np.clip(np.abs(np.sum(na * nb, axis=1)), -1, 1)
+        assert np.degrees(np.arccos(cos[far])).max() < 1e-5
 
 
 @given(st.sampled_from(["u0", "u1", "v0", "v1"]), st.integers(1, 4))
@@ -240,4 +329,4 @@ def test_bad_input_is_refused_with_what_to_do():
     with pytest.raises(InvalidInputError, match="two joins"):
         fair_patches(targets, [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "u1", 2, "v0")])
     with pytest.raises(InvalidInputError, match="continuity"):
-        fair_patches(targets, joins, continuity="G2")
+        fair_patches(targets, joins, continuity="C1")

@@ -161,3 +161,66 @@ def test_faces_that_share_one_surface_are_faired_as_one():
     assert np.array_equal(first.poles, second.poles)
     assert first.shape[1] < 204 and all(r.max_deviation <= 0.001 for r in result.faces
                                         if r.faired)
+
+
+def _grid_beside_a_plane():
+    """The noise-free 2 x 2 patch grid (cq_fairing.core.examples.patch_grid) sewn with a
+    planar strip along patch 0's side x = 0: the block is no whole part of the model, so
+    its faces are projected jointly (not merged), patch 0's side on the plane pinned."""
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeFace,
+        BRepBuilderAPI_MakePolygon,
+        BRepBuilderAPI_Sewing,
+    )
+    from OCP.gp import gp_Pnt
+
+    from cq_fairing.core.examples import patch_grid
+    from cq_fairing.occ.builders import surface_to_natural_face
+
+    grid = patch_grid(noise=0.0)
+    sewing = BRepBuilderAPI_Sewing(1e-5)
+    for patch in grid.patches:
+        sewing.Add(surface_to_natural_face(patch))
+    strip = BRepBuilderAPI_MakePolygon(gp_Pnt(0, 0, 0), gp_Pnt(0, 1, 0), gp_Pnt(-1, 1, 0),
+                                       gp_Pnt(-1, 0, 0), True)
+    sewing.Add(BRepBuilderAPI_MakeFace(strip.Wire(), True).Face())
+    sewing.Perform()
+    return grid, sewing.SewedShape()
+
+
+def _faired_patches(result, grid):
+    """The faired B-spline surfaces in the grid's patch order (matched by their centres)."""
+    from cq_fairing.occ.convert import face_to_surface
+
+    surfaces = [face_to_surface(r.face)[0] for r in result.faces
+                if r.faired and r.face is not None]
+    centre = [s.evaluate_grid([0.5], [0.5])[0, 0] for s in surfaces]
+    return [surfaces[int(np.argmin([np.linalg.norm(c - p.evaluate_grid([0.5], [0.5])[0, 0])
+                                    for c in centre]))] for p in grid.patches]
+
+
+def test_curvature_joins_hold_the_normal_curvature_across():
+    """joins="curvature": across the joins whose source is curvature-continuous (the
+    noise-free grid's four), the faired faces have one normal curvature, as well as one
+    tangent plane; with "smooth" the curvature jumps.  Next to the vertex where patch 0's
+    pinned side meets a join, the G2 rows stop short (one join keeps a small jump)."""
+    from cq_fairing.core.joins import cross_curvatures, holds_curvature, join_angles
+
+    grid, shell = _grid_beside_a_plane()
+    assert all(holds_curvature(grid.patches, j) for j in grid.joins)
+    t = np.linspace(0.0, 1.0, 101)
+    jumps = {}
+    for joins in ("smooth", "curvature"):
+        result = fair_shape(shell, tol=0.002, joins=joins)
+        assert result.n_faired == 4 and result.valid
+        assert all(r.max_deviation <= 0.002 for r in result.faces if r.faired)
+        surfaces = _faired_patches(result, grid)
+        assert max(join_angles(surfaces, j, t).max() for j in grid.joins) < 1e-4
+        jumps[joins] = sorted(np.nanmax(np.abs(np.subtract(*cross_curvatures(surfaces, j, t))))
+                              for j in grid.joins)
+        if joins == "curvature":
+            assert result.joins.summary()["curved"] == 4
+            assert "G2 across 4" in result.joins.line()
+    assert jumps["smooth"][-1] > 0.2
+    assert jumps["curvature"][:3] == pytest.approx([0, 0, 0], abs=1e-6)
+    assert jumps["curvature"][-1] < 0.1 * jumps["smooth"][-1]
