@@ -125,3 +125,26 @@ def test_the_signatures_take_their_defaults_from_the_options_module(function):
     assert not set(options.RENAMED) & set(parameters)     # old spellings only through **renamed
     for name in options.APPLIES:
         assert name in options.DEFAULTS
+
+
+@pytest.mark.parametrize("joins, angle_tol, match", [
+    ("sealed", 1.0, "joins must be one of"), ("G2", 1.0, "joins must be one of"),
+    (None, 1.0, "joins must be one of"), ("smooth", 0, "angle_tol"),
+    ("smooth", 90, "angle_tol"), ("smooth", float("nan"), "angle_tol"),
+    ("smooth", True, "angle_tol"), ("smooth", "1", "angle_tol")])
+def test_join_options_are_refused_with_the_values_that_would_do(joins, angle_tol, match):
+    from cq_fairing.core.options import check_joins
+
+    with pytest.raises(cf.InvalidInputError, match=match) as info:
+        check_joins(joins, angle_tol)
+    assert "curvature" in str(info.value) or "e.g. 1.0" in str(info.value)
+
+
+def test_each_join_option_but_free_names_the_continuity_it_holds():
+    from cq_fairing.core.joins import CONTINUITIES
+    from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
+
+    for joins in JOINS:
+        check_joins(joins, 1.0)
+    assert set(JOIN_CONTINUITY) == set(JOINS) - {"free"}
+    assert set(JOIN_CONTINUITY.values()) == set(CONTINUITIES)
