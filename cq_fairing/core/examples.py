@@ -17,6 +17,8 @@ r"""Synthetic test geometry with known noise-free truth.
   noise-free truth.
 * :func:`patch_grid`: four noisy bicubic patches of one smooth surface in a 2 x 2 grid,
   one parametrized backwards and one transposed, with their border joins.
+* :func:`patch_network`: three noisy bicubic patches of one span each (already at their
+  coarsest) in an L, sharing their borders pole for pole, with their border joins.
 """
 
 from typing import NamedTuple
@@ -26,10 +28,11 @@ import numpy as np
 from .geometry import BSplineCurve, BSplineSurface
 from .interpolation import interpolate_grid, interpolate_points
 from .joins import BorderJoin
+from .patch_grid import insert_knot
 from .spaces import SplineSpace
 
 __all__ = ["SeedCurve", "seed_curve", "seed_curve_points", "BladeSurface", "blade_surface",
-           "PatchGrid", "patch_grid"]
+           "PatchGrid", "patch_grid", "patch_network"]
 
 
 class SeedCurve(NamedTuple):
@@ -113,7 +116,8 @@ def blade_surface(shape=(50, 80), noise=0.02, seed=7, span=100.0, chord=30.0):
 
 
 class PatchGrid(NamedTuple):
-    """Patches of one surface and the joins between them (:func:`patch_grid`)."""
+    """Patches of one surface and the joins between them (:func:`patch_grid`,
+    :func:`patch_network`)."""
 
     patches: list
     joins: list
@@ -150,3 +154,37 @@ def patch_grid(noise=0.003, seed=1, poles=12):
     joins = [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "v1", 2, "v0"),
              BorderJoin(2, "u1", 3, "v0"), BorderJoin(1, "v1", 3, "u0", reversed=True)]
     return PatchGrid(patches, joins)
+
+
+def patch_network(noise=0.003, seed=2):
+    r"""Three bicubic patches of one span each, the unit squares at :math:`(0, 0)`,
+    :math:`(1, 0)` and :math:`(0, 1)` of :math:`z = 0.3 \sin 2x \cos 1.5y + 0.1 xy` on
+    :math:`[0, 2]^2`: an L.
+
+    The surface is the bicubic least-squares fit with two uniform spans per direction on
+    40 x 40 samples (C2 at :math:`x = 1` and :math:`y = 1`), cut into its four Bezier
+    patches by inserting those knots to multiplicity 3 (:func:`~cq_fairing.core.patch_grid.insert_knot`),
+    with Gaussian ``noise`` on the z of every pole of that 7 x 7 net: the patches share
+    their borders pole for pole and the joins turn by a few degrees.  Each patch is
+    already at its coarsest (4 x 4 poles), so a face-by-face search has nothing to remove,
+    and the L is no rectangle of patches to merge into one surface.
+
+    Returns
+    -------
+    PatchGrid
+        ``patches`` (three BSplineSurface on [0, 1]^2) and their two ``BorderJoin``.
+    """
+    knots = SplineSpace.quasi_uniform(2, 3).knots
+    knots = 2.0 * knots / knots[-1]
+    s = np.linspace(0.0, 2.0, 40)
+    fit = np.linalg.pinv(SplineSpace.from_knots(knots, 3).collocation(s).toarray())
+    net = np.einsum("ia,abd,jb->ijd", fit, _grid_truth(*np.meshgrid(s, s, indexing="ij")),
+                    fit)
+    for axis in (0, 1):
+        _, split = insert_knot(knots, 3, np.moveaxis(net, axis, 0), 1.0, 2)
+        net = np.moveaxis(split, 0, axis)
+    net[..., 2] += np.random.default_rng(seed).normal(0.0, noise, net.shape[:2])
+    bezier = np.array([0.0] * 4 + [1.0] * 4)
+    patches = [BSplineSurface(net[a:a + 4, b:b + 4].copy(), bezier, bezier, 3, 3)
+               for a, b in ((0, 0), (3, 0), (0, 3))]
+    return PatchGrid(patches, [BorderJoin(0, "u1", 1, "u0"), BorderJoin(0, "v1", 2, "v0")])

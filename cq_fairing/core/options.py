@@ -37,7 +37,7 @@ The options
     How the uniform tolerance search (``"wavelet"`` with ``tol``) finds the target scale:
     the core's step rules (:mod:`cq_fairing.core.accuracy`), or, for an occ face,
     ``"local"``: bisection on the face's own samples inside its trim
-    (:mod:`cq_fairing.occ.search`).  Default ``"guaranteed"`` in the core, ``"local"``
+    (:mod:`cq_fairing.core.scale_search`).  Default ``"guaranteed"`` in the core, ``"local"``
     for occ faces.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.

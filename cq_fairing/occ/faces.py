@@ -2,7 +2,7 @@ r"""Fair one OCP face: :func:`fair_face` and its :class:`FaceFairReport`.
 
 Pipeline: classify the face; convert it to NURBS on request; take its net
 (:func:`~cq_fairing.occ.face_to_surface`); choose the target (explicit ``n`` or the
-fewest poles within ``tol``, :mod:`cq_fairing.occ.search`); fair with the core
+fewest poles within ``tol``, :mod:`cq_fairing.core.scale_search`); fair with the core
 (:func:`cq_fairing.fair_surface`), or with ``method="adaptive"`` let the core choose
 non-uniform targets within ``tol`` (:mod:`cq_fairing.core.adaptive`); put the faired surface under the face's own trim
 (:func:`~cq_fairing.occ.surface_to_face`); measure the deviation with OCCT's projection
@@ -44,6 +44,7 @@ from ..core.geometry import BSplineSurface, closed_axes, collapse_rows, collapse
 from ..core.options import check_face_options, renamed_value
 from ..core.plans import target_space
 from ..core.results import SurfaceFairResult
+from ..core.scale_search import SurfaceSampler, max_scales, search_scales, target_degrees
 from ..core.spaces import SplineSpace
 from ..errors import (
     InvalidInputError,
@@ -54,7 +55,6 @@ from ..errors import (
 from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, face_uv_grid, reference_samples
-from .search import max_scales, search_scales
 from .trims import face_region
 
 if TYPE_CHECKING:
@@ -194,7 +194,7 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
     search : {"local", "guaranteed", "linear", "polyfit"}
         How the ``method="wavelet"`` target is found with ``tol``.  ``"local"``:
         bisection on the face's own samples (inside the trim) with the distance to the
-        faired tangent planes (:mod:`cq_fairing.occ.search`); the others:
+        faired tangent planes (:mod:`cq_fairing.core.scale_search`); the others:
         ``cq_fairing.fair_surface(tol=..., search=...)``, the core's accuracy control
         with that step rule, measured in the face's UV box.  Either way OCCT's
         projection checks the result; if it fails, the local search runs again with the
@@ -417,20 +417,6 @@ def _unchanged(face, info, surface, message, tol):
                           poles_after=surface.shape, max_deviation=0.0, tolerance=tol)
 
 
-def target_degrees(surface, target_degree):
-    """The target's degrees ``(p, q)``: ``target_degree`` (an int or a pair), by default
-    ``min(3, source degree)`` per direction."""
-    if target_degree is None:
-        return min(3, surface.u_degree), min(3, surface.v_degree)
-    pair = (target_degree, target_degree) if np.ndim(target_degree) == 0 else tuple(target_degree)
-    if len(pair) != 2 or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
-                             for d in pair):
-        raise InvalidInputError(
-            f"target_degree must be an integer >= 1 or a pair of them, got {target_degree!r}."
-        )
-    return int(pair[0]), int(pair[1])
-
-
 def _choose(source, tol, n, degree, sampler, finish, criterion, region=None, window=None):
     """Target scales, the faired (finished) surface and the core result if computed.
 
@@ -488,66 +474,6 @@ def _core_fair(source, target, degree):
     return fair_surface(source.poles, n=target, u_knots=source.u_knots,
                         v_knots=source.v_knots, degree=(source.u_degree, source.v_degree),
                         weights=source.weights, target_degree=degree)
-
-
-class SurfaceSampler:
-    """Original points on a UV grid of the face (inside the trim), for the search.
-
-    Collocation matrices are cached per spline space, so a candidate costs two small
-    dense products.
-    """
-
-    def __init__(self, grid, surface):
-        self.grid = grid
-        self.u, self.v, self.inside = grid
-        self._cache = {}
-        self.reference = self.evaluate(surface)
-
-    def _matrix(self, space, x, nu=0):
-        key = (space.key, x.size, nu)
-        if key not in self._cache:
-            self._cache[key] = space.collocation(x, nu).toarray()
-        return self._cache[key]
-
-    def evaluate(self, surface):
-        net = surface.homogeneous() if surface.is_rational else surface.poles
-        mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
-        grid = np.matmul(mv, np.tensordot(mu, net, axes=(1, 0)))[self.inside]
-        return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
-
-    def parametric(self, faired):
-        """Largest ``|S_f(u, v) - S(u, v)|``: an upper bound of the true distance."""
-        points = self.evaluate(faired)
-        return float(np.linalg.norm(points - self.reference, axis=1).max())
-
-    def normal(self, faired):
-        """Largest distance to the faired surface's tangent planes at the same parameters.
-
-        A first-order estimate of the true distance, far below the parametric one where
-        fairing shifts the surface along itself (bumpy nets); OCCT checks the result.
-        """
-        net = faired.homogeneous() if faired.is_rational else faired.poles
-        mu, mv = self._matrix(faired.u_space, self.u), self._matrix(faired.v_space, self.v)
-        du = self._matrix(faired.u_space, self.u, 1)
-        dv = self._matrix(faired.v_space, self.v, 1)
-        along_u = np.tensordot(mu, net, axes=(1, 0))
-        h = np.matmul(mv, along_u)[self.inside]
-        hu = np.matmul(mv, np.tensordot(du, net, axes=(1, 0)))[self.inside]
-        hv = np.matmul(dv, along_u)[self.inside]
-        if faired.is_rational:  # quotient rule: S = X / w, S_u = (X_u - w_u S) / w
-            w = h[:, -1:]
-            points = h[:, :-1] / w
-            su = (hu[:, :-1] - hu[:, -1:] * points) / w
-            sv = (hv[:, :-1] - hv[:, -1:] * points) / w
-        else:
-            points, su, sv = h, hu, hv
-        normal = np.cross(su, sv)
-        length = np.linalg.norm(normal, axis=1)
-        offset = self.reference - points
-        dist = np.linalg.norm(offset, axis=1)
-        ok = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
-        dist[ok] = np.abs(np.einsum("ij,ij->i", offset[ok], normal[ok])) / length[ok]
-        return float(dist.max())
 
 
 def _finisher(surface, periodic, boundary):
@@ -608,7 +534,7 @@ def _fix_border(source, faired):
 
 def _into(faired, source):
     """L2 projection of ``faired`` into the source spaces (homogeneous if rational)."""
-    from .search import _operator
+    from ..core.scale_search import _operator
 
     net = faired.homogeneous() if source.is_rational else faired.poles
     au = _operator(faired.u_space, source.u_space)

@@ -1,9 +1,10 @@
 """Part.BSplineSurface / Part.BSplineCurve <-> cq_fairing geometry.
 
 FreeCAD stores distinct knots plus multiplicities; the core stores full clamped knot
-vectors.  Periodic geometry is converted to its clamped (non-periodic) equivalent with
-OCCT's ``setUNotPeriodic`` and ``segment`` (the same shape, more poles) before
-conversion, so it is handled rather than refused.  Rational geometry keeps its weights
+vectors.  Periodic geometry, and non-periodic geometry with unclamped ("uniform") knots,
+is converted to its clamped (non-periodic) equivalent with OCCT's ``setUNotPeriodic``
+and ``segment`` (the same shape, more poles) before conversion, so it is handled rather
+than refused.  Rational geometry keeps its weights
 (all-one weights count as polynomial).  Other surface types (planes, cylinders, ...) raise
 :class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
 """
@@ -35,15 +36,24 @@ def _weights_or_none(weights):
 
 def _clamped_surface(surface):
     """Non-periodic, clamped copy: ``setUNotPeriodic`` may leave unclamped end knots, and
-    ``segment`` over the whole domain clamps them (same geometry)."""
+    OCCT also keeps unclamped ("uniform") knot vectors on non-periodic surfaces (whose
+    domain starts at the knot of index degree + 1); ``segment`` over the whole domain
+    clamps them (same geometry)."""
     surface = surface.copy()
-    if surface.isUPeriodic() or surface.isVPeriodic():
-        if surface.isUPeriodic():
-            surface.setUNotPeriodic()
-        if surface.isVPeriodic():
-            surface.setVNotPeriodic()
+    if surface.isUPeriodic():
+        surface.setUNotPeriodic()
+    if surface.isVPeriodic():
+        surface.setVNotPeriodic()
+    if not _is_clamped(surface):
         surface.segment(*surface.bounds())
     return surface
+
+
+def _is_clamped(surface):
+    """True when both knot vectors start and end with multiplicity degree + 1."""
+    return all(mults[0] == mults[-1] == degree + 1 for mults, degree in (
+        (surface.getUMultiplicities(), surface.UDegree),
+        (surface.getVMultiplicities(), surface.VDegree)))
 
 
 def surface_from_face(face):

@@ -67,11 +67,12 @@ CLOSED = 1e-7  # relative to the size: joins closer than this are sewn as they a
 
 
 def _sewn_closed(shapes, joins):
-    """The faired faces sewn into one valid shell when every join among them (``joins``,
-    a :class:`~fairing_wb.joins.JoinReport`, whose faces after the faired ones are their
-    fixed neighbours) is closed within :data:`CLOSED` times the size, else ``None``.  The
-    sewn edges lie on both faces to within their gaps, so their tolerances stay at the
-    faces' own (no source edge is put back on a moved face)."""
+    """The faired faces sewn into one valid shell of them all when every join among them
+    (``joins``, a :class:`~fairing_wb.joins.JoinReport`, whose faces after the faired ones
+    are their fixed neighbours) is closed within :data:`CLOSED` times the size, else
+    ``None`` (sewing may also leave a face loose, out of the shell).  The sewn edges lie
+    on both faces to within their gaps, so their tolerances stay at the faces' own (no
+    source edge is put back on a moved face)."""
     if joins is None:
         return None
     compound = Part.makeCompound(shapes)
@@ -81,7 +82,7 @@ def _sewn_closed(shapes, joins):
         return None
     sewn = compound.copy()
     sewn.sewShape(reach)
-    if sewn.isValid() and len(sewn.Faces) == len(shapes) and len(sewn.Shells) == 1:
+    if sewn.isValid() and [len(shell.Faces) for shell in sewn.Shells] == [len(shapes)]:
         return sewn.Shells[0]
     return None
 

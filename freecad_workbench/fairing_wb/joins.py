@@ -25,12 +25,18 @@ evaluated and projected onto by FreeCAD's Part (``Surface.value``, ``Surface.nor
 ``Surface.parameter``).  A join whose largest source angle is below the angle
 tolerance is *smooth*, else a *crease*.
 
-Holding the joins is the core's work
-(:func:`~cq_fairing.core.joint_projection.project_jointly`): :func:`hold_joins` gives it
-the faces read as non-periodic B-spline patches and the target spaces of each face
-faired alone; a neighbour has no target, so it is kept and its border constrains the
-faired face across the join, and a faired face's side on a join with a face that is no
-such patch is pinned to its source.
+Holding the joins is the core's work, in the three steps the OCP layer takes
+(:func:`cq_fairing.occ.joint.fair_joined`): :func:`hold_joins` gives it the faces read
+as non-periodic B-spline patches, the faces faired alone and those left as they were.
+The patch grids that form whole parts of the shape are merged and faired as one
+surface each, then cut back at their borders
+(:func:`~cq_fairing.core.grid_fairing.fair_grids`); the faces faired alone are projected
+again together (:func:`~cq_fairing.core.joint_projection.project_jointly`): a neighbour
+has no target, so it is kept and its border constrains the faired face across the
+join, and a faired face's side on a join with a face that is no such patch is pinned to
+its source; the faces left as they were (already at their coarsest) are faired together
+by energy across their joins (:func:`~cq_fairing.core.network_fairing.fair_networks`).
+Each face solved is checked against its own tolerance by the caller's measure.
 """
 
 from dataclasses import dataclass, field
@@ -40,19 +46,23 @@ import numpy as np
 import Part
 
 import cq_fairing as cf
+from cq_fairing.core.grid_fairing import fair_grids
 from cq_fairing.core.join_summary import summarize, summary_line
 from cq_fairing.core.joint_projection import (
     Join,
     JoinSide,
     border_joins,
+    held_joins,
+    joint_targets,
     locate_side,
     project_jointly,
 )
+from cq_fairing.core.network_fairing import fair_networks
 
 from . import analysis, conversion
 
-__all__ = ["JOINS", "SAMPLES", "FaceJoins", "JoinReport", "find_joins", "measure_joins",
-           "hold_joins", "check_join_options"]
+__all__ = ["JOINS", "SAMPLES", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
+           "measure_joins", "hold_joins", "check_join_options"]
 
 JOINS = ("smooth", "closed", "free")  # the first is the default
 SAMPLES = 24              # points measured along each join
@@ -297,21 +307,59 @@ def measure_joins(found, surfaces):
     return out
 
 
-def hold_joins(found, targets, tolerances, check, joins="smooth"):
-    """Project the faces of ``found`` together so that their joins stay closed (and,
-    with ``joins="smooth"``, smooth): the core's
-    :func:`~cq_fairing.core.joint_projection.project_jointly` on the border joins
-    between readable faces (:func:`~cq_fairing.core.joint_projection.border_joins`),
-    every other side on a join pinned to its source.
+@dataclass(frozen=True)
+class HeldJoins:
+    """What :func:`hold_joins` did.
+
+    Attributes
+    ----------
+    surfaces : dict
+        ``{face: BSplineSurface}``: every face solved (a patch grid's pieces, the joint
+        projection's faces, the networks' moved faces), as checked.
+    kept : dict
+        ``{face: deviation}``: the faces the joint projection kept as they were (the
+        deviation they stayed at with their joins closed, over their tolerance; ``None``
+        where their pinned sides left nothing to fair) and no network moved.
+    held : list of Join
+        The joins held closed.
+    grids : list of GridFairing
+        The patch grids faired as one surface each.
+    networks : list of NetworkFairing
+        The networks of faces faired together by energy.
+    """
+
+    surfaces: dict
+    kept: dict
+    held: list
+    grids: list
+    networks: list
+
+
+def _between(joins, faces):
+    """The joins of ``joins`` with both faces among ``faces``."""
+    return [j for j in joins if set(j.faces) <= set(faces)]
+
+
+def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
+    """Fair the faces of ``found`` together so that their joins stay closed (and, with
+    ``joins="smooth"``, smooth), as the OCP layer does: the patch grids that form whole
+    parts of the shape as one surface each (:func:`~cq_fairing.core.grid_fairing.fair_grids`),
+    the faces faired alone projected again together
+    (:func:`~cq_fairing.core.joint_projection.project_jointly`, on the border joins
+    between readable faces, :func:`~cq_fairing.core.joint_projection.border_joins`,
+    every other side on a join pinned to its source), and the faces left as they were
+    faired together by energy (:func:`~cq_fairing.core.network_fairing.fair_networks`).
 
     Parameters
     ----------
     found : FaceJoins
-    targets : dict
-        ``{face: (SplineSpace, SplineSpace)}``: the target spaces of each face faired
-        alone onto a polynomial surface on its source's domain.
+    faired : dict
+        ``{face: BSplineSurface}``: the faces faired alone.
+    unchanged : collection of int
+        The faces left as their sources that may still move with others: their own
+        fairing had nothing to remove.
     tolerances : dict
-        ``{face: tol}``.
+        ``{face: tol}`` of the faces faired (their neighbours have none: they stay).
     check : callable
         ``check(face, surface) -> float``: the face's two-sided deviation with
         ``surface``.
@@ -320,11 +368,31 @@ def hold_joins(found, targets, tolerances, check, joins="smooth"):
 
     Returns
     -------
-    JointProjection
+    HeldJoins
     """
+    continuity = "G1" if joins == "smooth" else "G0"
     border = border_joins(found.joins, found.readable, tolerances)
-    return project_jointly(found.readable, targets, found.joins, border, tolerances, check,
-                           continuity="G1" if joins == "smooth" else "G0")
+    polynomial = {face: s for face, s in found.readable.items() if not s.is_rational}
+    grids = fair_grids(polynomial, found.joins, _between(border, polynomial), tolerances,
+                       check)
+    pieces = {face: s for grid in grids for face, s in grid.surfaces.items()}
+    in_grids = _between(border, pieces)
+    border = [j for j in border if not set(j.faces) & set(pieces)]
+    projection = project_jointly(found.readable, joint_targets(found.readable, faired),
+                                 found.joins, border, tolerances, check,
+                                 continuity=continuity, excluded=set(pieces))
+    left = set(unchanged) | {face for face, d in projection.kept.items() if d is None}
+    networks = fair_networks(polynomial, left, found.joins, _between(border, polynomial),
+                             tolerances, check, continuity=continuity)
+    moved = {face: s for network in networks for face, s in network.surfaces.items()}
+    in_networks = [j for network in networks for j in network.joins
+                   if set(j.faces) & set(network.surfaces)]
+    surfaces = {**pieces, **projection.surfaces, **moved}
+    kept = {face: d for face, d in projection.kept.items() if face not in moved}
+    still = {face for face in found.boxes
+             if face not in surfaces and (face not in faired or face in kept)}
+    return HeldJoins(surfaces, kept, in_grids + held_joins(projection, still) + in_networks,
+                     grids, networks)
 
 
 @dataclass(eq=False)
@@ -337,15 +405,21 @@ class JoinReport:
     measures : list of (numpy.ndarray, numpy.ndarray)
         The faired faces' gaps and angles per join (:func:`measure_joins`).
     held : list of Join
-        The joins held closed by the joint projection.
+        The joins held closed (:attr:`HeldJoins.held`).
     seconds : float
         Wall time of reading, holding and measuring the joins.
+    grids : list of GridFairing
+        The patch grids faired as one surface each.
+    networks : list of NetworkFairing
+        The networks of faces faired together by energy.
     """
 
     found: FaceJoins
     measures: list
     held: list = field(default_factory=list)
     seconds: float = 0.0
+    grids: list = field(default_factory=list)
+    networks: list = field(default_factory=list)
 
     def rows(self):
         """One dict per join: ``faces`` (1-based positions), ``kind``, ``held``,
@@ -361,8 +435,14 @@ class JoinReport:
 
     def summary(self):
         """Counts and extremes (:func:`~cq_fairing.core.join_summary.summarize`), with
+        ``grids`` (the shape of each patch grid faired as one surface), ``grid_faces``
+        (their faces), ``network_faces`` (faces faired together by energy) and
         ``non_manifold``."""
-        return summarize(self.rows(), non_manifold=self.found.non_manifold)
+        return summarize(
+            self.rows(), grids=[list(g.shape) for g in self.grids],
+            grid_faces=sum(len(g.faces) for g in self.grids),
+            network_faces=sum(len(n.moved) for n in self.networks),
+            non_manifold=self.found.non_manifold)
 
     def line(self):
         """The summary as one line, worded as the command line's

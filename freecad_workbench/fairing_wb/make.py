@@ -20,12 +20,20 @@ import numpy as np
 import Part
 
 import cq_fairing as cf
-from cq_fairing.core.joint_projection import held_joins, joint_targets, unholdable
+from cq_fairing.core.joint_projection import unholdable
 from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
-from .joins import JOINS, JoinReport, check_join_options, find_joins, hold_joins, measure_joins
+from .joins import (
+    JOINS,
+    HeldJoins,
+    JoinReport,
+    check_join_options,
+    find_joins,
+    hold_joins,
+    measure_joins,
+)
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "neighbour_faces", "fair_shapes", "error_sentence",
@@ -39,6 +47,9 @@ BOUNDARIES = ("free", "corners", "edges")
 SEARCHES = ("linear", "guaranteed", "polyfit")
 MEASURES = ("parametric", "geometric")
 DEVIATION_SAMPLES = 30
+# why a face at its coarsest that no network moved is kept (Status)
+COARSEST = ("its net is already at its coarsest (nothing to remove) and no network of "
+            "faces at their coarsest moved it")
 
 
 @dataclass(frozen=True)
@@ -506,11 +517,14 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     and ``face_settings`` as in :func:`fair_elements`.
 
     Several faces of one shape are faired alone first; in tolerance mode and with
-    ``joins`` other than ``"free"`` they are then projected again together along the
-    edges they share (:mod:`fairing_wb.joins`): closed to round-off, and smooth across
-    the joins that were smooth in the source.  Their joins are measured either way.  The
-    ``neighbours``, faces of the same shape not faired, take part as fixed faces: a
-    faired face's join with one stays as the source has it.
+    ``joins`` other than ``"free"`` they are then faired again together along the edges
+    they share (:func:`fairing_wb.joins.hold_joins`, as ``cq-fairing fair`` does): the
+    patch grids that form whole parts of the shape as one surface each, the other faces
+    projected together, and the faces already at their coarsest together by energy;
+    closed to round-off, and smooth across the joins that were smooth in the source.
+    Their joins are measured either way.  The ``neighbours``, faces of the same shape
+    not faired, take part as fixed faces: a faired face's join with one stays as the
+    source has it.
 
     Parameters
     ----------
@@ -554,14 +568,14 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             results.append(fair_edge(element, **{**settings, "target": own}))
     if progress is not None:
         progress(len(named), len(named))
-    return _joined(named, results, settings["tolerance"], joins, angle_tolerance,
-                   list(neighbours))
+    return _joined(named, results, settings, joins, angle_tolerance, list(neighbours))
 
 
-def _joined(named, results, tolerance, joins, angle_tolerance, neighbours):
+def _joined(named, results, settings, joins, angle_tolerance, neighbours):
     """``results`` with the joins of the faces of ``named``, among themselves and with
     their ``neighbours`` (fixed), held (:func:`_hold`) and measured, as
     :class:`FairedShapes`."""
+    tolerance = settings["tolerance"]
     faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
     if len(faces) < 2:
         return FairedShapes(results)
@@ -570,49 +584,64 @@ def _joined(named, results, tolerance, joins, angle_tolerance, neighbours):
     found = find_joins([named[k][1] for k in faces], angle_tolerance,
                        neighbours=[face for _, face in neighbours])
     alone = [results[k] for k in faces]
-    faired, held = alone, []
+    faired, outcome = alone, HeldJoins({}, {}, [], [], [])
     if joins != "free" and tolerance is not None and found.joins:
-        faired, held = _hold(found, elements, alone, tolerance, joins)
+        faired, outcome = _hold(found, elements, alone, tolerance, joins, settings["method"])
     out = list(results)
     for k, result in zip(faces, faired):
         out[k] = result
     surfaces = {**found.sources,
                 **{i: r.surface for i, r in enumerate(faired) if r.surface is not None}}
-    report = JoinReport(found, measure_joins(found, surfaces), held,
-                        time.perf_counter() - start)
+    report = JoinReport(found, measure_joins(found, surfaces), outcome.held,
+                        time.perf_counter() - start, outcome.grids, outcome.networks)
     return FairedShapes(out, report)
 
 
-def _hold(found, elements, alone, tolerance, joins):
-    """The faces faired ``alone`` projected again together (:func:`joins.hold_joins`):
-    ``(results, held joins)``; a face the joint projection keeps says why, and so does a
-    face with a join no fairing can hold
-    (:func:`~cq_fairing.core.joint_projection.unholdable`).  ``elements`` are the faces
-    faired then their neighbours (fixed: no tolerance, no target)."""
+def _hold(found, elements, alone, tolerance, joins, method):
+    """The faces faired ``alone`` faired again together (:func:`joins.hold_joins`):
+    ``(results, HeldJoins)``.  A face solved there is measured by :func:`face_deviation`
+    and must stay within ``tolerance``; a face kept as it was says why: its joins hold
+    it over the tolerance, its pinned sides leave it nothing to fair, it has a join no
+    fairing can hold (:func:`~cq_fairing.core.joint_projection.unholdable`), or it was
+    already at its coarsest (:func:`_nothing_faired`) and no network moved it.
+    ``elements`` are the faces faired then their neighbours (fixed: no tolerance, no
+    target)."""
     faired = list(alone)
     moved = {i for i, r in enumerate(alone) if r.surface is not None}
-    for i, neighbours in unholdable(found.joins, found.readable, moved, moved).items():
+    stuck = unholdable(found.joins, found.readable, moved, moved)
+    for i, neighbours in stuck.items():
         faired[i] = _kept_by_joins(elements[i], [elements[n][0] for n in neighbours],
                                    tolerance)
-    targets = joint_targets(found.readable, {i: r.surface for i, r in enumerate(faired)
-                                             if r.surface is not None})
+    coarsest = {i for i in moved - set(stuck)
+                if _nothing_faired(found.sources[i], alone[i].surface, method)}
     measured = {}
 
     def check(face, surface):
         measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
         return measured[face]
 
-    projection = hold_joins(found, targets, dict.fromkeys(range(len(alone)), tolerance),
-                            check, joins)
-    for i, surface in projection.surfaces.items():
+    outcome = hold_joins(found, {i: r.surface for i, r in enumerate(faired)
+                                 if r.surface is not None and i not in coarsest},
+                         coarsest | set(stuck), dict.fromkeys(range(len(alone)), tolerance),
+                         check, joins)
+    for i, surface in outcome.surfaces.items():
         shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
         faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),
-                            max_deviation=measured[i], surface=surface)
-    for i, deviation in projection.kept.items():
+                            max_deviation=measured[i], note="", surface=surface)
+    for i, deviation in outcome.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
-    unchanged = ({i for i, r in enumerate(faired) if r.surface is None}
-                 | set(range(len(alone), len(elements))))
-    return faired, held_joins(projection, unchanged)
+    for i in coarsest - set(outcome.surfaces):
+        faired[i] = _kept_as_is(elements[i], COARSEST)
+    return faired, outcome
+
+
+def _nothing_faired(source, surface, method):
+    """True when a face's own fairing gave back its source's net: ``surface`` on the
+    source's spaces, by the wavelet or adaptive method (their targets are then the
+    source's own spaces, the L2 projection onto them the identity; the energy method
+    keeps the spaces and moves the poles)."""
+    return (method != "energy" and surface.u_space.same_as(source.u_space)
+            and surface.v_space.same_as(source.v_space))
 
 
 def _kept_by_joins(element, why, tolerance):
@@ -620,8 +649,6 @@ def _kept_by_joins(element, why, tolerance):
     deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
     all positive), ``None`` where its pinned joins leave it no net smaller than its
     source's, or the names of the neighbours whose joins run across its surface."""
-    sub, face = element
-    poles = tuple(conversion.surface_from_face(face).shape)
     if why is None:
         text = "its joins, held where the source has them, leave no net smaller than the " \
                "source's"
@@ -633,17 +660,23 @@ def _kept_by_joins(element, why, tolerance):
                 f"{tolerance:.4g} mm; its neighbours close onto it")
     else:
         text = "with its joins held closed its weights are not all positive"
-    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, f"{sub} kept unchanged: {text}")
+    return _kept_as_is(element, text)
+
+
+def _kept_as_is(element, why):
+    """:class:`FairedShape` of the face ``element`` (``(sub, Part.Face)``) left as it is:
+    same poles, deviation 0, and ``why`` in its note."""
+    sub, face = element
+    poles = tuple(conversion.surface_from_face(face).shape)
+    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, f"{sub} kept unchanged: {why}")
 
 
 def _kept(face, sub, error):
     """:class:`FairedShape` of a face left as it is because ``error`` (a
-    :class:`cq_fairing.ToleranceNotMetError`) found no coarser net within the tolerance:
-    same poles, deviation 0, and a note for the ``Status``."""
-    poles = tuple(conversion.surface_from_face(face).shape)
-    note = (f"{sub} kept unchanged: no coarser net within {error.tolerance:.4g} mm "
-            f"(best found {error.best_deviation:.4g} mm)")
-    return FairedShape(face.copy(), poles, poles, 0.0, 0.0, note)
+    :class:`cq_fairing.ToleranceNotMetError`) found no coarser net within the tolerance
+    (:func:`_kept_as_is`)."""
+    return _kept_as_is((sub, face), f"no coarser net within {error.tolerance:.4g} mm "
+                                    f"(best found {error.best_deviation:.4g} mm)")
 
 
 def error_sentence(error):

@@ -78,3 +78,42 @@ def sample_distance(faired_face, source_face, count=12):
     return max(source_face.distToShape(Part.Vertex(surface.value(u, v)))[0]
                for u in np.linspace(u0, u1, count) for v in np.linspace(v0, v1, count)
                if faired_face.isPartOfDomain(u, v))
+
+
+def shared_edges(shape):
+    """``[(edge, face i, face j)]``: the non-degenerated edges of exactly two faces, by
+    OCCT's ancestor map."""
+    out = []
+    for edge in shape.Edges:
+        owners = [i for i, f in enumerate(shape.Faces)
+                  if any(f.isSame(a) for a in shape.ancestorsOfType(edge, Part.Face))]
+        if not edge.Degenerated and len(owners) == 2:
+            out.append((edge, *owners))
+    return out
+
+
+def normal_at(face, point):
+    u, v = face.Surface.parameter(point)
+    return face.normalAt(u, v)
+
+
+def joins_along(source, faired, count=9):
+    """Per shared edge of ``source``: the largest gap (OCCT projection of face i's faired
+    points onto face j's faired surface) and the source and faired normal angles
+    (degrees, ``Part.Face.normalAt``) at ``count`` interior points."""
+    rows = []
+    for edge, i, j in shared_edges(source):
+        first, last = edge.ParameterRange
+        gaps, before, after = [], [], []
+        for t in first + (np.arange(count) + 0.5) / count * (last - first):
+            point = edge.valueAt(t)
+            u, v = source.Faces[i].Surface.parameter(point)
+            on_i = faired[i].Surface.value(u, v)
+            a, b = faired[j].Surface.parameter(on_i)
+            gaps.append((faired[j].Surface.value(a, b) - on_i).Length)
+            before.append(np.degrees(normal_at(source.Faces[i], point).getAngle(
+                normal_at(source.Faces[j], point))))
+            after.append(np.degrees(faired[i].normalAt(u, v).getAngle(
+                faired[j].normalAt(a, b))))
+        rows.append((max(gaps), np.array(before), np.array(after)))
+    return rows

@@ -273,8 +273,8 @@ def test_rational_fallback_when_weights_go_non_positive():
     check = sample_face_deviation(face, report.face, density=15)
     assert check["max"] == pytest.approx(report.max_deviation, rel=0.5)
     from cq_fairing.core.plans import target_space
+    from cq_fairing.core.scale_search import project
     from cq_fairing.errors import NumericalError
-    from cq_fairing.occ.search import project
 
     with pytest.raises(NumericalError, match="non-positive weights"):
         project(surface, target_space(surface.u_space, 5), target_space(surface.v_space, 5))

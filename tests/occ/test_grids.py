@@ -1,6 +1,8 @@
 """Patch grids faired as one surface (occ.grids), on a sewn shell of the noisy 2 x 2
 grid of ``core.examples.patch_grid``: measured with OCCT's own evaluation and
-projection, against the same shell faired face by face."""
+projection, against the same shell faired face by face, and against the core's merge of
+the example called directly (``tests/core/patch_references``, which the FreeCAD
+workbench's result is compared with too)."""
 
 import numpy as np
 import pytest
@@ -13,7 +15,9 @@ from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 
 from cq_fairing.core.examples import patch_grid
+from cq_fairing.occ.convert import face_to_surface
 from cq_fairing.occ.shapes import fair_shape
+from tests.core.patch_references import grid_pieces, matching
 
 from .helpers import faces_of, global_distance, occ_points, uv_box_grid
 
@@ -63,6 +67,17 @@ def test_the_grid_is_found_and_faired_as_one_surface(runs):
     assert all(report.faired for report in result.faces) and result.valid
     assert "2 x 2 patch grid" in result.faces[0].message
     assert "1 patch grids (4 faces)" in result.joins.line()
+
+
+def test_the_pieces_are_the_core_merge_of_the_example_faired_and_cut(shell, runs):
+    order = matching([face_to_surface(f)[0].poles for f in faces_of(shell)],
+                     patch_grid().patches)
+    reference = grid_pieces(TOL)
+    for report, k in zip(runs["smooth"].faces, order):
+        assert report.surface.shape == reference[k].shape
+        assert np.array_equal(report.surface.u_knots, reference[k].u_knots)
+        assert np.array_equal(report.surface.v_knots, reference[k].v_knots)
+        assert np.abs(report.surface.poles - reference[k].poles).max() <= 1e-9 * 2.0
 
 
 def test_every_face_stays_within_tolerance_both_ways(shell, runs):

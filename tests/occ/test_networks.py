@@ -1,13 +1,24 @@
 """Faces at their coarsest faired together by energy (occ.networks): the 99 bicubic
 4 x 4 patches of shell_patches.brep, measured by OCCT, against the same shell faired
-face by face (which leaves every patch as it is)."""
+face by face (which leaves every patch as it is); and the L of three one-span patches of
+``core.examples.patch_network``, against the core's network fairing of the example
+called directly (``tests/core/patch_references``, which the FreeCAD workbench's result
+is compared with too)."""
 
+import numpy as np
 import pytest
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
 
+from cq_fairing.core.examples import patch_network
+from cq_fairing.occ.convert import face_to_surface
 from cq_fairing.occ.io import read_shape
 from cq_fairing.occ.shapes import fair_shape
 from tests.conftest import data_path
+from tests.core.patch_references import matching, network_surfaces
+
+from .helpers import faces_of
+from .test_grids import _occ_face
 
 TOL = 0.083   # the model's default tolerance (1e-3 of its diagonal)
 SIZE = 83.1   # its bounding-box diagonal
@@ -43,3 +54,22 @@ def test_joins_stay_closed_and_turn_no_more_than_the_source_plus_a_twentieth(run
     assert max(r["gap"] - r["source_gap"] for r in rows) <= 1e-7 * SIZE
     assert max(r["angle_excess"] for r in rows if r["kind"] == "smooth") <= 0.05
     assert sum(r["held"] for r in rows) >= 20
+
+
+def test_an_l_of_patches_at_their_coarsest_is_the_core_network_of_the_example():
+    """The sewn L of patch_network at tol 0.01 (its joins turn by up to 3.2 deg, smooth
+    below 5): the three faces move together, each exactly as the core's fair_network of
+    the example gives it."""
+    example = patch_network()
+    sewing = BRepBuilderAPI_Sewing(1e-5)
+    for patch in example.patches:
+        sewing.Add(_occ_face(patch))
+    sewing.Perform()
+    shape = sewing.SewedShape()
+    result = fair_shape(shape, tol=0.01, joins="smooth", angle_tol=5.0)
+    assert result.joins.summary()["network_faces"] == 3
+    order = matching([face_to_surface(f)[0].poles for f in faces_of(shape)], example.patches)
+    reference = network_surfaces(0.01)
+    for report, k in zip(result.faces, order):
+        assert report.faired and report.surface.shape == reference[k].shape == (5, 5)
+        assert np.abs(report.surface.poles - reference[k].poles).max() <= 1e-9 * 2.0

@@ -53,6 +53,19 @@ def test_periodic_ring_is_converted_not_refused():
     assert core.u_knots[0] == core.u_knots[core.u_degree]  # clamped
 
 
+def test_unclamped_uniform_knots_are_clamped_not_refused():
+    """shell_patches.brep's patches carry uniform, unclamped knots (-3 .. 4, each once)
+    on a non-periodic surface: converted to the same surface on its domain [0, 1]^2,
+    clamped (one Bezier patch, 4 x 4 poles)."""
+    face = Part.read(str(fixtures.REAL / "shell_patches.brep")).Faces[0]
+    surface = face.Surface
+    assert not (surface.isUPeriodic() or surface.isVPeriodic())
+    assert surface.getUMultiplicities()[0] == 1 and surface.getUKnots()[0] == -3.0
+    core = conversion.surface_from_face(face)
+    assert core.domain == ((0.0, 1.0), (0.0, 1.0)) and core.shape == (4, 4)
+    _check_same_surface(surface, core)
+
+
 def test_rational_face_keeps_weights():
     shape = Part.read(str(fixtures.REAL / "linkrods.step"))
     face = next(f for f in shape.Faces if isinstance(f.Surface, Part.BSplineSurface)

@@ -44,45 +44,6 @@ def _subs(obj):
     return [f"Face{i + 1}" for i in range(len(obj.Shape.Faces))]
 
 
-def _shared_edges(shape):
-    """``[(edge, face i, face j)]``: the non-degenerated edges of exactly two faces, by
-    OCCT's ancestor map."""
-    out = []
-    for edge in shape.Edges:
-        owners = [i for i, f in enumerate(shape.Faces)
-                  if any(f.isSame(a) for a in shape.ancestorsOfType(edge, Part.Face))]
-        if not edge.Degenerated and len(owners) == 2:
-            out.append((edge, *owners))
-    return out
-
-
-def _normal(face, point):
-    u, v = face.Surface.parameter(point)
-    return face.normalAt(u, v)
-
-
-def _along(source, faired, count=9):
-    """Per shared edge of ``source``: the largest gap (OCCT projection of face i's faired
-    points onto face j's faired surface) and the source and faired normal angles
-    (degrees, ``Part.Face.normalAt``) at ``count`` interior points."""
-    rows = []
-    for edge, i, j in _shared_edges(source):
-        first, last = edge.ParameterRange
-        gaps, before, after = [], [], []
-        for t in first + (np.arange(count) + 0.5) / count * (last - first):
-            point = edge.valueAt(t)
-            u, v = source.Faces[i].Surface.parameter(point)
-            on_i = faired[i].Surface.value(u, v)
-            a, b = faired[j].Surface.parameter(on_i)
-            gaps.append((faired[j].Surface.value(a, b) - on_i).Length)
-            before.append(np.degrees(_normal(source.Faces[i], point).getAngle(
-                _normal(source.Faces[j], point))))
-            after.append(np.degrees(faired[i].normalAt(u, v).getAngle(
-                faired[j].normalAt(a, b))))
-        rows.append((max(gaps), np.array(before), np.array(after)))
-    return rows
-
-
 def _faired(fuselage, how):
     return make.fair_elements(fuselage, _subs(fuselage), SETTINGS, FACE_SETTINGS, joins=how)
 
@@ -92,14 +53,13 @@ def test_joins_through_part_match_occt_ancestors_and_normals(fuselage):
     turn by more than 1 deg at the edges' midpoints: 2."""
     shape = fuselage.Shape
     found = joins.find_joins(list(shape.Faces))
-    shared = _shared_edges(shape)
+    shared = fixtures.shared_edges(shape)
     assert len(found.joins) == len(shared) == 14
     assert sorted(tuple(sorted(j.faces)) for j in found.joins) == sorted(
         (i, j) for _, i, j in shared)
-    creases = sum(np.degrees(_normal(shape.Faces[i], e.valueAt(sum(e.ParameterRange) / 2))
-                             .getAngle(_normal(shape.Faces[j],
-                                               e.valueAt(sum(e.ParameterRange) / 2)))) > 1.0
-                  for e, i, j in shared)
+    middles = [(e.valueAt(sum(e.ParameterRange) / 2), i, j) for e, i, j in shared]
+    creases = sum(np.degrees(fixtures.normal_at(shape.Faces[i], point).getAngle(
+        fixtures.normal_at(shape.Faces[j], point))) > 1.0 for point, i, j in middles)
     assert creases == sum(j.kind == "crease" for j in found.joins) == 2
     assert all(side.side is not None and side.full for j in found.joins for side in j.sides)
 
@@ -116,7 +76,7 @@ def test_smooth_joins_stay_closed_and_turn_no_more_than_the_source(fuselage):
     rows = results.joins.rows()
     assert all(r["gap"] <= 1e-9 * size for r in rows if r["held"])
     assert sum(r["held"] for r in rows) >= 10
-    for gap, before, after in _along(source, faired):
+    for gap, before, after in fixtures.joins_along(source, faired):
         assert gap <= 1e-9 * size
         if before.max() < 1.0:
             assert np.all(after <= before + 0.05), (before, after)
@@ -132,7 +92,8 @@ def test_free_joins_open(fuselage):
     results = _faired(fuselage, "free")
     assert results.joins.summary()["held"] == 0
     assert results.joins.summary()["max_gap"] > 1e-3
-    assert max(gap for gap, _, _ in _along(fuselage.Shape, [r.shape for r in results])) > 1e-3
+    opened = fixtures.joins_along(fuselage.Shape, [r.shape for r in results])
+    assert max(gap for gap, _, _ in opened) > 1e-3
 
 
 def test_feature_holds_joins_by_default_and_reports_them(doc, fuselage):
@@ -160,7 +121,7 @@ def _to_neighbours(source, selected, faired, count=9):
     source, and from its faired face ``faired[k]`` (same order as ``selected``), to the
     other face's source surface, by OCCT's projection at ``count`` interior points."""
     rows = []
-    for edge, i, j in _shared_edges(source):
+    for edge, i, j in fixtures.shared_edges(source):
         if (i in selected) == (j in selected):
             continue
         mine, other = (i, j) if i in selected else (j, i)

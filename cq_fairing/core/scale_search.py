@@ -9,8 +9,9 @@ For a candidate ``(n_u, n_v)`` the faired surface is the L2-best approximation i
 computed here with the core's exact Gram matrices and no wavelet details (they are
 only needed for the final result).  Its deviation is the largest *parametric* distance
 :math:`\max_i |S_n(u_i, v_i) - S(u_i, v_i)|` over samples inside the face, an upper bound
-of the true distance, so a candidate accepted here is within ``tol``; OCCT's projection
-checks the final face again (:mod:`cq_fairing.occ.faces`).
+of the true distance, so a candidate accepted here is within ``tol``
+(:meth:`SurfaceSampler.parametric`); the caller checks the final face again with its
+own two-sided measure.
 
 The search is a bisection on a common fraction of the largest scales, then on each
 direction alone.  Deviation is not strictly monotone in ``n``, so the result is the
@@ -18,22 +19,23 @@ fewest poles *found*, always verified, not a proven minimum.  Along a closed dir
 (end rows that coincide) fewer spans than :func:`~cq_fairing.core.geometry.fewest_spans`
 count as failing: the coarsest net still closes as a valid face.
 
-This is the local stand-in for ``cq_fairing.fair_surface(tol=...)`` until the core's
-accuracy control lands with a surface search.
+The OCP layer's face search (:mod:`cq_fairing.occ.faces`) and the merged patch grids
+(:mod:`cq_fairing.core.grid_fairing`) run it, measuring candidates on a
+:class:`SurfaceSampler`.  This module imports numpy and scipy only (and the core).
 """
 
 import math
 
 import numpy as np
 
-from ..core.banded import BandedSPD
-from ..core.geometry import BSplineSurface, fewest_spans
-from ..core.gram import gram_matrix
-from ..core.plans import target_space
-from ..core.results import cartesian_poles, homogeneous_coefficients
-from ..errors import ToleranceNotMetError
+from ..errors import InvalidInputError, ToleranceNotMetError
+from .banded import BandedSPD
+from .geometry import BSplineSurface, fewest_spans
+from .gram import gram_matrix
+from .plans import target_space
+from .results import cartesian_poles, homogeneous_coefficients
 
-__all__ = ["project", "search_scales", "max_scales"]
+__all__ = ["project", "search_scales", "max_scales", "target_degrees", "SurfaceSampler"]
 
 
 _OPERATORS = {}
@@ -207,3 +209,78 @@ def _shrink(start, tol, run):
                 lo_n = mid
         best = tuple(hi_n if a == axis else best[a] for a in (0, 1))
     return best
+
+
+def target_degrees(surface, target_degree):
+    """The target's degrees ``(p, q)``: ``target_degree`` (an int or a pair), by default
+    ``min(3, source degree)`` per direction."""
+    if target_degree is None:
+        return min(3, surface.u_degree), min(3, surface.v_degree)
+    pair = (target_degree, target_degree) if np.ndim(target_degree) == 0 else tuple(target_degree)
+    if len(pair) != 2 or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
+                             for d in pair):
+        raise InvalidInputError(
+            f"target_degree must be an integer >= 1 or a pair of them, got {target_degree!r}."
+        )
+    return int(pair[0]), int(pair[1])
+
+
+class SurfaceSampler:
+    """Original points on a UV grid of the face (inside the trim), for the search.
+
+    ``grid`` is ``(u, v, inside)``: the grid's parameters and the ``(u.size, v.size)``
+    mask of the samples that lie on the face.  Collocation matrices are cached per
+    spline space, so a candidate costs two small dense products.
+    """
+
+    def __init__(self, grid, surface):
+        self.grid = grid
+        self.u, self.v, self.inside = grid
+        self._cache = {}
+        self.reference = self.evaluate(surface)
+
+    def _matrix(self, space, x, nu=0):
+        key = (space.key, x.size, nu)
+        if key not in self._cache:
+            self._cache[key] = space.collocation(x, nu).toarray()
+        return self._cache[key]
+
+    def evaluate(self, surface):
+        net = surface.homogeneous() if surface.is_rational else surface.poles
+        mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
+        grid = np.matmul(mv, np.tensordot(mu, net, axes=(1, 0)))[self.inside]
+        return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
+
+    def parametric(self, faired):
+        """Largest ``|S_f(u, v) - S(u, v)|``: an upper bound of the true distance."""
+        points = self.evaluate(faired)
+        return float(np.linalg.norm(points - self.reference, axis=1).max())
+
+    def normal(self, faired):
+        """Largest distance to the faired surface's tangent planes at the same parameters.
+
+        A first-order estimate of the true distance, far below the parametric one where
+        fairing shifts the surface along itself (bumpy nets); OCCT checks the result.
+        """
+        net = faired.homogeneous() if faired.is_rational else faired.poles
+        mu, mv = self._matrix(faired.u_space, self.u), self._matrix(faired.v_space, self.v)
+        du = self._matrix(faired.u_space, self.u, 1)
+        dv = self._matrix(faired.v_space, self.v, 1)
+        along_u = np.tensordot(mu, net, axes=(1, 0))
+        h = np.matmul(mv, along_u)[self.inside]
+        hu = np.matmul(mv, np.tensordot(du, net, axes=(1, 0)))[self.inside]
+        hv = np.matmul(dv, along_u)[self.inside]
+        if faired.is_rational:  # quotient rule: S = X / w, S_u = (X_u - w_u S) / w
+            w = h[:, -1:]
+            points = h[:, :-1] / w
+            su = (hu[:, :-1] - hu[:, -1:] * points) / w
+            sv = (hv[:, :-1] - hv[:, -1:] * points) / w
+        else:
+            points, su, sv = h, hu, hv
+        normal = np.cross(su, sv)
+        length = np.linalg.norm(normal, axis=1)
+        offset = self.reference - points
+        dist = np.linalg.norm(offset, axis=1)
+        ok = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+        dist[ok] = np.abs(np.einsum("ij,ij->i", offset[ok], normal[ok])) / length[ok]
+        return float(dist.max())

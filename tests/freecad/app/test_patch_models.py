@@ -1,0 +1,159 @@
+"""Models made of patches, faired as ``cq-fairing fair`` fairs them, inside FreeCAD (no
+mocks): a patch grid that forms a whole shell is merged and faired as one surface, and
+faces already at their coarsest are faired together by energy.
+
+The shells are sewn by Part from the core's example patches; each result is compared
+with the core's functions called directly on the example (``tests/core/patch_references``,
+the references ``cq_fairing.occ.fair_shape`` is compared with in ``tests/occ``), and its
+joins and deviations are measured with OCCT's projection and normals through Part,
+independently of the workbench's measure.
+"""
+
+import numpy as np
+import pytest
+
+import FreeCAD
+import Part
+from cq_fairing.core.examples import patch_grid, patch_network
+from fairing_wb import make
+
+import fixtures
+from tests.core.patch_references import grid_pieces, matching, network_surfaces
+
+TOL = 0.01
+GRID_ANGLE = 20.0     # the noisy grid's joins turn by up to 16 deg: smooth ones here
+NETWORK_ANGLE = 5.0   # the L's joins turn by up to 3.2 deg
+SETTINGS = {"tolerance": TOL, "target": None, "method": "wavelet", "search": "linear",
+            "measure": "parametric", "objective": "compact"}
+FACE_SETTINGS = {"boundary": "free", "borders": "auto"}
+
+
+@pytest.fixture
+def doc():
+    document = FreeCAD.newDocument("PatchModels")
+    name = document.Name
+    yield document
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+def _part_face(surface):
+    """A Part face on a core surface, built with Part's own constructor."""
+    knots = [np.unique(k, return_counts=True) for k in (surface.u_knots, surface.v_knots)]
+    part = Part.BSplineSurface()
+    part.buildFromPolesMultsKnots(
+        [[FreeCAD.Vector(*map(float, p)) for p in row] for row in surface.poles],
+        [int(m) for m in knots[0][1]], [int(m) for m in knots[1][1]],
+        [float(k) for k in knots[0][0]], [float(k) for k in knots[1][0]],
+        False, False, surface.u_degree, surface.v_degree)
+    return Part.Face(part)
+
+
+def _sewn(doc, patches, name):
+    """The patches sewn into one shell by Part, as a document object."""
+    shape = Part.makeCompound([_part_face(p) for p in patches])
+    shape.sewShape(1e-5)
+    assert len(shape.Shells) == 1 and len(shape.Shells[0].Faces) == len(patches)
+    obj = fixtures.add_shape(doc, shape.Shells[0], name)
+    doc.recompute()
+    return obj
+
+
+def _net(face):
+    """``(poles, u knots, v knots)`` of a Part face's surface, knots expanded."""
+    surface = face.Surface
+    poles = np.array([[tuple(p) for p in row] for row in surface.getPoles()])
+    return (poles, np.repeat(surface.getUKnots(), surface.getUMultiplicities()),
+            np.repeat(surface.getVKnots(), surface.getVMultiplicities()))
+
+
+def _order(obj, patches):
+    """The example patch of each face of ``obj`` (sewing may reorder them)."""
+    return matching([_net(face)[0] for face in obj.Shape.Faces], patches)
+
+
+def _fair(obj, joins, angle):
+    subs = [f"Face{i + 1}" for i in range(len(obj.Shape.Faces))]
+    return make.fair_elements(obj, subs, SETTINGS, FACE_SETTINGS, joins=joins,
+                              angle_tolerance=angle)
+
+
+def _assert_equal_to(results, order, reference):
+    """Every faired face (the Part face installed) is the reference piece of its patch:
+    the same knots, poles to 1e-9 of the model's size."""
+    for result, k in zip(results, order):
+        poles, u_knots, v_knots = _net(result.shape)
+        assert poles.shape == reference[k].poles.shape
+        assert np.abs(u_knots - reference[k].u_knots).max() <= 1e-12
+        assert np.abs(v_knots - reference[k].v_knots).max() <= 1e-12
+        assert np.abs(poles - reference[k].poles).max() <= 1e-9 * 2.0
+
+
+def _assert_within_tolerance(obj, results):
+    for result, face in zip(results, obj.Shape.Faces):
+        assert result.note == "" and result.max_deviation <= TOL
+        assert fixtures.sample_distance(result.shape, face) <= TOL
+        assert fixtures.sample_distance(face, result.shape) <= TOL
+
+
+def test_a_patch_grid_is_faired_as_one_surface_cut_in_four(doc):
+    """The sewn 2 x 2 grid: one surface faired across the joins and cut back, so the four
+    pieces meet to round-off with the same normals (the source's joins turn by up to
+    16 deg); the pieces are the core's merge of the example faired and cut."""
+    obj = _sewn(doc, patch_grid().patches, "Grid")
+    results = _fair(obj, "smooth", GRID_ANGLE)
+    summary = results.joins.summary()
+    assert summary["grids"] == [[2, 2]] and summary["grid_faces"] == 4
+    assert summary["joins"] == summary["held"] == 4
+    _assert_within_tolerance(obj, results)
+    _assert_equal_to(results, _order(obj, patch_grid().patches), grid_pieces(TOL))
+    rows = fixtures.joins_along(obj.Shape, [r.shape for r in results])
+    assert len(rows) == 4
+    for gap, before, after in rows:
+        assert gap <= 1e-9 * 2.0
+        assert before.max() > 1.0 and after.max() <= 1e-4, (before.max(), after.max())
+
+
+def test_faces_at_their_coarsest_are_faired_together_by_energy(doc):
+    """The sewn L of three one-span bicubic patches: alone each face has nothing to
+    remove; together they are faired by energy across their joins, closed and G1 (the
+    source's joins turn by up to 3.2 deg), exactly as the core's network fairing of the
+    example."""
+    example = patch_network()
+    obj = _sewn(doc, example.patches, "L")
+    alone = _fair(obj, "free", NETWORK_ANGLE)
+    assert all(r.poles_after == (4, 4) and r.max_deviation <= 1e-9 * 2.0 for r in alone)
+    results = _fair(obj, "smooth", NETWORK_ANGLE)
+    summary = results.joins.summary()
+    assert summary["network_faces"] == 3 and summary["joins"] == summary["held"] == 2
+    assert all(r.poles_after == (5, 5) for r in results)
+    _assert_within_tolerance(obj, results)
+    _assert_equal_to(results, _order(obj, example.patches), network_surfaces(TOL))
+    for gap, before, after in fixtures.joins_along(obj.Shape, [r.shape for r in results]):
+        assert gap <= 1e-9 * 2.0
+        assert before.max() > 0.5 and after.max() <= 1e-4, (before.max(), after.max())
+
+
+def test_the_feature_reports_grids_networks_and_why_faces_stay(doc):
+    """The feature's Status names the patch grid faired as one surface, the faces faired
+    together by energy, and why faces at their coarsest stay as they are when no network
+    of them fits the tolerance (the L at 0.001 mm: the joins alone hold each face
+    further than that)."""
+    grid = make.make_fairing(_sewn(doc, patch_grid().patches, "Grid"), tolerance=TOL,
+                             angle_tolerance=GRID_ANGLE)
+    network = make.make_fairing(_sewn(doc, patch_network().patches, "L"), tolerance=TOL,
+                                angle_tolerance=NETWORK_ANGLE, name="Network")
+    tight = make.make_fairing(doc.getObject("L"), tolerance=0.001,
+                              angle_tolerance=NETWORK_ANGLE, name="Tight")
+    doc.recompute()
+    for obj in (grid, network, tight):
+        assert obj.isValid() and obj.Shape.isValid(), obj.Status
+        assert len(obj.Shape.Shells) == 1
+    assert grid.Status.startswith("OK; joins: 4 (4 held closed)")
+    assert grid.Status.endswith("; 1 patch grids (4 faces) faired as one surface each")
+    assert network.Status.endswith("; 3 faces at their coarsest faired together")
+    assert network.PolesAfter == "5 x 5; 5 x 5; 5 x 5"
+    assert tight.Status.startswith("OK; Face1 kept unchanged: its net is already at its "
+                                   "coarsest"), tight.Status
+    assert tight.Status.count("kept unchanged") == 3
+    assert tight.PolesAfter == "4 x 4; 4 x 4; 4 x 4" and tight.MaxDeviation.Value == 0.0
