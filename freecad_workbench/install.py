@@ -31,8 +31,8 @@ def default_mod_dir():
 
 def check_core(python):
     """Import the core with FreeCAD's Python; returns the error text or ''."""
-    code = ("import sys; sys.path.insert(0, %r); import numpy, scipy, cq_fairing; "
-            "print(numpy.__version__, scipy.__version__)" % str(REPO))
+    code = (f"import sys; sys.path.insert(0, {str(REPO)!r}); import numpy, scipy, cq_fairing; "
+            "print(numpy.__version__, scipy.__version__)")
     out = subprocess.run([python, "-c", code], capture_output=True, text=True)
     return "" if out.returncode == 0 else out.stderr.strip().splitlines()[-1]
 

@@ -81,7 +81,10 @@ def fair_networks(sources, unchanged, joins, border, tolerances, check, *,
         with ``surface`` under its trim (the backend's measure); the surfaces checked have
         the source's collapsed border rows put back
         (:func:`~cq_fairing.core.geometry.collapsed_kept`).
-    continuity : {"G0", "G1"}
+    continuity : {"G0", "G1", "G2"}
+        The model's continuity (:data:`~cq_fairing.core.options.JOIN_CONTINUITY`); the
+        energy network holds G1 for ``"G2"`` too (its faces are at their coarsest: no
+        three rows across to spare for the curvature).
     reversed_ : callable, optional
         ``reversed_(join)``: the two faces' along-parameters run opposite ways.
 
@@ -102,7 +105,8 @@ def fair_networks(sources, unchanged, joins, border, tolerances, check, *,
         if moving:
             done = _fair_component(sources, sorted(component), moving,
                                    [j for j in links if set(j.faces) <= component],
-                                   tolerances, check, reversed_, continuity)
+                                   tolerances, check, reversed_,
+                                   "G0" if continuity == "G0" else "G1")
             if done is not None:
                 out.append(done)
     return out

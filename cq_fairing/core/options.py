@@ -46,7 +46,7 @@ The options
     ``"wavelet"`` with ``tol`` in the core.
 ``schedule`` : {"auto", "direct", "hybrid"}, default "auto"
     Spaces the core's projection visits (:mod:`cq_fairing.core.schedule`).  ``"wavelet"``.
-``joins`` : {"smooth", "curvature", "closed", "free"}, default "smooth"
+``joins`` : {"smooth", "closed", "free", "curvature"}, default "smooth"
     Models (occ shapes, the workbench): how faces that meet hold their joins.
     ``"smooth"``: closed, and one tangent plane across the joins that were smooth in the
     source (G1); ``"curvature"``: also the normal curvature across the smooth joins
@@ -100,7 +100,7 @@ MEASURES = ("geometric", "parametric")
 #: Spaces visited by the core's projection.
 SCHEDULES = ("auto", "direct", "hybrid")
 #: How a model's faces hold their joins (``"smooth"`` first: the default).
-JOINS = ("smooth", "curvature", "closed", "free")
+JOINS = ("smooth", "closed", "free", "curvature")
 #: The continuity the joint projection holds for each of :data:`JOINS` but ``"free"``.
 JOIN_CONTINUITY = {"smooth": "G1", "curvature": "G2", "closed": "G0"}
 
@@ -220,8 +220,8 @@ def check_joins(joins, angle_tol):
                                                                   np.floating))
             or not np.isfinite(angle_tol) or not 0 < angle_tol < 90):
         raise InvalidInputError(
-            f"angle_tol must be an angle in degrees between 0 and 90, got {angle_tol!r}; "
-            "e.g. 1.0 for 'smooth below one degree'.")
+            f"the angle tolerance (angle_tol) must be an angle in degrees between 0 and 90, "
+            f"got {angle_tol!r}; e.g. 1.0 for 'smooth below one degree'.")
 
 
 def checked_objective(value):

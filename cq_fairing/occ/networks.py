@@ -27,7 +27,7 @@ def fair_networks(job, adjacency, readable, joins, reversed_, continuity):
         Whole-side joins between faces of ``readable``.
     reversed_ : callable
         ``reversed_(join)``: the two faces' along-parameters run opposite ways.
-    continuity : {"G0", "G1"}
+    continuity : {"G0", "G1", "G2"}
 
     Returns
     -------

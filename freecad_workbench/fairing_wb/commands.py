@@ -7,6 +7,7 @@ recording replays it.
 
 import FreeCAD
 import FreeCADGui
+
 import cq_fairing as cf
 
 from . import deviation_map, feature, icon_path, make, preferences, task_panel, undo

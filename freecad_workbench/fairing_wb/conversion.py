@@ -9,10 +9,10 @@ than refused.  Rational geometry keeps its weights
 :class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
 """
 
-import numpy as np
-
 import FreeCAD
+import numpy as np
 import Part
+
 import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",

@@ -7,10 +7,10 @@ that FreeCAD's mesh view provider uses when ``Coloring`` is on).  Maps never tou
 faired model: they only read it.
 """
 
-import numpy as np
-
 import FreeCAD
 import Mesh
+import numpy as np
+
 import cq_fairing as cf
 
 from . import analysis, conversion, feature, preferences

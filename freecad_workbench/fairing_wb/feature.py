@@ -8,6 +8,7 @@ proxy's module path ``fairing_wb.feature`` is frozen: saved documents refer to i
 """
 
 import Part
+
 import cq_fairing as cf
 
 from . import conversion, make

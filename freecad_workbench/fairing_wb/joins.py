@@ -58,13 +58,13 @@ from cq_fairing.core.joint_projection import (
     project_jointly,
 )
 from cq_fairing.core.network_fairing import fair_networks
+from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
 
 from . import analysis, conversion
 
 __all__ = ["JOINS", "SAMPLES", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
-           "measure_joins", "hold_joins", "check_join_options"]
+           "measure_joins", "hold_joins", "check_joins"]
 
-JOINS = ("smooth", "closed", "free")  # the first is the default
 SAMPLES = 24              # points measured along each join
 
 
@@ -105,26 +105,6 @@ class FaceJoins:
     signs: dict
     non_manifold: int = 0
     analytic: dict = field(default_factory=dict)
-
-
-def check_join_options(joins, angle_tolerance):
-    """Validate the join options at the public boundary.
-
-    Raises
-    ------
-    cq_fairing.InvalidInputError
-        ``joins`` is not one of :data:`JOINS`, or ``angle_tolerance`` is not an angle
-        strictly between 0 and 90 degrees.
-    """
-    if joins not in JOINS:
-        raise cf.InvalidInputError(
-            f"joins must be one of {JOINS}, got {joins!r}; 'smooth' keeps the joins between "
-            "the faces closed and smooth, 'closed' closed, 'free' fairs each face alone.")
-    if (isinstance(angle_tolerance, bool) or not isinstance(angle_tolerance, (int, float))
-            or not 0 < angle_tolerance < 90):
-        raise cf.InvalidInputError(
-            f"the angle tolerance must be an angle in degrees between 0 and 90, got "
-            f"{angle_tolerance!r}; e.g. 1 for 'smooth below one degree'.")
 
 
 def _shared_edges(faces):
@@ -363,14 +343,16 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
     check : callable
         ``check(face, surface) -> float``: the face's two-sided deviation with
         ``surface``.
-    joins : {"smooth", "closed"}
-        ``"smooth"``: G1 across the smooth joins; ``"closed"``: G0 only.
+    joins : {"smooth", "closed", "curvature"}
+        ``"smooth"``: G1 across the smooth joins; ``"closed"``: G0 only;
+        ``"curvature"``: also G2 where the source is curvature-continuous
+        (:data:`~cq_fairing.core.options.JOIN_CONTINUITY`).
 
     Returns
     -------
     HeldJoins
     """
-    continuity = "G1" if joins == "smooth" else "G0"
+    continuity = JOIN_CONTINUITY[joins]
     border = border_joins(found.joins, found.readable, tolerances)
     polynomial = {face: s for face, s in found.readable.items() if not s.is_rational}
     grids = fair_grids(polynomial, found.joins, _between(border, polynomial), tolerances,

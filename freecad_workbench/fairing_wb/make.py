@@ -25,15 +25,7 @@ from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's d
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
-from .joins import (
-    JOINS,
-    HeldJoins,
-    JoinReport,
-    check_join_options,
-    find_joins,
-    hold_joins,
-    measure_joins,
-)
+from .joins import JOINS, HeldJoins, JoinReport, check_joins, find_joins, hold_joins, measure_joins
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "neighbour_faces", "fair_shapes", "error_sentence",
@@ -547,7 +539,7 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     FairedShapes
         One per element, in the order of ``named``, with the joins' report.
     """
-    check_join_options(joins, angle_tolerance)
+    check_joins(joins, angle_tolerance)
     target = settings["target"]
     results = []
     for done, (sub, element) in enumerate(named):
@@ -750,7 +742,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
     _check_adaptive_only(method, objective, borders)
-    check_join_options(joins, angle_tolerance)
+    check_joins(joins, angle_tolerance)
     obj_source, subs = _source_link(source)
     doc = doc or obj_source.Document
     obj = doc.addObject("Part::FeaturePython", name)

@@ -18,6 +18,7 @@ line).
 """
 
 import FreeCAD
+
 import cq_fairing as cf
 
 from . import conversion

@@ -50,7 +50,8 @@ class PreferencesDialog(QtWidgets.QDialog):
 
     def _paint(self):
         for button, rgb in zip(self.buttons, self.colors):
-            button.setStyleSheet("background-color: rgb(%d,%d,%d)" % tuple(255 * c for c in rgb))
+            red, green, blue = (int(255 * c) for c in rgb)
+            button.setStyleSheet(f"background-color: rgb({red},{green},{blue})")
 
     def _pick(self, index):
         color = QtWidgets.QColorDialog.getColor(QtGui.QColor.fromRgbF(*self.colors[index]), self)

@@ -64,10 +64,12 @@ def test_joins_through_part_match_occt_ancestors_and_normals(fuselage):
     assert all(side.side is not None and side.full for j in found.joins for side in j.sides)
 
 
-def test_smooth_joins_stay_closed_and_turn_no_more_than_the_source(fuselage):
+@pytest.mark.parametrize("how", ["smooth", "curvature"])
+def test_smooth_joins_stay_closed_and_turn_no_more_than_the_source(fuselage, how):
+    """"curvature" holds what "smooth" does, and the curvature where the source has it."""
     source = fuselage.Shape
     size = source.BoundBox.DiagonalLength
-    results = _faired(fuselage, "smooth")
+    results = _faired(fuselage, how)
     faired = [r.shape for r in results]
     assert sum(r.note == "" for r in results) >= 4  # faces were faired, not all kept
     for result, face in zip(results, source.Faces):
