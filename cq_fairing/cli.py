@@ -443,7 +443,8 @@ def command_points(args):
         sizes = f"{source.shape[0]}x{source.shape[1]} -> {result.poles.shape[0]}x{result.poles.shape[1]}"
     else:
         source = interpolate_points(points, args.parametrization)
-        result = fair_curve(source.poles, tol=tol, knots=source.knots, degree=3)
+        result = fair_curve(source.poles, tol=tol, knots=source.knots, degree=3,
+                            method="wavelet")
         shape = _curve_shape(result.curve)
         sizes = f"{source.n_poles} -> {result.poles.shape[0]}"
     from .occ import write_shape

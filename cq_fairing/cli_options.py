@@ -98,7 +98,8 @@ def check_method(args):
     that choose their own net.  An option spelled out at its default is no request, as
     in the API."""
     for name in ("objective", "borders", "target_degree", "boundary"):
-        value, allowed = getattr(args, name), APPLIES[name]
+        value = getattr(args, name)
+        allowed = [method for method in APPLIES[name] if method in METHODS]
         if value in (None, DEFAULTS[name]) or args.method in allowed:
             continue
         option = "--" + name.replace("_", "-")

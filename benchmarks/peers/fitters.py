@@ -283,8 +283,22 @@ def lsq_uniform(case):
 def wavelet_uniform(case):
     s = case.source
     if case.kind == "curve":
-        r = cf.fair_curve(s.poles, tol=case.tol, knots=s.knots, degree=s.degree, weights=s.weights)
+        r = cf.fair_curve(s.poles, tol=case.tol, knots=s.knots, degree=s.degree, weights=s.weights,
+                          method="wavelet")
         return r.curve, f"n={r.n}"
+    r = cf.fair_surface(s.poles, tol=case.tol, u_knots=s.u_knots, v_knots=s.v_knots,
+                        degree=(s.u_degree, s.v_degree), weights=s.weights)
+    return r.surface, f"n={r.n}"
+
+
+def default(case):
+    """The core's default with only ``tol`` given (curves: the chosen fit, named)."""
+    s = case.source
+    if case.kind == "curve":
+        r = cf.fair_curve(s.poles, tol=case.tol, knots=s.knots, degree=s.degree,
+                          weights=s.weights)
+        chosen = " ".join(str(value) for value in r.choice.values())
+        return r.curve, f"{chosen} n={r.n}"
     r = cf.fair_surface(s.poles, tol=case.tol, u_knots=s.u_knots, v_knots=s.v_knots,
                         degree=(s.u_degree, s.v_degree), weights=s.weights)
     return r.surface, f"n={r.n}"
@@ -327,6 +341,7 @@ METHODS = {
     "geomdl approximate": geomdl_fit,
     "LSQ uniform": lsq_uniform,
     "ours energy (EH)": energy,
+    "ours default": default,
     "ours wavelet uniform": wavelet_uniform,
     "ours wavelet adaptive": wavelet_adaptive,
     "ours wavelet adaptive free": lambda case: wavelet_adaptive(case, borders="free"),

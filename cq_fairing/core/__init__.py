@@ -28,7 +28,8 @@ adaptive       adaptive (non-uniform) targets: the method and its public names
 adaptive_knots knot families equidistributing an error density
 adaptive_counts searches for the smallest passing count of spans
 polish         the energy polish and its constrained stages
-adaptive_curve fair_curve_adaptive
+adaptive_curve fair_curve_adaptive, and its faithful fit where the noise sets the size
+auto_curve     the curves' default: the adaptive fit chosen per curve
 surface_fit    one adaptive surface fit and its checks
 adaptive_surface fair_surface_adaptive
 weighted       span-weighted L2 projections

@@ -1,5 +1,6 @@
 """Adaptive fairing of curves: :func:`fair_curve_adaptive` and its target search
-(:mod:`cq_fairing.core.adaptive`).
+(:mod:`cq_fairing.core.adaptive`); :func:`noise_limited_curve`, its ``"faithful"`` fit
+where the noise, not the tolerance, sets the size.
 """
 
 from functools import cache
@@ -153,8 +154,46 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
         Even the source's own space at the target degree exceeds ``tol``.
     """
     tol = check_tolerance(tol)
-    faithful = checked_objective(objective) == "faithful"
-    degree = checked_target_degree(target_degree, curve.degree)
+    return _adaptive_curve(curve, tol, checked_target_degree(target_degree, curve.degree),
+                           checked_objective(objective), polish, per_span)
+
+
+def noise_limited_curve(curve, tol, *, target_degree=None, most_poles=None, per_span=8):
+    """The ``"faithful"`` fit of :func:`fair_curve_adaptive` where the noise sets its
+    size, else ``None``.
+
+    The smallest target of the knot family whose residual is down to the source's
+    estimated noise (:mod:`cq_fairing.core.fidelity`) is the answer when it meets ``tol``
+    (checked as by :func:`fair_curve_adaptive`).  When it does not, ``tol`` needs more
+    poles than the noise does: the tolerance, not the noise, limits the fit, and the
+    ``"faithful"`` objective would go on with the compact search; this function stops
+    there and returns ``None`` (one projection measured, no search).
+
+    Parameters
+    ----------
+    curve, tol, target_degree, per_span
+        As for :func:`fair_curve_adaptive`.
+    most_poles : int, optional
+        ``None`` also, before anything is measured, when the noise needs a target with
+        more poles.
+
+    Returns
+    -------
+    FairResult or None
+        As :func:`fair_curve_adaptive` with ``objective="faithful"`` returns it.
+    """
+    tol = check_tolerance(tol)
+    return _adaptive_curve(curve, tol, checked_target_degree(target_degree, curve.degree),
+                           "faithful", True, per_span, past_noise=False,
+                           most_poles=np.inf if most_poles is None else most_poles)
+
+
+def _adaptive_curve(curve, tol, degree, objective, polish, per_span, past_noise=True,
+                    most_poles=np.inf):
+    """:func:`fair_curve_adaptive` on validated arguments; ``past_noise=False``: ``None``
+    where a ``"faithful"`` fit would need the compact search or more than ``most_poles``
+    poles (:func:`noise_limited_curve`)."""
+    faithful = objective == "faithful"
     fair = objective == "fair" and polish and not curve.is_rational and degree >= 3
     fit = _CurveFit(curve, SAFETY * tol, degree, per_span)
     b0, rho0 = _source_density(curve.space)
@@ -174,8 +213,10 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
     if faithful:
         start, sigma = _faithful_count(fit, family, top)
         table = (("noise", sigma),)
-    if faithful and check(start):
+    if faithful and family(start).dimension <= most_poles and check(start):
         space, (faired, values, e), lam = family(start), cache[start], 0.0
+    elif not past_noise:
+        return None
     else:
         space, faired, values, e = _compact_curve(fit, family, check, cache, top, start, tol)
         lam = 0.0

@@ -8,7 +8,9 @@ The two entry points validate their input once (:func:`~cq_fairing.core.geometry
 * ``"wavelet"`` with ``tol``: the fewest poles within the tolerance
   (:mod:`cq_fairing.core.accuracy`);
 * ``"adaptive"``: targets whose knots follow the error (:mod:`cq_fairing.core.adaptive`);
-* ``"energy"``: Eck-Hadenfeld energy fairing (:mod:`cq_fairing.core.energy`).
+* ``"energy"``: Eck-Hadenfeld energy fairing (:mod:`cq_fairing.core.energy`);
+* ``"auto"`` (curves, the default): the adaptive fit chosen per curve
+  (:mod:`cq_fairing.core.auto_curve`), with ``n`` the wavelet projection.
 
 Each returns a :class:`~cq_fairing.core.results.FairResult` or
 :class:`~cq_fairing.core.results.SurfaceFairResult`.
@@ -22,15 +24,18 @@ from ..errors import InvalidInputError, UnsupportedGeometryError
 from .accuracy import fair_curve_to_tolerance, fair_surface_to_tolerance
 from .adaptive_curve import fair_curve_adaptive
 from .adaptive_surface import fair_surface_adaptive
+from .auto_curve import fair_curve_auto
 from .energy import fair_curve_energy, fair_surface_energy
 from .geometry import make_curve, make_surface, split_pair
 from .options import (
+    CURVE_METHODS,
     MEASURES,
     SEARCHES,
     check_applies,
     check_order,
     check_search_options,
     checked_choice,
+    curve_method,
     renamed_keywords,
     tolerance_method,
 )
@@ -39,6 +44,7 @@ from .projection import project_curve, project_surface
 from .results import FairResult, SurfaceDetails, SurfaceFairResult
 
 Method = Literal["wavelet", "adaptive", "energy"]
+CurveMethod = Literal["auto", "wavelet", "adaptive", "energy"]
 Objective = Literal["compact", "faithful", "fair"]
 Borders = Literal["auto", "free", "pinned"]
 Schedule = Literal["auto", "direct", "hybrid"]
@@ -54,12 +60,14 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
                knots: ArrayLike | None = None, degree: int | None = None,
                weights: ArrayLike | None = None, target_degree: int | None = None,
                schedule: Schedule = "auto", search: Search = "guaranteed", order: int = 6,
-               measure: Measure = "geometric", method: Method = "wavelet",
+               measure: Measure = "geometric", method: CurveMethod = "auto",
                objective: Objective = "compact", **renamed: object) -> FairResult:
     r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
 
-    The faired curve is the L2-best approximation of the source in the quasi-uniform
-    space :math:`V_n` (``n`` spans, ``n + target_degree`` poles):
+    With ``tol`` (the default ``method="auto"``) the fit is chosen per curve among the
+    adaptive ones and reported as ``choice`` (see ``method``).  With ``n`` the faired
+    curve is the L2-best approximation of the source in the quasi-uniform space
+    :math:`V_n` (``n`` spans, ``n + target_degree`` poles):
 
     .. math:: C_n = \langle\Phi_n|\Phi_n\rangle^{-1} \langle\Phi_n|\Phi_S\rangle\, C_S
 
@@ -74,8 +82,7 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
         Target scale (knot spans).  Give ``n`` or ``tol``.
     tol : float, optional
         Largest allowed deviation (model units, e.g. mm) between source and faired
-        curve; the fewest poles within it are searched (see
-        :mod:`cq_fairing.core.accuracy`).
+        curve (true closest-point distance, both ways).
     knots : array_like, shape (k + degree + 1,), optional
         Clamped source knots; default quasi-uniform on [0, 1].
     degree : int, optional
@@ -83,12 +90,13 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     weights : array_like, shape (k,), optional
         Positive weights of a rational source; fairing works on :math:`(w P, w)`.
     target_degree : int, optional
-        Degree of the faired curve; default ``min(degree, 3)``.  Refused with
-        ``method="energy"``, which keeps the degree.
+        Degree of the faired curve; default ``min(degree, 3)`` (``"auto"``: chosen, see
+        there).  Refused with ``method="energy"``, which keeps the degree.
     schedule : {"auto", "direct", "hybrid"}
-        Spaces visited, see :mod:`cq_fairing.core.schedule`; ``method="wavelet"`` only.
+        Spaces visited, see :mod:`cq_fairing.core.schedule`; ``method="wavelet"`` only
+        (and the default method with ``n``, which is the wavelet projection).
     search : {"guaranteed", "linear", "polyfit"}
-        Step rule of the tolerance search (with ``tol``, see
+        Step rule of the wavelet tolerance search (with ``tol``, see
         :func:`~cq_fairing.core.accuracy.fair_curve_to_tolerance`).
     order : int
         Degree (2 .. 6) of the least-squares fit of ``search="polyfit"``; only with it.
@@ -100,7 +108,16 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
         Old spellings, accepted for one release with a ``DeprecationWarning``:
         ``strategy`` (now ``search``), ``deviation`` (now ``measure``); see
         :mod:`cq_fairing.core.options`.
-    method : {"wavelet", "adaptive", "energy"}
+    method : {"auto", "wavelet", "adaptive", "energy"}
+        ``"auto"`` (default): with ``tol``, the adaptive fit chosen per curve by the rule
+        of :mod:`cq_fairing.core.options` (:mod:`cq_fairing.core.auto_curve`): the
+        ``"faithful"`` fit, at the degree 3, 5 or 7 that needs the fewest poles, where
+        the noise sets its size and it needs no more poles than the compact fit at
+        degree 3; else the compact fit with the fewest poles over those degrees; the
+        result's ``choice`` names the options that give the same curve.  With ``n``: the
+        wavelet projection.  ``"wavelet"``: the projection onto :math:`V_n`, with
+        ``tol`` the fewest poles of a uniform target within it (the seed's ARWFA search,
+        :mod:`cq_fairing.core.accuracy`).
         ``"adaptive"``: the exact L2 projection onto a target whose knots follow the
         error (:mod:`cq_fairing.core.adaptive`), usually fewer poles than the
         quasi-uniform ``V_n`` at the same ``tol``; one direct decomposition step, so
@@ -143,15 +160,20 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
     >>> bool(np.allclose(result.reconstruct(), poles, atol=1e-10))
     True
     """
+    method = curve_method(method, n, tol)
     search, measure = _checked_search(
         **renamed_keywords("fair_curve", renamed, method, search=search, measure=measure))
     curve = make_curve(poles, knots, degree, weights)
-    method = tolerance_method(method, objective, n, tol)
+    method = tolerance_method(method, objective, n, tol, methods=CURVE_METHODS)
     check_applies(method, (("target_degree", target_degree), ("schedule", schedule),
-                           ("search", search), ("order", order), ("measure", measure)))
+                           ("search", search), ("order", order), ("measure", measure)),
+                  methods=CURVE_METHODS)
     check_search_options(n, tol, (("search", search, "guaranteed"), ("order", order, 6),
                                   ("measure", measure, "geometric")))
     check_order(order, search)
+    if method == "auto":
+
+        return fair_curve_auto(curve, tol, target_degree=target_degree)
     if method == "energy":
 
         if curve.degree < 2:

@@ -81,6 +81,11 @@ class FairResult:
         Filled by accuracy control and the measures (``None`` when not computed).
     centre : ndarray, shape (d,), optional
         Translation :math:`c` of the coordinates the steps work in (``None``: origin).
+    choice : dict, optional
+        What :func:`fair_curve`'s ``method="auto"`` chose with ``tol``: the explicit
+        options that give the same curve, e.g. ``{"method": "adaptive", "objective":
+        "faithful", "target_degree": 7}`` (:mod:`cq_fairing.core.auto_curve`); ``None``
+        when the method was given (or with ``n``: the wavelet projection).
     """
 
     source: BSplineCurve
@@ -94,6 +99,7 @@ class FairResult:
     table: tuple = None
     fairness: dict = None
     centre: np.ndarray = field(repr=False, default=None)
+    choice: dict = None
 
     @cached_property
     def details(self):

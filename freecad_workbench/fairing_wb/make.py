@@ -375,7 +375,8 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or a target control-point count, not both/neither.")
-    keywords = _core_keywords(method, objective, tolerance)
+    # the core's default for curves chooses its own fit: the wavelet method is named
+    keywords = {"method": "wavelet", **_core_keywords(method, objective, tolerance)}
     common = dict(knots=source.knots, degree=source.degree, weights=source.weights, **keywords)
     if tolerance is not None:
         _require_accuracy_control()

@@ -52,9 +52,9 @@ def test_bad_options():
     with pytest.raises(cf.InvalidInputError, match="search"):
         cf.fair_curve(poles, tol=0.1, search="magic")
     with pytest.raises(cf.InvalidInputError, match="order"):
-        cf.fair_curve(poles, tol=0.1, search="polyfit", order=9)
+        cf.fair_curve(poles, tol=0.1, method="wavelet", search="polyfit", order=9)
     with pytest.raises(cf.InvalidInputError, match="measure"):
-        cf.fair_curve(poles, tol=0.1, measure="hausdorff")
+        cf.fair_curve(poles, tol=0.1, method="wavelet", measure="hausdorff")
 
 
 def _refusal(call):
@@ -117,7 +117,7 @@ def test_a_window_with_another_method_names_the_method_it_belongs_to():
 def test_tolerance_not_met():
     poles = noisy_poles(30, 0.05, 1)
     with pytest.raises(cf.ToleranceNotMetError) as info:
-        cf.fair_curve(poles, tol=1e-9, target_degree=2)
+        cf.fair_curve(poles, tol=1e-9, target_degree=2, method="wavelet")
     assert info.value.tolerance == 1e-9
     assert info.value.best_deviation > 1e-9
     assert "raise the tolerance" in str(info.value)
@@ -142,7 +142,7 @@ PEAK_BETWEEN_SAMPLES = np.array([
 
 def test_strict_check_catches_a_peak_between_coarse_samples():
     tol = 0.17910559422978428
-    result = cf.fair_curve(PEAK_BETWEEN_SAMPLES, tol=tol, degree=2)
+    result = cf.fair_curve(PEAK_BETWEEN_SAMPLES, tol=tol, degree=2, method="wavelet")
     assert M.deviation(result.source, result.curve, per_span=64).max <= tol
 
 
@@ -152,7 +152,7 @@ def test_strict_check_catches_a_peak_between_coarse_samples():
 def test_guaranteed_curve_is_within_tol_and_minimal(k, amp, rel, seed_):
     curve = cf.make_curve(noisy_poles(k, amp, seed_))
     tol = rel * amp
-    result = cf.fair_curve(curve.poles, tol=tol)
+    result = cf.fair_curve(curve.poles, tol=tol, method="wavelet")
     truth = M.deviation(curve, result.curve, per_span=STRICT_PER_SPAN).max
     assert truth <= tol * (1 + 1e-9)
     assert result.max_deviation == pytest.approx(truth, rel=1e-9, abs=1e-15)
@@ -186,7 +186,7 @@ def test_guaranteed_surface_is_within_tol_and_minimal(ku, kv, amp, seed_):
 
 
 def test_result_deviation_matches_dense_evaluation(seed):
-    result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots)
+    result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots, method="wavelet")
     u = np.linspace(0, 1, 200_001)
     same = np.linalg.norm(seed.curve.evaluate(u) - result.curve.evaluate(u), axis=1).max()
     assert result.max_deviation <= 0.02
@@ -207,7 +207,7 @@ def test_seed_table1_shape(seed):
 
 def test_seed_table2_linear_iterations(seed):
     result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
-                           search="linear", schedule="hybrid")
+                           method="wavelet", search="linear", schedule="hybrid")
     dyadic = [r for r in result.table if r.n in (1024, 512, 256, 128, 64)]
     iterations = [r for r in result.table if r.n not in (1024, 512, 256, 128, 64, 1299)]
     assert len(dyadic) == 5 and 2 <= len(iterations) <= 4
@@ -223,11 +223,11 @@ def test_seed_table3_polyfit_orders(seed):
     scales = [int(np.ceil(2 ** polyfit_scale(points, 0.02, order, (6, 7)))) for order in range(2, 7)]
     assert scales == sorted(scales, reverse=True)   # higher order, closer to the objective
     objective = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
-                              schedule="hybrid").n
+                              method="wavelet", schedule="hybrid").n
     assert abs(scales[-1] - objective) <= 0.05 * objective
     assert scales[0] > objective
     result = cf.fair_curve(seed.curve.poles, tol=0.02, knots=seed.curve.knots,
-                           search="polyfit", schedule="hybrid")
+                           method="wavelet", search="polyfit", schedule="hybrid")
     assert result.max_deviation <= 0.02 and result.n >= objective
 
 

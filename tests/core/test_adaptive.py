@@ -64,7 +64,7 @@ def test_seed_curve_meets_tol_by_true_distance(seed, seed_result):
 
 
 def test_seed_curve_needs_fewer_poles_than_uniform(seed, seed_result):
-    uniform = cf.fair_curve(seed.curve.poles, tol=0.02)
+    uniform = cf.fair_curve(seed.curve.poles, tol=0.02, method="wavelet")
     assert seed_result.poles.shape[0] < uniform.poles.shape[0]
 
 
@@ -821,7 +821,8 @@ def test_a_curve_refused_by_the_denser_check_grows_until_it_passes():
         assert two_sided <= tol
         counts.append(result.curve.n_poles)
     assert counts == sorted(counts, reverse=True)
-    assert counts[2] < cf.fair_curve(poles, tol=0.05, target_degree=1).curve.n_poles
+    assert counts[2] < cf.fair_curve(poles, tol=0.05, target_degree=1,
+                                     method="wavelet").curve.n_poles
 
 
 def test_a_higher_target_degree_may_use_more_spans_than_the_source():

@@ -23,8 +23,11 @@ CURVE = noisy_poles(40, 0.01, 3)
 
 
 def _fair(kind, **options):
+    """Fair the curve or the net within 0.02; ``method`` default ``"wavelet"``, the method
+    of the tolerance-search options."""
     call = cf.fair_curve if kind == "curve" else cf.fair_surface
-    return call(CURVE if kind == "curve" else _net(), tol=0.02, **options)
+    return call(CURVE if kind == "curve" else _net(), tol=0.02,
+                **{"method": "wavelet", **options})
 
 
 def _silent(call):
@@ -101,27 +104,29 @@ def test_fair_surface_has_no_order():
 def test_order_needs_the_polyfit_search():
     with pytest.raises(cf.InvalidInputError, match="order=3 with search='guaranteed'; add "
                                                    "search='polyfit' or drop order"):
-        cf.fair_curve(CURVE, tol=0.02, order=3)
-    result = _silent(lambda: cf.fair_curve(CURVE, tol=0.02, search="polyfit", order=3))
+        cf.fair_curve(CURVE, tol=0.02, method="wavelet", order=3)
+    result = _silent(lambda: cf.fair_curve(CURVE, tol=0.02, method="wavelet", search="polyfit",
+                                           order=3))
     assert result.max_deviation <= 0.02
 
 
 def test_options_at_their_defaults_pass_with_every_method():
     """A default value is no request: spelling it out is never refused."""
-    for method in options.METHODS:
+    for method in options.CURVE_METHODS:
         kwargs = dict(search="guaranteed", measure="geometric", schedule="auto",
                       target_degree=None)
         result = _silent(lambda: cf.fair_curve(CURVE, tol=0.02, method=method, **kwargs))
         assert result.max_deviation <= 0.02
 
 
-@pytest.mark.parametrize("function", [cf.fair_curve, cf.fair_surface])
-def test_the_signatures_take_their_defaults_from_the_options_module(function):
+@pytest.mark.parametrize("function, defaults", [(cf.fair_curve, options.CURVE_DEFAULTS),
+                                                (cf.fair_surface, options.DEFAULTS)])
+def test_the_signatures_take_their_defaults_from_the_options_module(function, defaults):
     parameters = inspect.signature(function).parameters
-    shared = [name for name in options.DEFAULTS if name in parameters]
+    shared = [name for name in defaults if name in parameters]
     assert {"method", "objective", "search", "measure", "schedule"} <= set(shared)
     for name in shared:
-        assert parameters[name].default == options.DEFAULTS[name], name
+        assert parameters[name].default == defaults[name], name
     assert not set(options.RENAMED) & set(parameters)     # old spellings only through **renamed
     for name in options.APPLIES:
         assert name in options.DEFAULTS

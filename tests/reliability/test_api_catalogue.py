@@ -137,7 +137,7 @@ CASES = [
      "schedule"),
     ("search unknown", lambda: cf.fair_curve(P, tol=0.1, search="x"), InvalidInputError,
      "search"),
-    ("order=7", lambda: cf.fair_curve(P, tol=0.1, search="polyfit", order=7),
+    ("order=7", lambda: cf.fair_curve(P, tol=0.1, method="wavelet", search="polyfit", order=7),
      InvalidInputError, "order"),
     ("method unknown", lambda: cf.fair_curve(P, 5, method="spline"), InvalidInputError,
      "method"),

@@ -116,10 +116,18 @@ def test_faired_poles_transform_equivariantly(offset, scale):
     assert np.abs(placed - (base * scale + offset)).max() <= bound
 
 
-def test_tolerance_search_is_scale_invariant():
+@pytest.mark.parametrize("method", ["wavelet", "auto"])
+def test_tolerance_search_is_scale_invariant(method):
+    """The same target (and, for the default method, the same choice) at every scale."""
     poles = _seed_curve()
-    chosen = {cf.fair_curve(poles * s, tol=2e-3 * s).n for s in (1e-6, 1e-3, 1.0, 1e3, 1e6)}
+    chosen = {_chosen(cf.fair_curve(poles * s, tol=2e-3 * s, method=method))
+              for s in (1e-6, 1e-3, 1.0, 1e3, 1e6)}
     assert len(chosen) == 1
+
+
+def _chosen(result):
+    """The target scale, degree and the options chosen by ``method="auto"``, hashable."""
+    return result.n, result.curve.degree, tuple(sorted((result.choice or {}).items()))
 
 
 @pytest.mark.parametrize("method", ["wavelet", "adaptive", "energy"])
