@@ -262,8 +262,9 @@ def check_joins(joins, angle_tol):
                                                                   np.floating))
             or not np.isfinite(angle_tol) or not 0 < angle_tol < 90):
         raise InvalidInputError(
-            f"the angle tolerance (angle_tol) must be an angle in degrees between 0 and 90, "
-            f"got {angle_tol!r}; e.g. 1.0 for 'smooth below one degree'.")
+            f"the angle tolerance must be an angle in degrees between 0 and 90 (angle_tol, "
+            f"the workbench's AngleTolerance), got {angle_tol!r}; e.g. 1.0 for 'smooth below "
+            "one degree'.")
 
 
 def checked_objective(value):
