@@ -29,8 +29,10 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
 The borders move with the patches: the energy runs across the joins.  :math:`\lambda`
 is the largest (bisection on its logarithm) for which every patch stays within the
 tolerance of its source by the same-parameter distance on :data:`SAMPLES` x
-:data:`SAMPLES` points, an upper bound of the true distance.  One regularised KKT
-system, one factorization per :math:`\lambda` for x, y and z.
+:data:`SAMPLES` points, an upper bound of the true distance.  The G0 rows and the kept
+patches' poles are identities, eliminated exactly (one unknown per class of tied poles);
+the G1 rows remain in one regularised KKT system, one factorization per :math:`\lambda`
+for x, y and z.
 
 This module imports numpy and scipy only.
 """
@@ -40,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
 
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
@@ -47,7 +50,7 @@ from .gram import gram_matrix
 from .joins import UnionFind, mirror_ratio, turned_patches
 from .patch_grid import insert_knot
 
-__all__ = ["NetworkResult", "fair_network", "network_joinable"]
+__all__ = ["NetworkResult", "PatchNetwork", "fair_network", "network_joinable"]
 
 SAMPLES = 9          # same-parameter samples per patch and direction
 KKT_EPS = 1e-12      # regularisation of the constraint block (relative)
@@ -127,36 +130,70 @@ def fair_network(patches, joins, tol, *, kept=(), continuity="G1"):
     InvalidInputError
         Rational patches, joins whose sides do not match, an unknown ``continuity``.
     """
-    sources, joins, tols = _checked(patches, joins, tol, continuity)
-    patches = [_refined(p) for p in sources]
-    samples = [_Probe(s, p) for s, p in zip(sources, patches)]
-    kept = set(kept)
-    for _ in range(len(patches)):
-        result = _smoothest(patches, sources, samples, joins, tols, kept, continuity)
-        moved = set(range(len(patches))) - result.kept
-        turned = (turned_patches(result.surfaces, sources, joins, moved)
-                  if continuity == "G1" else set())
-        if not turned:
-            return result
-        kept |= turned   # their joins would turn more than the source's: keep them
-    return result
+    return PatchNetwork(patches, joins, continuity).fair(tol, kept=kept)
 
 
-def _smoothest(patches, sources, samples, joins, tols, kept, continuity):
+class PatchNetwork:
+    """A network of patches prepared for :meth:`fair` (:func:`fair_network`): its forms,
+    samples and joins' rows, which do not depend on the tolerance, built once for any
+    number of tolerances.
+
+    Parameters
+    ----------
+    patches, joins, continuity
+        As in :func:`fair_network`.
+
+    Raises
+    ------
+    InvalidInputError
+        Rational patches, joins whose sides do not match, an unknown ``continuity``.
+    """
+
+    def __init__(self, patches, joins, continuity="G1"):
+        self.sources, self.joins = _checked(patches, joins, continuity)
+        self.continuity = continuity
+        self.forms = _Forms([_refined(p) for p in self.sources])
+        self.probes = _Probes(self.sources, self.forms.patches)
+        self.sides = _join_sides(self.forms, self.joins)
+
+    def fair(self, tol, *, kept=()):
+        """:func:`fair_network` of the prepared network within ``tol`` (per patch or for
+        all), the patches ``kept`` held.
+
+        Returns
+        -------
+        NetworkResult
+        """
+        sources = self.sources
+        tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(sources),))
+        kept = set(kept)
+        for _ in range(len(sources)):
+            result = _smoothest(self, tols, kept)
+            moved = set(range(len(sources))) - result.kept
+            turned = (turned_patches(result.surfaces, sources, self.joins, moved)
+                      if self.continuity == "G1" else set())
+            if not turned:
+                return result
+            kept |= turned   # their joins would turn more than the source's: keep them
+        return result
+
+
+def _smoothest(network, tols, kept):
     """The largest energy weight within the tolerances, the patches that the joins alone
     hold out of their tolerance kept."""
+    sources = network.sources
     kept = set(kept)
-    for _ in range(len(patches)):
-        system = _System(patches, kept)
-        constraints, g1_rows = _constraints(system, joins, continuity)
-        solve = _solver(system, constraints, sources, samples, kept)
+    count = len(sources)
+    for _ in range(count):
+        system = _System(network.forms, kept, network.sides, network.continuity)
+        solve = _solver(system, network.probes, kept)
         best = solve(0.0)
-        over = {f for f in range(len(patches)) if best[1][f] > tols[f]} - kept
+        over = {f for f in range(count) if best[1][f] > tols[f]} - kept
         if not over:
             break
         kept |= over     # the joins hold these too far: they constrain their neighbours
-    if len(kept) == len(patches):
-        return NetworkResult(list(sources), 0.0, np.zeros(len(patches)), g1_rows, kept)
+    if len(kept) == count:
+        return NetworkResult(list(sources), 0.0, np.zeros(count), system.g1_rows, kept)
     lo, hi, lam = np.log(LAMBDA_RANGE[0]), np.log(LAMBDA_RANGE[1]), 0.0
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
@@ -166,7 +203,7 @@ def _smoothest(patches, sources, samples, joins, tols, kept, continuity):
         else:
             hi = mid
     surfaces = [sources[f] if f in kept else s for f, s in enumerate(best[0])]
-    return NetworkResult(surfaces, lam, best[1], g1_rows, kept)
+    return NetworkResult(surfaces, lam, best[1], system.g1_rows, kept)
 
 
 def _refined(patch):
@@ -187,17 +224,15 @@ def _refined(patch):
                           patch.v_degree)
 
 
-def _solver(system, constraints, patches, samples, kept):
+def _solver(system, probes, kept):
     """``solve(lam) -> (surfaces, deviation per patch)``."""
     def solve(lam):
-        surfaces = system.surfaces(system.solve(lam, constraints))
-        deviation = np.array([0.0 if f in kept else samples[f].distance(surfaces[f])
-                              for f in range(len(patches))])
-        return surfaces, deviation
+        surfaces = system.surfaces(system.solve(lam))
+        return surfaces, probes.distances(surfaces, kept)
     return solve
 
 
-def _checked(patches, joins, tol, continuity):
+def _checked(patches, joins, continuity):
     if continuity not in ("G0", "G1"):
         raise InvalidInputError(
             f"continuity must be 'G0' or 'G1', got {continuity!r}.")
@@ -213,55 +248,115 @@ def _checked(patches, joins, tol, continuity):
             raise InvalidInputError(
                 f"patches {join.a} and {join.b} differ in degree or knots along their join "
                 f"({join.side_a}/{join.side_b}); leave the join out or refine one patch.")
-    tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(patches),))
-    return patches, joins, tols
+    return patches, joins
+
+
+class _Forms:
+    """Every patch's poles numbered together, with the block-diagonal L2 form and scaled
+    thin-plate energy (:math:`M_f` and :math:`s_f H_f`); the same whichever patches are
+    kept, so built once per network, and once per distinct pair of spaces."""
+
+    def __init__(self, patches):
+        self.patches = patches
+        self.offsets = np.cumsum([0] + [p.shape[0] * p.shape[1] for p in patches])
+        by_spaces = {}
+        for patch in patches:
+            key = (patch.u_space.key, patch.v_space.key)
+            if key not in by_spaces:
+                by_spaces[key] = _patch_forms(patch.u_space, patch.v_space)
+        blocks = [by_spaces[p.u_space.key, p.v_space.key] for p in patches]
+        self.mass = sp.block_diag([m for m, _ in blocks], format="csr")
+        self.energy = sp.block_diag([h for _, h in blocks], format="csr")
+        self.source = np.concatenate([p.poles.reshape(-1, 3) for p in patches])
+
+
+def _patch_forms(u_space, v_space):
+    r"""``(M, s H)`` of a patch on ``u_space`` x ``v_space``: its L2 Gram matrix
+    :math:`G_u\otimes G_v` and its thin-plate energy scaled by
+    :math:`s = \mathrm{tr} M / \mathrm{tr} H`."""
+    g = [[gram_matrix(s, nu=nu) for nu in (0, 1, 2)] for s in (u_space, v_space)]
+    m = sp.kron(g[0][0], g[1][0])
+    h = sp.kron(g[0][2], g[1][0]) + 2 * sp.kron(g[0][1], g[1][1]) + sp.kron(g[0][0], g[1][2])
+    return m, m.diagonal().sum() / max(h.diagonal().sum(), 1e-300) * h
 
 
 class _System:
-    """Every patch's poles numbered together, with the L2 and energy forms."""
+    r"""The network's poles under its joins, the kept patches' poles held.
 
-    def __init__(self, patches, kept):
-        self.patches, self.kept = patches, kept
-        self.offsets = np.cumsum([0] + [p.shape[0] * p.shape[1] for p in patches])
-        mass, energy, scale = [], [], []
-        for patch in patches:
-            g = [[gram_matrix(s, nu=nu) for nu in (0, 1, 2)] for s in (patch.u_space,
-                                                                      patch.v_space)]
-            m = sp.kron(g[0][0], g[1][0])
-            h = sp.kron(g[0][2], g[1][0]) + 2 * sp.kron(g[0][1], g[1][1]) + \
-                sp.kron(g[0][0], g[1][2])
-            mass.append(m)
-            energy.append(h)
-            scale.append(m.diagonal().sum() / max(h.diagonal().sum(), 1e-300))
-        self.mass = sp.block_diag(mass, format="csr")
-        self.energy = sp.block_diag([s * h for s, h in zip(scale, energy)], format="csr")
-        self.source = np.concatenate([p.poles.reshape(-1, 3) for p in patches])
+    The G0 rows and the holding of the kept poles are identities: they are eliminated.
+    The poles tied by G0 rows form classes; a class tied to a kept pole takes that
+    pole's source position (a constant), every other class is one unknown, so that the
+    poles are :math:`C = P z + h` (:math:`P` a 0/1 matrix, :math:`h` the held
+    positions).  The G1 rows remain as constraints :math:`A C = 0`."""
+
+    def __init__(self, forms, kept, sides, continuity):
+        self.patches = forms.patches
+        self.offsets, self.mass, self.energy = forms.offsets, forms.mass, forms.energy
+        self.source = forms.source
         fixed = np.zeros(self.offsets[-1], dtype=bool)
         for f in kept:
             fixed[self.offsets[f]:self.offsets[f + 1]] = True
         self.fixed = fixed
+        ties, mirrored, self.g1_rows = _constraints(self, sides, continuity)
+        self.basis, self.held = self._eliminated(ties)
+        self.kkt, self.rhs = self._kkt(mirrored)
+        self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
 
-    def index(self, patch, i, j):
-        return int(self.offsets[patch] + i * self.patches[patch].shape[1] + j)
+    def _eliminated(self, ties):
+        """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
+        indices, a forest: each joins two classes, at most one kept pole per class)."""
+        size = int(self.offsets[-1])
+        pairs = np.array(ties, dtype=int).reshape(-1, 2)
+        graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                              shape=(size, size))
+        count, label = connected_components(graph, directed=False)
+        anchor = np.full(count, -1)
+        kept = np.flatnonzero(self.fixed)
+        anchor[label[kept]] = kept
+        held = np.zeros((size, 3))
+        on_kept = anchor[label] >= 0
+        held[on_kept] = self.source[anchor[label[on_kept]]]
+        free = np.flatnonzero(~on_kept)
+        classes, column = np.unique(label[free], return_inverse=True)
+        basis = sp.csr_matrix((np.ones(free.size), (free, column)),
+                              shape=(size, classes.size))
+        return basis, held
 
-    def solve(self, lam, constraints):
-        r"""Poles of all patches: the KKT system
-        :math:`\begin{bmatrix}M + \lambda H & A^T\\ A & -\varepsilon I\end{bmatrix}`,
-        kept poles held by identity rows."""
-        free = ~self.fixed
-        q = (self.mass + lam * self.energy).tocsr()
-        a = constraints
-        if self.fixed.any():
-            held = sp.identity(len(free), format="csr")[np.flatnonzero(self.fixed)]
-            a = sp.vstack([a, held], format="csr") if a.shape[0] else held
-        rhs_c = np.zeros((a.shape[0], 3))
-        if self.fixed.any():
-            rhs_c[-int(self.fixed.sum()):] = self.source[self.fixed]
-        scale = float(q.diagonal().mean())
-        kkt = sp.bmat([[q, scale * a.T], [scale * a, -KKT_EPS * scale *
-                                         sp.identity(a.shape[0])]], format="csc")
-        rhs = np.concatenate([self.mass @ self.source, scale * rhs_c])
-        return spla.splu(kkt).solve(rhs)[: len(free)]
+    def _kkt(self, mirrored):
+        r"""The KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and the right-hand
+        side :math:`b_M + \lambda b_H` and :math:`s b_A` in parts:
+
+        .. math:: K_M = \begin{bmatrix}P^T M P & 0\\ 0 & 0\end{bmatrix},\;
+                  K_H = \begin{bmatrix}P^T H P & 0\\ 0 & 0\end{bmatrix},\;
+                  K_A = \begin{bmatrix}0 & A_P^T\\ A_P & -\varepsilon I\end{bmatrix},
+
+        :math:`A_P = A P`, :math:`b_M = P^T M (C_0 - h)`, :math:`b_H = -P^T H h`,
+        :math:`b_A = -A h` (:math:`C_0` the sources' poles, :math:`\varepsilon` =
+        :data:`KKT_EPS`)."""
+        unknowns, rows = self.basis.shape[1], mirrored.shape[0]
+        a = (mirrored @ self.basis).tocsr()
+        empty = sp.csr_matrix((rows, rows))
+        parts = [sp.block_diag([self.basis.T @ form @ self.basis, empty], format="csc")
+                 for form in (self.mass, self.energy)]
+        parts.append(sp.bmat([[sp.csr_matrix((unknowns, unknowns)), a.T],
+                              [a, -KKT_EPS * sp.identity(rows)]], format="csc")
+                     if rows else sp.csc_matrix((unknowns, unknowns)))
+        rhs = [self.basis.T @ (self.mass @ (self.source - self.held)),
+               -(self.basis.T @ (self.energy @ self.held)), -(mirrored @ self.held)]
+        return parts, rhs
+
+    def solve(self, lam):
+        r"""Poles of all patches, :math:`P z + h`: :math:`z` from the KKT system
+        :math:`\begin{bmatrix}P^T(M + \lambda H)P & s A_P^T\\ s A_P & -\varepsilon s I
+        \end{bmatrix}` (:meth:`_kkt`; :math:`s` the mean diagonal of :math:`M + \lambda
+        H`, which scales the G1 rows like the rest)."""
+        unknowns = self.basis.shape[1]
+        if unknowns == 0:
+            return self.held
+        scale = float(np.mean(self.diagonals[0] + lam * self.diagonals[1]))
+        kkt = self.kkt[0] + lam * self.kkt[1] + scale * self.kkt[2]
+        rhs = np.concatenate([self.rhs[0] + lam * self.rhs[1], scale * self.rhs[2]])
+        return self.basis @ spla.splu(kkt).solve(rhs)[:unknowns] + self.held
 
     def surfaces(self, poles):
         out = []
@@ -272,94 +367,117 @@ class _System:
         return out
 
 
-def _border_rows(patch, side):
-    """``(border, inner)`` pole index pairs ``(i, j)`` along ``side`` in the order of its
-    along-parameter."""
-    ku, kv = patch.shape
+def _join_sides(forms, joins):
+    """Per join: ``(join, border_a, inner_a, border_b, inner_b, mu)``, the indices of the
+    border poles and of the inner poles next to them on both sides, in the order of side
+    a's along-parameter, and the join's mirror ratio from the sources' cross rows."""
+    out = []
+    for join in joins:
+        border_a, inner_a = _side_rows(forms, join.a, join.side_a)
+        border_b, inner_b = _side_rows(forms, join.b, join.side_b)
+        if join.reversed:
+            border_b, inner_b = border_b[::-1], inner_b[::-1]
+        source = forms.source
+        mu = mirror_ratio(source[inner_a] - source[border_a], source[inner_b] - source[border_b])
+        out.append((join, border_a, inner_a, border_b, inner_b, mu))
+    return out
+
+
+def _side_rows(forms, patch, side):
+    """``(border, inner)``: the indices of the poles along ``side`` of ``patch`` and of the
+    poles next to them inside, in the order of its along-parameter."""
+    ku, kv = forms.patches[patch].shape
+    index = forms.offsets[patch] + np.arange(ku * kv).reshape(ku, kv)
+    if side[0] == "v":
+        index = index.T
     end, inner = (0, 1) if side[1] == "0" else (-1, -2)
-    if side[0] == "u":
-        e, n = end % ku, inner % ku
-        return [((e, k), (n, k)) for k in range(kv)]
-    e, n = end % kv, inner % kv
-    return [((k, e), (k, n)) for k in range(ku)]
+    return index[end], index[inner]
 
 
-def _constraints(system, joins, continuity):
-    """The sparse constraint rows (G0 pole identities, G1 mirrored rows) and the number
-    of G1 rows.
+def _constraints(system, sides, continuity):
+    """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows and
+    their number.
 
     A row that would tie two poles already tied (through other rows, or both held by
     kept patches) is left out: it could only repeat or contradict the others."""
-    rows, cols, vals = [], [], []
     g0 = UnionFind()   # G0 identifications of poles, then (cycles) of their classes
-
-    def row(entries):
-        r = rows[-1] + 1 if rows else 0
-        for c, v in entries:
-            rows.append(r)
-            cols.append(c)
-            vals.append(v)
-
-    for index in np.flatnonzero(system.fixed):
-        g0.tie(HELD, int(index))      # the kept patches' poles: one held class
-    sides = []
-    for join in joins:
-        ra = _border_rows(system.patches[join.a], join.side_a)
-        rb = _border_rows(system.patches[join.b], join.side_b)
-        if join.reversed:
-            rb = rb[::-1]
-        sides.append((join, ra, rb))
-        for (pa, _), (pb, _) in zip(ra, rb):
-            ia, ib = system.index(join.a, *pa), system.index(join.b, *pb)
-            if g0.tie(ia, ib) is None:
-                row([(ia, 1.0), (ib, -1.0)])
-    g1 = 0
+    for index in np.flatnonzero(system.fixed).tolist():
+        g0.tie(HELD, index)      # the kept patches' poles: one held class
+    ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
+            for a, b in zip(border_a.tolist(), border_b.tolist()) if g0.tie(a, b) is None]
+    rows = []
     if continuity == "G1":
         cycles = UnionFind()
-        for join, ra, rb in sides:
+        for join, border_a, inner_a, border_b, inner_b, mu in sides:
             if not join.smooth:
                 continue
-            a, b = system.patches[join.a], system.patches[join.b]
-            mu = mirror_ratio(np.array([a.poles[q] - a.poles[p] for p, q in ra]),
-                              np.array([b.poles[q] - b.poles[p] for p, q in rb]))
-            for (pa, qa), (pb, qb) in zip(ra, rb):
-                ia, na = system.index(join.a, *pa), system.index(join.a, *qa)
-                ib, nb = system.index(join.b, *pb), system.index(join.b, *qb)
+            for ia, na, ib, nb in zip(*(x.tolist() for x in (border_a, inner_a, border_b,
+                                                               inner_b))):
                 if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
-                    row([(na, 1.0), (ia, -1.0), (nb, mu), (ib, -mu)])
-                    g1 += 1
-    count = rows[-1] + 1 if rows else 0
-    matrix = sp.csr_matrix((vals, (rows, cols)), shape=(count, int(system.offsets[-1])))
-    return matrix, g1
+                    rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
+    columns = np.array([c for c, _ in rows], dtype=int).reshape(-1, 4)
+    values = np.array([v for _, v in rows], dtype=float).reshape(-1, 4)
+    matrix = sp.csr_matrix((values.ravel(), (np.repeat(np.arange(len(rows)), 4),
+                                             columns.ravel())),
+                           shape=(len(rows), int(system.offsets[-1])))
+    return ties, matrix, len(rows)
 
 
-class _Probe:
-    """A patch's samples (at least :data:`SAMPLES` per direction, three per span), its
+class _Probes:
+    """Every patch's samples (at least :data:`SAMPLES` per direction, three per span), its
     source's points and normals there, and the refined spaces' basis values, so that a
-    candidate net costs a few small products."""
+    candidate network costs a few small products: the patches on the same spaces share
+    their samples and are evaluated together."""
 
-    def __init__(self, source, refined):
-        self.u, self.v = (np.unique(np.concatenate(
-            [np.linspace(a, b, 3) for a, b in zip(space.breakpoints[:-1],
-                                                   space.breakpoints[1:])]
-            + [np.linspace(*space.domain, SAMPLES)]))
-            for space in (source.u_space, source.v_space))
-        self.bases = [[space.collocation(x, nu).toarray() for nu in (0, 1)]
-                      for space, x in ((refined.u_space, self.u), (refined.v_space, self.v))]
-        self.points, self.normal = self._evaluate(refined.poles)
+    def __init__(self, sources, refined):
+        self.groups = {}
+        for f, source in enumerate(sources):
+            self.groups.setdefault((source.u_space.key, source.v_space.key), []).append(f)
+        self.bases, self.points, self.normals = {}, {}, {}
+        for key, members in self.groups.items():
+            self.bases[key] = _sample_bases(sources[members[0]], refined[members[0]])
+            self.points[key], self.normals[key] = self._evaluate(
+                key, np.stack([refined[f].poles for f in members]))
 
-    def _evaluate(self, poles):
-        (bu, du), (bv, dv) = self.bases
-        along_u = np.tensordot(bu, poles, axes=(1, 0))
-        points = np.einsum("ijd,kj->ikd", along_u, bv)
-        su = np.einsum("ia,abd,jb->ijd", du, poles, bv)
-        sv = np.einsum("ijd,kj->ikd", along_u, dv)
+    def _evaluate(self, key, poles):
+        """Points and unnormalised normals of the nets ``poles`` (g, k_u, k_v, 3) on the
+        spaces ``key``, at their samples: (g, n_u, n_v, 3) each."""
+        (bu, du), (bv, dv) = self.bases[key]
+        g, ku, kv, d = poles.shape
+        along_u = np.matmul(bu, poles.reshape(g, ku, kv * d)).reshape(g, -1, kv, d)
+        points = np.einsum("gijd,kj->gikd", along_u, bv)
+        su = np.einsum("ia,gabd,jb->gijd", du, poles, bv)
+        sv = np.einsum("gijd,kj->gikd", along_u, dv)
         return points, np.cross(su, sv)
 
-    def distance(self, surface):
-        """Largest same-parameter distance from the source; infinite where the surface
-        folds over (:func:`~cq_fairing.core.geometry.folded`)."""
-        points, normal = self._evaluate(surface.poles)
-        if folded(normal, self.normal).any():
-            return np.inf
-        return float(np.linalg.norm(points - self.points, axis=-1).max())
+    def distances(self, surfaces, kept):
+        """Each patch's largest same-parameter distance from its source (0 for ``kept``);
+        infinite where the surface folds over (:func:`~cq_fairing.core.geometry.folded`)."""
+        out = np.zeros(len(surfaces))
+        for key, members in self.groups.items():
+            rows = [q for q, f in enumerate(members) if f not in kept]
+            if not rows:
+                continue
+            points, normals = self._evaluate(
+                key, np.stack([surfaces[members[q]].poles for q in rows]))
+            distance = np.linalg.norm(points - self.points[key][rows], axis=-1).max(axis=(1, 2))
+            reference = self.normals[key][rows]
+            # a surface can only fold where its normals point away from the source's
+            apart = (np.einsum("gijd,gijd->gij", normals, reference) < 0.0).any(axis=(1, 2))
+            for k in np.flatnonzero(apart):
+                if folded(normals[k], reference[k]).any():
+                    distance[k] = np.inf
+            out[[members[q] for q in rows]] = distance
+        return out
+
+
+def _sample_bases(source, refined):
+    """``[[B_u, B_u'], [B_v, B_v']]``: the refined spaces' basis values and first
+    derivatives at the samples of ``source``'s spaces (at least :data:`SAMPLES` per
+    direction, three per span)."""
+    samples = (np.unique(np.concatenate(
+        [np.linspace(a, b, 3) for a, b in zip(space.breakpoints[:-1], space.breakpoints[1:])]
+        + [np.linspace(*space.domain, SAMPLES)]))
+        for space in (source.u_space, source.v_space))
+    return [[space.collocation(x, nu).toarray() for nu in (0, 1)]
+            for space, x in zip((refined.u_space, refined.v_space), samples)]

@@ -16,8 +16,11 @@ A member with any other join (to a faired face, a partial or trimmed side, other
 keeps its surface and constrains its neighbours, so every join of a moved face is held
 closed.  Each moved face is then checked against its own face by the backend's two-sided
 measure (``check``); if one is over its tolerance the network is solved again with
-:data:`SHRINK` times the tolerances, :data:`RETRIES` times at most, and otherwise left
-as it was.
+:data:`SHRINK` times the tolerances, :data:`RETRIES` times at most (its forms and
+samples prepared once, :class:`~cq_fairing.core.network.PatchNetwork`), and otherwise
+left as it was.  The faces nearest their tolerance by the network's own samples are
+checked first, and the first one over ends the check: testtoler's first network (22
+faces at tol 0.01) is then refused after one measure instead of 22.
 
 This module imports numpy only (and the core).
 """
@@ -27,7 +30,7 @@ from dataclasses import dataclass
 from .geometry import collapsed_kept
 from .joins import BorderJoin
 from .joint_projection import runs_reversed
-from .network import fair_network, network_joinable
+from .network import PatchNetwork, network_joinable
 
 __all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK"]
 
@@ -144,17 +147,18 @@ def _fair_component(sources, faces, moving, links, tolerances, check, reversed_,
                   for j in links for a, b in [j.sides]]
     kept = [position[f] for f in faces if f not in moving]
     tols = [tolerances[f] for f in faces]
+    network = PatchNetwork([sources[f] for f in faces], core_joins, continuity)
     for _ in range(RETRIES + 1):
-        result = fair_network([sources[f] for f in faces], core_joins, tols, kept=kept,
-                              continuity=continuity)
+        result = network.fair(tols, kept=kept)
         moved = {f for f in moving if position[f] not in result.kept}
         if not moved:
             return None
+        # the faces nearest their tolerance by the network's own samples first
+        nearest = sorted(moved, key=lambda f: -result.deviations[position[f]] / tolerances[f])
         surfaces = {f: collapsed_kept(sources[f], result.surfaces[position[f]])
-                    for f in sorted(moved)}
-        deviations = {f: check(f, surface) for f, surface in surfaces.items()}
-        if all(deviations[f] <= tolerances[f] for f in surfaces):
+                    for f in nearest}
+        if all(check(f, surfaces[f]) <= tolerances[f] for f in nearest):
             return NetworkFairing(sorted(moved), sorted(set(faces) - moved), links,
-                                  result.smoothing, surfaces)
+                                  result.smoothing, dict(sorted(surfaces.items())))
         tols = [SHRINK * t for t in tols]
     return None

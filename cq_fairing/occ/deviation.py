@@ -57,7 +57,7 @@ from OCP.TopAbs import TopAbs_REVERSED
 from ..core.closest_points import closest_points_surface_restarted
 from ..core.evaluation import surface_derivatives
 from ..errors import InvalidInputError, UnsupportedGeometryError
-from .convert import as_face, face_to_surface
+from .convert import as_face, face_info, face_to_surface
 from .trims import face_region
 
 __all__ = ["sample_face_deviation", "face_uv_grid", "DEFAULT_DENSITY"]
@@ -122,7 +122,9 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         The faired face must share the original's UV domain (as fairing guarantees).
     density : int or (int, int), optional
         Samples per direction over the original face's UV box; samples outside the trim
-        are dropped.
+        are dropped.  An untrimmed face (``face_info(face).trimmed`` false: one wire on
+        the borders of its surface) keeps every sample, as the fairing of a face does,
+        without asking OCCT's classifier about each (6 ms on 40 x 40 samples).
     projection : {"local", "global"}, optional
         ``"local"``: on B-spline faces, the core's batched Newton projection started at
         each sample's own parameters, OCCT measuring again every sample near the maximum
@@ -154,8 +156,8 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         raise InvalidInputError(
             f"projection must be one of {PROJECTIONS}, got {projection!r}."
         )
-    return deviation_on_grid(original_face, faired_face,
-                             face_uv_grid(original_face, density), projection)
+    grid = face_uv_grid(original_face, density, classify=face_info(original_face).trimmed)
+    return deviation_on_grid(original_face, faired_face, grid, projection)
 
 
 def reference_samples(face, *grids, surface=None):

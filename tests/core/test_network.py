@@ -6,11 +6,13 @@ import numpy as np
 import pytest
 
 from cq_fairing.core.examples import patch_grid
+from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.joins import BorderJoin
-from cq_fairing.core.network import fair_network, network_joinable
+from cq_fairing.core.network import SAMPLES, PatchNetwork, _Forms, fair_network, network_joinable
+from cq_fairing.core.patch_grid import insert_knot
 from cq_fairing.errors import InvalidInputError
 
-from .naive import basis_matrix
+from .naive import basis_matrix, dense_gram
 from .test_joins import _joins_measured
 
 
@@ -97,3 +99,93 @@ def test_joins_along_different_knots_are_refused(grid):
     assert not network_joinable(grid.patches[0], "u1", other, "u1", False)
     with pytest.raises(InvalidInputError, match="differ in degree or knots"):
         fair_network([grid.patches[0], other], [BorderJoin(0, "u1", 1, "u1")], 0.01)
+
+
+def _border_row(surface, side):
+    """The border poles along ``side`` in the order of its along-parameter."""
+    poles = surface.poles
+    return {"u0": poles[0], "u1": poles[-1], "v0": poles[:, 0], "v1": poles[:, -1]}[side]
+
+
+def test_joined_borders_are_one_row_of_poles_to_the_last_bit(grid, faired):
+    """G0 is held exactly: both patches take the very same border poles, also next to a
+    kept patch, whose border stays its source's, and with G0 alone (no mirrored rows)."""
+    g0 = fair_network(grid.patches, grid.joins, 0.005, continuity="G0")
+    assert g0.g1_rows == 0 and g0.smoothing > 0
+    for result in (faired, fair_network(grid.patches, grid.joins, 0.005, kept=[0]), g0):
+        for join in grid.joins:
+            a = _border_row(result.surfaces[join.a], join.side_a)
+            b = _border_row(result.surfaces[join.b], join.side_b)
+            assert np.array_equal(a, b[::-1] if join.reversed else b)
+    kept = fair_network(grid.patches, grid.joins, 0.005, kept=[0])
+    assert np.array_equal(_border_row(kept.surfaces[1], "u1"), _border_row(grid.patches[0], "u1"))
+
+
+@pytest.fixture(scope="module")
+def mixed(grid):
+    """The grid with patch 2 refined across u (a knot at u = 0.05, the same surface): its
+    join with patch 0 runs along other knots and is left out; patches on two kinds of
+    spaces, interleaved."""
+    patch = grid.patches[2]
+    knots, net = insert_knot(patch.u_knots, 3, patch.poles, 0.05)
+    refined = BSplineSurface(net, knots, patch.v_knots, 3, 3)
+    patches = [grid.patches[0], grid.patches[1], refined, grid.patches[3]]
+    joins = [j for j in grid.joins if network_joinable(
+        patches[j.a], j.side_a, patches[j.b], j.side_b, j.reversed)]
+    assert len(joins) == 3
+    return patches, joins
+
+
+def _probe_samples(space):
+    """The documented samples of a direction: three per span and SAMPLES over the domain."""
+    b = space.breakpoints
+    return np.unique(np.concatenate([np.linspace(p, q, 3) for p, q in zip(b[:-1], b[1:])]
+                                    + [np.linspace(b[0], b[-1], SAMPLES)]))
+
+
+def test_sampled_deviations_are_the_same_parameter_distances_on_the_samples(mixed):
+    """Each patch's deviation is the largest distance to its source at equal parameters on
+    its samples, evaluated here with scipy's bases, for patches on different spaces."""
+    patches, joins = mixed
+    result = fair_network(patches, joins, 0.005)
+    assert result.smoothing > 0 and len(result.kept) < len(patches)
+    for k, (source, surface) in enumerate(zip(patches, result.surfaces)):
+        u, v = _probe_samples(source.u_space), _probe_samples(source.v_space)
+        points = [np.einsum("ia,abd,jb->ijd", basis_matrix(s.u_knots, 3, u), s.poles,
+                            basis_matrix(s.v_knots, 3, v)) for s in (source, surface)]
+        expected = 0.0 if k in result.kept else np.linalg.norm(points[0] - points[1], axis=-1).max()
+        assert result.deviations[k] == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    assert np.all(result.deviations <= 0.005)
+
+
+def test_each_patch_gets_the_forms_of_its_own_spaces(mixed):
+    """The L2 and thin-plate forms, built once per pair of spaces, against dense Gauss
+    quadrature of scipy's bases for every patch."""
+    patches, _ = mixed
+    forms = _Forms(patches)
+    for k, patch in enumerate(patches):
+        block = slice(forms.offsets[k], forms.offsets[k + 1])
+        g = [[dense_gram(s.knots, 3, s.knots, 3, nu) for nu in (0, 1, 2)]
+             for s in (patch.u_space, patch.v_space)]
+        mass = np.kron(g[0][0], g[1][0])
+        energy = np.kron(g[0][2], g[1][0]) + 2 * np.kron(g[0][1], g[1][1]) + \
+            np.kron(g[0][0], g[1][2])
+        scaled = np.trace(mass) / np.trace(energy) * energy
+        assert np.allclose(forms.mass[block, block].toarray(), mass, rtol=1e-9,
+                           atol=1e-12 * np.abs(mass).max())
+        assert np.allclose(forms.energy[block, block].toarray(), scaled, rtol=1e-9,
+                           atol=1e-12 * np.abs(scaled).max())
+        assert forms.mass[block].nnz == forms.mass[block, block].nnz   # block-diagonal
+
+
+def test_a_network_prepared_once_fairs_each_tolerance_as_a_fresh_one(grid):
+    """The forms and samples a PatchNetwork keeps do not depend on the tolerance or the
+    kept patches: fairing it again gives what a fresh fair_network gives, to the bit."""
+    network = PatchNetwork(grid.patches, grid.joins)
+    for tol, kept in ((0.01, ()), (0.005, (0,)), (0.003, ())):
+        again, fresh = network.fair(tol, kept=kept), fair_network(grid.patches, grid.joins, tol,
+                                                                   kept=kept)
+        assert again.smoothing == fresh.smoothing and again.kept == fresh.kept
+        assert np.array_equal(again.deviations, fresh.deviations)
+        assert all(np.array_equal(a.poles, b.poles)
+                   for a, b in zip(again.surfaces, fresh.surfaces))

@@ -77,6 +77,25 @@ def _real_faired(real, name, pick, tol):
     raise LookupError(name)
 
 
+def test_an_untrimmed_face_keeps_every_sample_and_occt_puts_each_on_the_face(real):
+    """The testtoler strip is untrimmed: its deviation keeps every one of the 30 x 30
+    samples of its UV box without classifying them, and OCCT's classifier
+    (``BRepTopAdaptor_FClass2d``, as for trimmed faces) finds each inside or on it."""
+    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
+    from OCP.gp import gp_Pnt2d
+    from OCP.TopAbs import TopAbs_IN, TopAbs_ON
+
+    from cq_fairing.occ.convert import face_info
+
+    face, report = _real_faired(real, "testtoler.brep", lambda s: s.shape[0] > 100, 2.0)
+    assert not face_info(face).trimmed
+    samples = sample_face_deviation(face, report.face, density=30)
+    assert samples["uv"].shape == (900, 2)
+    classifier = BRepTopAdaptor_FClass2d(face, 1e-9)
+    assert all(classifier.Perform(gp_Pnt2d(float(u), float(v))) in (TopAbs_IN, TopAbs_ON)
+               for u, v in samples["uv"])
+
+
 REAL_FACES = {
     "IEA main face": ("IEA_15MW_CFD.stp", lambda s: s.shape[1] > 200, 0.05),
     "testtoler strip": ("testtoler.brep", lambda s: s.shape[0] > 100, 2.0),
