@@ -84,7 +84,7 @@ from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
-           "pinning_patch", "side_parameters", "turned_patches", "mirror_ratio", "UnionFind",
+           "pinning_patch", "side_parameters", "turned_patches", "JoinTurns", "mirror_ratio", "UnionFind",
            "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
            "holds_curvature", "CURVATURE_SLACK"]
 
@@ -329,18 +329,33 @@ def holds_curvature(sources, join):
     return bool(largest * size <= FLAT or np.abs(ka - kb).max() <= CURVATURE_SLACK * largest)
 
 
+class JoinTurns:
+    """The sources' normal angles along every smooth join of ``joins``
+    (:data:`ANGLE_SAMPLES` samples), measured once, against which faired patches are
+    checked (:meth:`turned`)."""
+
+    def __init__(self, sources, joins):
+        self.joins = list(joins)
+        self.samples = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
+        self.source = {k: join_angles(sources, join, self.samples)
+                       for k, join in enumerate(self.joins) if join.smooth}
+
+    def turned(self, surfaces, moved):
+        """The patches of ``moved`` on a smooth join whose normals turn, somewhere along
+        it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle at the same
+        place."""
+        out, moved = set(), set(moved)
+        for k, angles in self.source.items():
+            join = self.joins[k]
+            mine = {join.a, join.b} & moved
+            if mine and np.max(join_angles(surfaces, join, self.samples) - angles) > ANGLE_SLACK:
+                out |= mine
+        return out
+
+
 def turned_patches(surfaces, sources, joins, moved):
-    """The patches of ``moved`` on a smooth join of ``joins`` whose normals turn,
-    somewhere along it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle
-    at the same place (:data:`ANGLE_SAMPLES` samples)."""
-    out = set()
-    t = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
-    for join in joins:
-        mine = {join.a, join.b} & set(moved)
-        if join.smooth and mine and np.max(join_angles(surfaces, join, t)
-                                           - join_angles(sources, join, t)) > ANGLE_SLACK:
-            out |= mine
-    return out
+    """:meth:`JoinTurns.turned` of ``surfaces`` against ``sources``, measured here."""
+    return JoinTurns(sources, joins).turned(surfaces, moved)
 
 
 # -- input ---------------------------------------------------------------------------------

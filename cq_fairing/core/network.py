@@ -47,7 +47,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
-from .joins import UnionFind, mirror_ratio, turned_patches
+from .joins import JoinTurns, UnionFind, mirror_ratio
 from .patch_grid import insert_knot
 
 __all__ = ["NetworkResult", "PatchNetwork", "fair_network", "network_joinable"]
@@ -155,6 +155,7 @@ class PatchNetwork:
         self.forms = _Forms([_refined(p) for p in self.sources])
         self.probes = _Probes(self.sources, self.forms.patches)
         self.sides = _join_sides(self.forms, self.joins)
+        self.turns = JoinTurns(self.sources, self.joins) if continuity == "G1" else None
 
     def fair(self, tol, *, kept=()):
         """:func:`fair_network` of the prepared network within ``tol`` (per patch or for
@@ -170,8 +171,7 @@ class PatchNetwork:
         for _ in range(len(sources)):
             result = _smoothest(self, tols, kept)
             moved = set(range(len(sources))) - result.kept
-            turned = (turned_patches(result.surfaces, sources, self.joins, moved)
-                      if self.continuity == "G1" else set())
+            turned = self.turns.turned(result.surfaces, moved) if self.turns else set()
             if not turned:
                 return result
             kept |= turned   # their joins would turn more than the source's: keep them
