@@ -15,8 +15,8 @@ Run:  python benchmarks/bench_speed.py [--rounds 5] [--parts startup faces curve
   ``peers.fitters.occt_fit``).  Each round runs OCCT's fit and then ours back to back;
   each runs once untimed first.  A peer slower than 10 s gets a third of the rounds.
 * ``curve``: the seed curve (1302 poles) at tol 0.02, ``fair_curve(poles, tol=0.02)``
-  with its defaults, against OCCT's ``GeomAPI_PointsToBSpline`` fit of the 1300 points,
-  in alternation as above.
+  with its defaults (``method="auto"``) and with ``method="wavelet"``, against OCCT's
+  ``GeomAPI_PointsToBSpline`` fit of the 1300 points, the three in alternation as above.
 
 Ratios are medians of ours against the peer's median in the same run; the per-round
 ratios show the spread.
@@ -151,18 +151,22 @@ def curve(rounds):
     def peer():
         results["peer"] = METHODS["OCCT PointsToBSpline"](case)[0]
 
-    def ours():
-        results["ours"] = cf.fair_curve(source.poles, tol=case.tol, knots=source.knots,
-                                        degree=source.degree)
+    def ours(key, **options):
+        def run():
+            results[key] = cf.fair_curve(source.poles, tol=case.tol, knots=source.knots,
+                                         degree=source.degree, **options)
+        return run
 
     print("| case | tol; ours: poles, deviation; OCCT: poles | OCCT fit median s | "
           "ours median s | ratio | per-round ratios (min, median, max) |")
     print("|---|---|---|---|---|---|")
-    times, n = alternate({"peer": peer, "ours": ours}, rounds)
-    result = results["ours"]
-    detail = (f"{case.tol:g}; {result.curve.poles.shape[0]}, {result.max_deviation:.4g}; "
-              f"{results['peer'].poles.shape[0]}")
-    _row("seed curve (1300 pts)", detail, times["peer"], times["ours"], n)
+    times, n = alternate({"peer": peer, "wavelet": ours("wavelet", method="wavelet"),
+                          "auto": ours("auto")}, rounds)
+    for method, label in (("wavelet", '`method="wavelet"`'), ("auto", 'default `"auto"`')):
+        result = results[method]
+        detail = (f"{case.tol:g}; {result.curve.poles.shape[0]}, {result.max_deviation:.4g}; "
+                  f"{results['peer'].poles.shape[0]}")
+        _row(f"seed curve (1300 pts), {label}", detail, times["peer"], times[method], n)
 
 
 PARTS = {"startup": startup, "faces": faces, "curve": curve}

@@ -1,9 +1,12 @@
 """Adaptive fairing of curves: :func:`fair_curve_adaptive` and its target search
-(:mod:`cq_fairing.core.adaptive`); :func:`noise_limited_curve`, its ``"faithful"`` fit
-where the noise, not the tolerance, sets the size.
-"""
+(:mod:`cq_fairing.core.adaptive`); :class:`CurveSearch`, its stages on one source,
+tolerance and degree, each measured once, among them the ``"faithful"`` fit where the
+noise, not the tolerance, sets the size (:meth:`CurveSearch.noise_limited`).
 
-from functools import cache
+A count of the knot family checked only for its verdict (the doubling and bisection,
+the last redistribution round of a count) is measured only as far as the verdict needs
+(:meth:`_CurveFit.errors`); every value the results depend on is measured as in full.
+"""
 
 import numpy as np
 import scipy.sparse as sp
@@ -43,14 +46,28 @@ class _CurveFit:
         self.coefficients = curve.homogeneous() if curve.is_rational else curve.poles
         self.probe = CurveProbe(curve, per_span=per_span)
         self.evaluations = 0
+        self._system = (None, None)
+
+    def _normal_equations(self, space):
+        r"""``{"gram", "rhs", "energy"}`` of ``space``: :math:`G_T`,
+        :math:`\langle\Phi_T|\Phi_S\rangle C_S` and the scaled :math:`G^{(3)}`
+        (built when first asked for); kept for the last space, which the polish and its
+        back-off project onto again and again."""
+        key = (space.degree, space.knots.tobytes())
+        if self._system[0] != key:
+            rhs = gram_matrix(space, self.curve.space) @ self.coefficients
+            self._system = (key, {"gram": gram_matrix(space), "rhs": rhs, "energy": None})
+        return self._system[1]
 
     def project(self, space, lam=0.0):
         """Coefficients of the (penalised) projection onto ``space``."""
-        g = gram_matrix(space)
+        system = self._normal_equations(space)
+        g = system["gram"]
         if lam > 0.0:
-            g = g + lam * _scaled_energy(space, 3)
-        rhs = gram_matrix(space, self.curve.space) @ self.coefficients
-        return np.asarray(spla.splu(sp.csc_matrix(g)).solve(rhs))
+            if system["energy"] is None:
+                system["energy"] = _scaled_energy(space, 3)
+            g = g + lam * system["energy"]
+        return np.asarray(spla.splu(sp.csc_matrix(g)).solve(system["rhs"]))
 
     def geometry(self, space, coefficients):
         if self.curve.is_rational:
@@ -58,30 +75,41 @@ class _CurveFit:
             return BSplineCurve(coefficients[:, :-1] / w[:, None], space.knots, space.degree, w)
         return BSplineCurve(coefficients, space.knots, space.degree)
 
-    def errors(self, faired):
-        """Per-sample deviation: true distance where the bound exceeds part of tol."""
+    def errors(self, faired, verdict=False):
+        """Per-sample deviation: true distance where the bound exceeds part of tol.
+
+        With ``verdict`` only whether tol holds is asked for: a candidate the probe
+        refutes (:meth:`~cq_fairing.core.probes.CurveProbe.refutes`) keeps its bounds,
+        and a failing one's true distances may be one-sided.  The verdict is the same,
+        and so are the values of a passing candidate; a failing one's are not those of
+        a full measure (which the error densities of the reduction need)."""
         self.evaluations += 1
         other, bound = self.probe.bound(faired)
-        return _refined(bound, lambda idx: self.probe.true_distance(faired, other, idx,
-                                                                     tol=self.tol), self.tol)
+        if verdict and self.probe.refutes(faired, other, bound, self.tol):
+            return bound
+        return _refined(bound, lambda idx: self.probe.true_distance(
+            faired, other, idx, tol=self.tol, verdict=verdict), self.tol)
 
-    def trial(self, space, lam=0.0):
+    def trial(self, space, lam=0.0, verdict=False):
         """``(faired, per-sample deviation, max)``.  A rational candidate with a
         non-positive weight fails (``max = inf``): it may pass through infinity between
         samples.  Its samples then say nothing about where the error is, so they all get
-        the same value (twice the tolerance), which keeps the knot density as it is."""
+        the same value (twice the tolerance), which keeps the knot density as it is.
+        ``verdict``: as for :meth:`errors`."""
         coefficients = self.project(space, lam)
         faired = self.geometry(space, coefficients)
         if self.curve.is_rational and not np.all(coefficients[:, -1] > 0):
             return faired, np.full(self.probe.u.size, 2.0 * self.tol), np.inf
-        values = self.errors(faired)
+        values = self.errors(faired, verdict)
         return faired, values, float(values.max())
 
 
 def _reduce(space0, values0, u, tol, degree, trial, rounds=ROUNDS):
     """Lower the span count one at a time with error-driven knots while ``tol`` holds.
 
-    Returns the last passing ``(space, faired, values, max)``.
+    ``trial(space, verdict=...)`` as :meth:`_CurveFit.trial`: the last round of a count
+    asks for the verdict only (a failing round's values are needed only for the next
+    round's density).  Returns the last passing ``(space, faired, values, max)``.
     """
     best = (space0,) + values0
     while best[0].n_spans > 1:
@@ -90,9 +118,9 @@ def _reduce(space0, values0, u, tol, degree, trial, rounds=ROUNDS):
         rho = error_density(b, _span_max(b, u, values), tol, degree)
         n = space.n_spans - 1
         found = None
-        for _ in range(rounds):
+        for round_ in range(rounds):
             cand = equidistributed_space(b, rho, n, degree)
-            f, vals, e = trial(cand)
+            f, vals, e = trial(cand, verdict=round_ == rounds - 1)
             if e <= tol:
                 found = (cand, f, vals, e)
                 break
@@ -154,133 +182,230 @@ def fair_curve_adaptive(curve, tol, *, target_degree=None, objective="compact", 
         Even the source's own space at the target degree exceeds ``tol``.
     """
     tol = check_tolerance(tol)
-    return _adaptive_curve(curve, tol, checked_target_degree(target_degree, curve.degree),
-                           checked_objective(objective), polish, per_span)
+    return CurveSearch(curve, tol, checked_target_degree(target_degree, curve.degree),
+                       per_span).adaptive(checked_objective(objective), polish)
 
 
-def noise_limited_curve(curve, tol, *, target_degree=None, most_poles=None, per_span=8):
-    """The ``"faithful"`` fit of :func:`fair_curve_adaptive` where the noise sets its
-    size, else ``None``.
-
-    The smallest target of the knot family whose residual is down to the source's
-    estimated noise (:mod:`cq_fairing.core.fidelity`) is the answer when it meets ``tol``
-    (checked as by :func:`fair_curve_adaptive`).  When it does not, ``tol`` needs more
-    poles than the noise does: the tolerance, not the noise, limits the fit, and the
-    ``"faithful"`` objective would go on with the compact search; this function stops
-    there and returns ``None`` (one projection measured, no search).
+class CurveSearch:
+    """The stages of the adaptive fits of one source curve at one tolerance and degree,
+    each measured once and kept: the counts of the knot family checked against ``tol``,
+    the compact search (:meth:`compact`), the noise-limited count
+    (:meth:`faithful_count`), and the polish and checks that finish a fit
+    (:meth:`finished`).  :func:`fair_curve_adaptive` runs them in order (:meth:`adaptive`);
+    the curves' default (:mod:`cq_fairing.core.auto_curve`) runs only those that can
+    change its choice.
 
     Parameters
     ----------
-    curve, tol, target_degree, per_span
-        As for :func:`fair_curve_adaptive`.
-    most_poles : int, optional
-        ``None`` also, before anything is measured, when the noise needs a target with
-        more poles.
-
-    Returns
-    -------
-    FairResult or None
-        As :func:`fair_curve_adaptive` with ``objective="faithful"`` returns it.
+    curve : BSplineCurve
+        Validated source curve.
+    tol : float
+        Checked tolerance.
+    degree : int
+        Checked target degree.
+    per_span : int
+        Deviation samples per source span.
     """
-    tol = check_tolerance(tol)
-    return _adaptive_curve(curve, tol, checked_target_degree(target_degree, curve.degree),
-                           "faithful", True, per_span, past_noise=False,
-                           most_poles=np.inf if most_poles is None else most_poles)
 
+    def __init__(self, curve, tol, degree, per_span=8):
+        self.curve, self.tol, self.degree, self.per_span = curve, tol, degree, per_span
+        self.fit = _CurveFit(curve, SAFETY * tol, degree, per_span)
+        self.top = curve.space.n_spans
+        self.checked = {}
+        self._density = _source_density(curve.space)
+        self._check_probe = None
+        self._kept = {}
 
-def _adaptive_curve(curve, tol, degree, objective, polish, per_span, past_noise=True,
-                    most_poles=np.inf):
-    """:func:`fair_curve_adaptive` on validated arguments; ``past_noise=False``: ``None``
-    where a ``"faithful"`` fit would need the compact search or more than ``most_poles``
-    poles (:func:`noise_limited_curve`)."""
-    faithful = objective == "faithful"
-    fair = objective == "fair" and polish and not curve.is_rational and degree >= 3
-    fit = _CurveFit(curve, SAFETY * tol, degree, per_span)
-    b0, rho0 = _source_density(curve.space)
-    top = curve.space.n_spans
+    def family(self, n):
+        """The knot family's space with ``n`` spans (breakpoints equidistributing the
+        source's own density)."""
+        return equidistributed_space(*self._density, n, self.degree)
 
-    def family(n):
-        return equidistributed_space(b0, rho0, n, degree)
+    def passes(self, n):
+        """Whether the family's space with ``n`` spans is within tol on the search
+        samples; its trial is kept in ``checked[n]``, in full for a passing count and the
+        top one, as far as the verdict needs for a failing one
+        (:meth:`_CurveFit.errors`)."""
+        if n not in self.checked:
+            self.checked[n] = self.fit.trial(self.family(n), verdict=n != self.top)
+        return self.checked[n][2] <= self.fit.tol
 
-    cache = {}
+    @property
+    def check_probe(self):
+        """The probe of the final check: twice the search's samples per span."""
+        if self._check_probe is None:
+            self._check_probe = CurveProbe(self.curve, per_span=2 * self.per_span)
+        return self._check_probe
 
-    def check(n):
-        cache[n] = fit.trial(family(n))
-        return cache[n][2] <= fit.tol
+    def once(self, key, compute):
+        """``compute()``, computed on the first call with ``key`` and kept."""
+        if key not in self._kept:
+            self._kept[key] = compute()
+        return self._kept[key]
 
-    table = ()
-    start = 4
-    if faithful:
-        start, sigma = _faithful_count(fit, family, top)
-        table = (("noise", sigma),)
-    if faithful and family(start).dimension <= most_poles and check(start):
-        space, (faired, values, e), lam = family(start), cache[start], 0.0
-    elif not past_noise:
-        return None
-    else:
-        space, faired, values, e = _compact_curve(fit, family, check, cache, top, start, tol)
+    def compact(self, start=4):
+        """Fewest spans within tol from ``start`` (:func:`_compact_curve`), unpolished:
+        ``(space, faired, values, deviation)``.
+
+        Raises
+        ------
+        ToleranceNotMetError
+            Even the source's own breakpoints at the target degree exceed tol.
+        """
+        return self.once(("compact", start), lambda: _compact_curve(self, start))
+
+    def faithful_count(self, ceiling=np.inf):
+        """``(count, sigma)`` of :func:`_faithful_count`; ``(None, sigma)`` where a count
+        whose space has more than ``ceiling`` poles is found too noisy: the count is not
+        below it, so its space has more poles too (the search stops there)."""
+        return self.once(("faithful", ceiling), lambda: _faithful_count(self, ceiling))
+
+    def residual_variance(self, n):
+        """Residual variance (:class:`~cq_fairing.core.fidelity.CurveResidual`) of the
+        projection onto the family's space with ``n`` spans, computed once."""
+        def compute():
+            residual = self.once("residual", lambda: CurveResidual(self.curve))
+            space = self.family(n)
+            return residual.variance(self.fit.geometry(space, self.fit.project(space)))
+        return self.once(("variance", n), compute)
+
+    def holds(self, faired):
+        """Whether ``faired`` is within tol on the final check's samples: the verdict of
+        :func:`_final_curve_check` without its exact maximum."""
+        return self.check_probe.max_deviation(faired, self.tol)[0] <= self.tol
+
+    def noise_limited(self, most_poles=np.inf):
+        """The ``"faithful"`` fit where the noise sets its size, else ``None``.
+
+        The smallest target of the knot family whose residual is down to the source's
+        estimated noise (:mod:`cq_fairing.core.fidelity`) is the answer when it meets
+        ``tol`` (checked as by :func:`fair_curve_adaptive`).  When it does not, ``tol``
+        needs more poles than the noise does: the tolerance, not the noise, limits the
+        fit, and the ``"faithful"`` objective goes on with the compact search; this
+        stops there and returns ``None`` (one projection measured, no search), as it
+        does, before anything is measured, when that target has more than
+        ``most_poles`` poles.
+
+        Returns
+        -------
+        FairResult or None
+            As :func:`fair_curve_adaptive` with ``objective="faithful"`` returns it.
+
+        Raises
+        ------
+        ToleranceNotMetError
+            The target passes the search samples but not the final check, nor do the
+            targets grown from it up to the source's span count.
+        """
+        start, sigma = self.faithful_count()
+        if self.family(start).dimension > most_poles or not self.passes(start):
+            return None
+        return self.finished((self.family(start),) + self.checked[start], 0.0,
+                             (("noise", sigma),))
+
+    def adaptive(self, objective="compact", polish=True):
+        """:func:`fair_curve_adaptive` on this search (checked ``objective``)."""
+        start, table = 4, ()
+        if objective == "faithful":
+            quiet = self.noise_limited()
+            if quiet is not None:
+                return quiet
+            start, sigma = self.faithful_count()
+            table = (("noise", sigma),)
+        found, lam = self.polished(self.compact(start), polish)
+        fair = objective == "fair" and polish and not self.curve.is_rational and self.degree >= 3
+        return self.finished(found, lam, table, fair)
+
+    def polished(self, found, polish=True):
+        """``found`` (as :meth:`compact`) with the energy polish of a polynomial target of
+        degree >= 3, and its ``lambda``."""
+        space, faired, values, e = found
         lam = 0.0
-        if polish and not curve.is_rational and degree >= 3:
-            (faired, values, e), lam = _polish(lambda x: fit.trial(space, x), fit.tol,
-                                               (faired, values, e))
-    space, faired, e, lam = _checked_curve(curve, fit, space, faired, values, lam, per_span,
-                                           tol)
-    if fair:
-        space, faired, e, lam = _fairest_curve(curve, fit, (space, faired, e, lam), values,
-                                               per_span, tol)
-    step = decomposition(curve.space, space)
-    return FairResult(curve, faired, (top, space.n_spans), space.n_spans, "adaptive",
-                      (step,), max_deviation=e, evaluations=fit.evaluations,
-                      table=(("lambda", lam),) + table)
+        if polish and not self.curve.is_rational and self.degree >= 3:
+            (faired, values, e), lam = _polish(lambda x: self.fit.trial(space, x),
+                                               self.fit.tol, (faired, values, e))
+        return (space, faired, values, e), lam
+
+    def finished(self, found, lam, table=(), fair=False):
+        """The result of ``found`` (as :meth:`compact`) with penalty ``lam``: checked on
+        denser samples (:func:`_checked_curve`), the objective ``"fair"``'s growths with
+        ``fair``.
+
+        Raises
+        ------
+        ToleranceNotMetError
+            The final check fails up to the source's span count.
+        """
+        space, faired, values, _ = found
+        space, faired, e, lam = _checked_curve(self, space, faired, values, lam)
+        if fair:
+            space, faired, e, lam = _fairest_curve(self, (space, faired, e, lam), values)
+        step = decomposition(self.curve.space, space)
+        return FairResult(self.curve, faired, (self.top, space.n_spans), space.n_spans,
+                          "adaptive", (step,), max_deviation=e,
+                          evaluations=self.fit.evaluations,
+                          table=(("lambda", lam),) + table)
 
 
-def _faithful_count(fit, family, top):
-    """Smallest count whose residual variance is within the noise level, and that level.
+class _TooNoisy(Exception):
+    """A count of :func:`_faithful_count` above its ceiling is too noisy."""
+
+
+def _faithful_count(search, ceiling=np.inf):
+    """Smallest count whose residual variance is within the noise level, and that level;
+    ``None`` for the count once one whose space has more than ``ceiling`` poles fails
+    (the count found is never below a failing one).
 
     Doubling from a small count stops at the count the noise was measured on (its
     variance is the noise level, so it passes); bisection closes the bracket (a curve's
     residual falls off a cliff onto the noise, where :func:`_interpolated_count`'s
     log-log chord guesses badly: 9 projections against 5 on the seed curve at degree 7)."""
-    residual = CurveResidual(fit.curve)
-
-    @cache
-    def variance(n):
-        space = family(n)
-        return residual.variance(fit.geometry(space, fit.project(space)))
+    top = search.top
 
     def count(fraction):
         return max(1, int(round(fraction * top)))
 
-    sigma = noise_level(lambda fraction: variance(count(fraction)), fit.curve.size)
+    sigma = noise_level(lambda fraction: search.residual_variance(count(fraction)),
+                        search.curve.size)
     limit = noise_limit(sigma)
 
     def quiet(n):
-        return variance(n) <= limit
+        if search.residual_variance(n) <= limit:
+            return True
+        if search.family(n).dimension > ceiling:
+            raise _TooNoisy
+        return False
 
-    fails, n = _doubling(quiet, count(1.0 / NOISE_FRACTION))
-    return (top if n is None else _bisect_count(fails, n, quiet)), sigma
+    try:
+        fails, n = _doubling(quiet, count(1.0 / NOISE_FRACTION))
+        return (top if n is None else _bisect_count(fails, n, quiet)), sigma
+    except _TooNoisy:
+        return None, sigma
 
 
-def _compact_curve(fit, family, check, cache, top, start, tol):
+def _compact_curve(search, start):
     """Fewest spans within tol: doubling from ``start``, bisection, error-driven reduction."""
-    fails, n = _doubling(check, top, start)
+    fit, top = search.fit, search.top
+    fails, n = _doubling(search.passes, top, start)
     if n is None:
-        what = ("give a non-positive weight" if np.isinf(cache[top][2])
-                else f"deviate by {cache[top][2]:.4g}")
+        worst = search.checked[top][2]
+        what = "give a non-positive weight" if np.isinf(worst) else f"deviate by {worst:.4g}"
         raise ToleranceNotMetError(
-            f"no adaptive target within tol={tol:g}: simple knots on the source's "
+            f"no adaptive target within tol={search.tol:g}: simple knots on the source's "
             f"breakpoints at degree {fit.degree} {what}; raise the tolerance or keep the "
             f"degree{_multiple_knots_hint(fit.curve.space)}.",
-            tolerance=tol, best_deviation=cache[top][2])
-    n = _scan_below(_bisect_count(fails, n, check), check)
-    return _reduce(family(n), cache[n], fit.probe.u, fit.tol, fit.degree, fit.trial)
+            tolerance=search.tol, best_deviation=worst)
+    n = _scan_below(_bisect_count(fails, n, search.passes), search.passes)
+    return _reduce(search.family(n), search.checked[n], fit.probe.u, fit.tol, fit.degree,
+                   fit.trial)
 
 
-def _fairest_curve(curve, fit, compact, values, per_span, tol):
+def _fairest_curve(search, compact, values):
     """Objective ``"fair"``: the ``compact`` answer ``(space, faired, deviation, lambda)``
     or the compact space with ``FAIR_CURVE_GROWTHS`` more spans (knots equidistributing
     the error density of the search-grid deviations ``values``), polished and checked,
     whichever has the least :func:`_curve_energy`."""
+    fit = search.fit
     space = compact[0]
     breaks = space.breakpoints
     rho = error_density(breaks, _span_max(breaks, fit.probe.u, values), fit.tol, fit.degree)
@@ -292,7 +417,7 @@ def _fairest_curve(curve, fit, compact, values, per_span, tol):
             continue
         (faired, _, _), lam = _polish(lambda x, grown=grown: fit.trial(grown, x), fit.tol, trial)
         try:
-            faired, e, lam = _final_curve_check(curve, fit, grown, faired, lam, per_span, tol)
+            faired, e, lam = _final_curve_check(search, grown, faired, lam)
         except ToleranceNotMetError:
             continue
         energy = _curve_energy(grown, faired)
@@ -307,16 +432,17 @@ def _curve_energy(space, curve):
     return float(np.einsum("id,id->", curve.poles, gram_matrix(space, nu=3) @ curve.poles))
 
 
-def _checked_curve(curve, fit, space, faired, values, lam, per_span, tol):
+def _checked_curve(search, space, faired, values, lam):
     """The final check of :func:`_final_curve_check`; a space it refuses grows by one
     span at a time (knots equidistributing the search grid's error density ``values``)
     up to the source's span count, as the surface search grows a refused net.  Returns
     ``(space, faired, deviation, lambda)``."""
+    fit = search.fit
     while True:
         try:
-            return (space,) + _final_curve_check(curve, fit, space, faired, lam, per_span, tol)
+            return (space,) + _final_curve_check(search, space, faired, lam)
         except ToleranceNotMetError:
-            if space.n_spans >= curve.space.n_spans:
+            if space.n_spans >= search.top:
                 raise
         breaks = space.breakpoints
         rho = error_density(breaks, _span_max(breaks, fit.probe.u, values), fit.tol,
@@ -325,14 +451,14 @@ def _checked_curve(curve, fit, space, faired, values, lam, per_span, tol):
         (faired, values, _), lam = fit.trial(space), 0.0
 
 
-def _final_curve_check(curve, fit, space, faired, lam, per_span, tol):
+def _final_curve_check(search, space, faired, lam):
     """Check on twice the samples; back the polish off until ``tol`` holds."""
-    check_probe = CurveProbe(curve, per_span=2 * per_span)
-    e = check_probe.max_deviation(faired)[0]
+    tol = search.tol
+    e = search.check_probe.max_deviation(faired)[0]
     while e > tol and lam > 0.0:
         lam = lam / 10.0 if lam > 1e-8 else 0.0
-        faired = fit.geometry(space, fit.project(space, lam))
-        e = check_probe.max_deviation(faired)[0]
+        faired = search.fit.geometry(space, search.fit.project(space, lam))
+        e = search.check_probe.max_deviation(faired)[0]
     if e > tol:
         raise ToleranceNotMetError(
             f"the adaptive target ({space.dimension} poles) passed the search samples but "

@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .evaluation import _derivatives_in_domain, curve_derivatives, sample_parameters
+from .spaces import find_spans
 
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
 
@@ -98,19 +99,68 @@ def _closest_from_starts(curve, points, sample_u, tree, same_u, starts=3, tol=No
     lobe, and Newton from both ends in the same local minimum (a seed-like curve of 53
     poles projected onto 23: 0.0518 against the true 0.0476).
 
-    With ``tol`` the other starts are tried only where the first distance exceeds it,
-    and every Newton iteration stops once below it.
+    ``tree()`` returns the ``cKDTree`` of the curve's samples at ``sample_u``, asked for
+    only when other starts are tried (building one for the ten thousand samples of a
+    seed-like curve costs about as much as a Newton run).  With ``tol`` the other starts
+    are tried only where the first distance exceeds it, and every Newton iteration stops
+    once below it.
     """
     best = closest_points_curve(curve, points, same_u, stop_below=tol)[1]
     todo = np.flatnonzero(best > tol) if tol is not None else np.arange(best.size)
     if todo.size == 0:
         return best
-    _, near = tree.query(points[todo], k=min(starts, sample_u.size))
+    _, near = tree().query(points[todo], k=min(starts, sample_u.size))
     near = near.reshape(todo.size, -1)
     for column in near.T:
         best[todo] = np.minimum(best[todo], closest_points_curve(
             curve, points[todo], sample_u[column], stop_below=tol)[1])
     return best
+
+
+def distance_floor(curve, u, on_curve, points):
+    r"""Lower bounds of the distances from ``points`` to a polynomial ``curve``, from its
+    points ``on_curve`` at increasing parameters ``u`` that span its domain.
+
+    On :math:`[u_j, u_{j+1}]` the curve moves at most :math:`M_j` per unit parameter,
+    :math:`M_j` the largest derivative control point
+    :math:`p\,(P_{i+1} - P_i) / (t_{i+p+1} - t_{i+1})` active on the knot spans the
+    interval meets (convex hull property of :math:`C'`), so with
+    :math:`a_j = \|C(u_j) - P\|`
+
+    .. math:: \min_{t \in [u_j, u_{j+1}]} \|C(t) - P\| \ge
+       \tfrac12\,(a_j + a_{j+1} - M_j\,(u_{j+1} - u_j)).
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        Polynomial (no weights).
+    u : ndarray, shape (m,)
+        Increasing, ``u[0]`` and ``u[-1]`` the domain's ends.
+    on_curve : ndarray, shape (m, d)
+        ``curve`` at ``u``.
+    points : ndarray, shape (q, d)
+
+    Returns
+    -------
+    ndarray, shape (q,)
+        Bounds ``>= 0``, never above the exact distances (up to rounding).
+    """
+    spans = find_spans(curve.space, u) - curve.degree
+    speed = _span_speeds(curve)
+    reach = np.maximum(np.maximum.reduceat(speed, spans[:-1]), speed[spans[1:]]) * np.diff(u)
+    a = _distance(on_curve[None, :, :], np.asarray(points, dtype=float)[:, None, :])
+    return np.maximum(0.5 * (a[:, :-1] + a[:, 1:] - reach).min(axis=1), 0.0)
+
+
+def _span_speeds(curve):
+    """Largest derivative control point norm active on each knot span of a polynomial
+    curve (span ``mu`` of :func:`find_spans` at index ``mu - p``): bounds of ``|C'|``."""
+    t, p = curve.knots, curve.degree
+    k = curve.poles.shape[0]
+    width = t[p + 1:p + k] - t[1:k]
+    step = np.linalg.norm(np.diff(curve.poles, axis=0), axis=1)
+    speed = p * np.divide(step, width, out=np.zeros_like(step), where=width > 0)
+    return np.lib.stride_tricks.sliding_window_view(speed, p).max(axis=1)
 
 
 def _damped(trial, active, step, dist, halvings=HALVINGS):

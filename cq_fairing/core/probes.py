@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
-from .closest_points import _closest_from_starts, _distance, closest_points_surface
+from .closest_points import _closest_from_starts, _distance, closest_points_surface, distance_floor
 from .evaluation import _derivatives_in_domain, curve_derivatives, sample_parameters, within_box
 from .geometry import grid_product
 
@@ -22,6 +22,9 @@ BLOCK_SAMPLES = 65_536  # grid samples per block of rows when a probe does not h
 
 
 COLLOCATIONS = 128     # collocation matrices a probe keeps (per target space and axis)
+
+
+REFUTERS = 2           # samples of largest bound a curve probe's refutation looks at
 
 
 # -- probes: cached source samples, fast maxima --------------------------------------------------
@@ -70,19 +73,60 @@ class CurveProbe:
         other = curve_derivatives(faired, self.u, 0)[0]
         return other, _distance(other, self.points)
 
-    def true_distance(self, faired, other, idx, tol=None):
+    def true_distance(self, faired, other, idx, tol=None, verdict=False):
         """Two-sided true distance at samples ``idx`` (max of both directions).
 
         With ``tol``, extra Newton starts are only tried where the first exceeds ``tol``,
-        and values ``<= tol`` are upper bounds (the iterations stop there).
+        and values ``<= tol`` are upper bounds (the iterations stop there).  With
+        ``verdict`` (and ``tol``) the distance from the faired points back to the source
+        is only measured where the source's distance to the faired curve is within
+        ``tol`` (as :meth:`SurfaceProbe.true_distance`): a value above ``tol`` is then
+        one direction's, enough to refuse the candidate.
         """
         if idx.size == 0:
             return np.zeros(0)
-        d_fs = _closest_from_starts(faired, self.points[idx], self.u, cKDTree(other),
+        d_fs = _closest_from_starts(faired, self.points[idx], self.u, lambda: cKDTree(other),
                                     self.u[idx], tol=tol)
-        d_sf = _closest_from_starts(self.source, other[idx], self.u, self.tree, self.u[idx],
-                                    tol=tol)
-        return np.maximum(d_fs, d_sf)
+        if not verdict:
+            return np.maximum(d_fs, self._to_source(other, idx, tol))
+        back = d_fs <= tol
+        if back.any():
+            d_fs[back] = np.maximum(d_fs[back], self._to_source(other, idx[back], tol))
+        return d_fs
+
+    def _to_source(self, other, idx, tol):
+        """Distance from the faired points ``other[idx]`` to the source."""
+        return _closest_from_starts(self.source, other[idx], self.u, lambda: self.tree,
+                                    self.u[idx], tol=tol)
+
+    def refutes(self, faired, other, bound, tol, leaders=REFUTERS):
+        """Whether ``faired`` provably deviates by more than ``tol`` (no Newton iteration).
+
+        The :func:`distance_floor` of ``faired`` from one of the ``leaders`` source
+        samples of largest ``bound`` (above ``tol``) exceeds ``tol`` by more than
+        rounding (``1e-9`` of the curve's size).  The true distance there, which
+        :meth:`true_distance` can only over-estimate, then exceeds ``tol`` too: a
+        tolerance check refuses ``faired`` either way.  ``False`` for a rational
+        ``faired`` or samples that do not end at its domain's ends.
+
+        Parameters
+        ----------
+        faired : BSplineCurve
+        other, bound : ndarray
+            ``faired``'s points and the same-parameter distances (:meth:`bound`).
+        tol : float
+        leaders : int
+        """
+        lo, hi = faired.domain
+        if faired.is_rational or self.u[0] != lo or self.u[-1] != hi:
+            return False
+        first = bound.size - min(leaders, bound.size)
+        idx = np.argpartition(bound, first)[first:]
+        idx = idx[bound[idx] > tol]
+        if idx.size == 0:
+            return False
+        floor = distance_floor(faired, self.u, other, self.points[idx])
+        return bool(floor.max() > tol + 1e-9 * faired.size)
 
     def max_deviation(self, faired, tol=None):
         """Largest deviation (dense samples); with ``tol`` stop once it is exceeded.

@@ -315,31 +315,48 @@ def basis_functions(space, x, spans, nu=0):
         ndu[j, j] = saved
     out = np.zeros((nu + 1, p + 1, q))
     out[0] = ndu[:, p]
-    for r in range(p + 1) if nu > 0 else ():
-        a = np.zeros((2, p + 1, q))
-        s1, s2 = 0, 1
-        a[s1, 0] = 1.0
-        for k in range(1, min(nu, p) + 1):
-            d = np.zeros(q)
-            rk, pk = r - k, p - k
-            if r >= k:
-                a[s2, 0] = _safe_divide(a[s1, 0], ndu[pk + 1, rk])
-                d = a[s2, 0] * ndu[rk, pk]
-            j1 = 1 if rk >= -1 else -rk
-            j2 = k - 1 if r - 1 <= pk else p - r
-            for j in range(j1, j2 + 1):
-                a[s2, j] = _safe_divide(a[s1, j] - a[s1, j - 1], ndu[pk + 1, rk + j])
-                d = d + a[s2, j] * ndu[rk + j, pk]
-            if r <= pk:
-                a[s2, k] = _safe_divide(-a[s1, k - 1], ndu[pk + 1, r])
-                d = d + a[s2, k] * ndu[r, pk]
-            out[k, r] = d
-            s1, s2 = s2, s1
+    if nu > 0:
+        out[1:min(nu, p) + 1] = _derivative_rows(ndu, min(nu, p))
     factor = float(p)
     for k in range(1, min(nu, p) + 1):
         out[k] *= factor
         factor *= p - k
     return np.ascontiguousarray(out.transpose(0, 2, 1))
+
+
+def _derivative_rows(ndu, nu):
+    r"""Rows ``1 .. nu`` (``nu <= p``) of A2.3's derivatives before their factors
+    :math:`p!/(p-k)!`, from its table ``ndu``, every ``r`` at once.
+
+    Step ``k`` turns the coefficients ``a[r, j]`` of step ``k - 1`` (one before step 1)
+    into ``(a[r, j] - a[r, j - 1]) / ndu[p - k + 1, r - k + j]`` and sums
+    ``a[r, j] ndu[r - k + j, p - k]``.  For one ``j`` the ``r`` of A2.3's ranges are
+    ``k - j .. p - j`` (``r - k + j = 0 .. p - k``), one slice: every value is computed by
+    A2.3's operations and the sum in its order of ``j`` (up to the sign of zeros), in a
+    few vector operations per ``j`` instead of per ``(r, j)``.
+
+    Returns
+    -------
+    ndarray, shape (nu, p + 1, q)
+    """
+    p, q = ndu.shape[0] - 1, ndu.shape[2]
+    a = np.ones((p + 1, 1, q))
+    rows = np.zeros((nu, p + 1, q))
+    for k in range(1, nu + 1):
+        pk = p - k
+        new = np.empty((p + 1, k + 1, q))   # entries outside the ranges are never read
+        for j in range(k + 1):
+            r = slice(k - j, p - j + 1)
+            if j == 0:
+                numerator = a[r, 0]
+            elif j == k:
+                numerator = -a[r, k - 1]
+            else:
+                numerator = a[r, j] - a[r, j - 1]
+            new[r, j] = _safe_divide(numerator, ndu[pk + 1, :pk + 1])
+            rows[k - 1, r] = rows[k - 1, r] + new[r, j] * ndu[:pk + 1, pk]
+        a = new
+    return rows
 
 
 def _safe_divide(numerator, denominator):

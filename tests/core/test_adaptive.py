@@ -18,7 +18,7 @@ from cq_fairing.core.adaptive_counts import (
     _gallop_down,
     _interpolated_count,
 )
-from cq_fairing.core.adaptive_curve import fair_curve_adaptive
+from cq_fairing.core.adaptive_curve import CurveSearch, fair_curve_adaptive
 from cq_fairing.core.adaptive_knots import _source_density, equidistributed_space
 from cq_fairing.core.adaptive_surface import fair_surface_adaptive
 from cq_fairing.core.energy import fair_surface_energy
@@ -75,6 +75,21 @@ def test_seed_curve_closer_to_truth_than_tol(seed, seed_result):
 def test_unpolished_curve_reconstructs_source_exactly(seed):
     result = fair_curve_adaptive(seed.curve, 0.05, polish=False)
     assert np.allclose(result.reconstruct(), seed.curve.poles, atol=1e-9)
+
+
+@pytest.mark.parametrize("tol", [0.005, 0.02])
+def test_a_verdict_trial_decides_as_a_full_one(seed, tol):
+    """A count checked for its verdict only (refuted by the distance floor, or measured
+    one way where that exceeds tol) passes or fails as the full measure does, and a
+    passing one has the full measure's values, which the reduction goes on from."""
+    fit = CurveSearch(seed.curve, tol, 3).fit
+    density = _source_density(seed.curve.space)
+    for n in (4, 16, 64, 66, 68, 69, 72, 128, 600, 660, 700):
+        space = equidistributed_space(*density, n, 3)
+        full, quick = fit.trial(space), fit.trial(space, verdict=True)
+        assert (quick[2] <= fit.tol) == (full[2] <= fit.tol), n
+        if full[2] <= fit.tol:
+            np.testing.assert_array_equal(quick[1], full[1])
 
 
 def test_curve_knots_are_valid_and_clamped(seed_result):

@@ -1,13 +1,14 @@
 """The curves' default method "auto" (cq_fairing.core.auto_curve): the seed curve's
-targets, the rule checked against the candidate fits computed one by one, the reported
-choice reproducing the curve, and the cases where it keeps one degree or falls back to
-the wavelet search."""
+targets, the rule checked against the candidate fits computed one by one (also where the
+default computes only what can change its choice), the reported choice reproducing the
+curve, and the cases where it keeps one degree or falls back to the wavelet search."""
 
 import numpy as np
 import pytest
 
 import cq_fairing as cf
 from cq_fairing.core import examples
+from cq_fairing.core.adaptive_curve import CurveSearch
 from cq_fairing.core.auto_curve import RAISED_DEGREES, candidate_degrees
 from cq_fairing.core.decomposition import refinement_matrix
 from cq_fairing.core.deviations import deviation
@@ -121,6 +122,50 @@ def test_a_noise_free_polynomial_is_recovered_exactly():
     assert result.choice == {"method": "adaptive", "objective": "faithful",
                              "target_degree": 3}
     assert np.abs(result.curve.poles - bezier).max() <= 1e-9 * np.abs(bezier).max()
+
+
+def _by_the_rule(curve, tol):
+    """The documented rule applied to every candidate fitted in full, each on its own:
+    ``(objective, fit)``."""
+    degrees = candidate_degrees(curve)
+    compact = {}
+    for p in degrees:
+        try:
+            compact[p] = _fair(curve, tol, method="adaptive", target_degree=p)
+        except cf.ToleranceNotMetError:
+            compact[p] = None
+    budget = compact[degrees[0]].curve.n_poles
+    quiet = [CurveSearch(curve, tol, p).noise_limited(budget) for p in degrees]
+    quiet = [fit for fit in quiet if fit is not None and fit.curve.n_poles <= budget]
+    fits, objective = (quiet, "faithful") if quiet else (
+        [fit for fit in compact.values() if fit is not None], "compact")
+    return objective, min(fits, key=lambda fit: (fit.curve.n_poles,
+                                                 curvature_derivative_energy(fit.curve)))
+
+
+@pytest.mark.parametrize("case, tol, objective", [
+    ("seed 400", 0.01, "faithful"),   # the budget: its searched space, never polished
+    ("seed 400", 0.1, "compact"),     # degree 7; the budget finished, degree 5 never
+    ("clean 200", 0.02, "compact"),   # degree 7; the budget's fit never finished
+    ("ten poles", 0.02, "compact"),   # the budget's own degree
+])
+def test_fitting_only_what_can_change_the_choice_chooses_as_fitting_everything(case, tol,
+                                                                               objective):
+    """The default computes a stage only where it can change the choice (lower bounds
+    on poles, the budget without its polish); the rule applied to every candidate
+    fitted in full, one by one, chooses the same fit, to the bit."""
+    curve = {"seed 400": lambda: examples.seed_curve(400).curve,
+             "clean 200": lambda: cf.interpolate_points(examples.seed_curve_points(200)),
+             "ten poles": lambda: cf.make_curve(np.random.default_rng(10).normal(size=(10, 3))),
+             }[case]()
+    expected_objective, expected = _by_the_rule(curve, tol)
+    result = _fair(curve, tol)
+    assert expected_objective == objective
+    assert result.choice == {"method": "adaptive", "objective": objective,
+                             "target_degree": expected.curve.degree}
+    np.testing.assert_array_equal(result.curve.poles, expected.curve.poles)
+    np.testing.assert_array_equal(result.curve.knots, expected.curve.knots)
+    assert result.max_deviation == expected.max_deviation
 
 
 def test_rational_low_degree_and_explicit_degrees_keep_one_degree(seed):

@@ -10,14 +10,16 @@ from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
 import cq_fairing as cf
+from cq_fairing.core import examples, probes
 from cq_fairing.core import measures as M
-from cq_fairing.core import probes
-from cq_fairing.core.closest_points import _distance
+from cq_fairing.core.adaptive_knots import _source_density, equidistributed_space
+from cq_fairing.core.closest_points import _distance, distance_floor
 from cq_fairing.core.plans import target_space
 from cq_fairing.core.probes import _FlatBound, _RowBound, box_region
 from cq_fairing.core.projection import project_curve, project_surface
+from tests.reliability.independent import curve_points, distance_to_curve
 
-from .naive import trapezoid
+from .naive import random_clamped_knots, trapezoid
 
 S2 = np.sqrt(0.5)
 
@@ -505,3 +507,64 @@ def test_a_region_excludes_whole_rows_from_the_maximum():
     assert value == pytest.approx(0.0, abs=1e-12)
     whole = M.SurfaceProbe(flat, per_span=4, hold_grid=False).max_deviation(bumped)[0]
     assert whole > 0.2
+
+
+@settings(max_examples=40, deadline=None)
+@given(degree=st.integers(1, 7), spans=st.integers(1, 12), samples=st.integers(2, 60),
+       far=st.floats(0.0, 3.0), seed=st.integers(0, 2**31 - 1))
+def test_a_distance_floor_lies_below_the_distance_and_within_its_reach(degree, spans,
+                                                                       samples, far, seed):
+    """``distance_floor`` against the reliability suite's independent distance (scipy
+    evaluation, dense samples and golden-section search, an upper bound of the true
+    distance): never above it, and below it by at most half the largest step the curve
+    can make between two samples (the bound's own slack)."""
+    rng = np.random.default_rng(seed)
+    knots = random_clamped_knots(rng, degree + spans, degree)
+    poles = rng.normal(size=(degree + spans, 3))
+    curve = cf.make_curve(poles, knots, degree)
+    u = np.unique(np.concatenate([[0.0, 1.0], rng.uniform(0, 1, samples)]))
+    points = curve.evaluate(rng.uniform(0, 1, 25)) + far * rng.normal(size=(25, 3))
+    floor = distance_floor(curve, u, curve.evaluate(u), points)
+    exact = distance_to_curve(points, lambda t: curve_points(poles, knots, degree, None, t),
+                              (0.0, 1.0), dense=20_000)
+    assert np.all(floor <= exact + 1e-9)
+    speed = np.max(degree * np.linalg.norm(np.diff(poles, axis=0), axis=1)
+                   / np.maximum(knots[degree + 1:-1] - knots[1:-degree - 1], 1e-300))
+    assert np.all(floor >= exact - 0.5 * speed * np.diff(u).max() - 1e-9)
+
+
+def test_a_curve_probe_refutes_only_candidates_beyond_tol():
+    """On the seed curve the family's coarse candidates are refused without a Newton
+    iteration, and every candidate refuted is beyond tol by the full two-sided measure;
+    the last ones before tol holds are too close to it for the floor and are not."""
+    seed = examples.seed_curve()
+    density = _source_density(seed.curve.space)
+    probe = M.CurveProbe(seed.curve)
+    tol = 0.0198
+    refuted = {}
+    for n in (4, 8, 16, 32, 64, 128):
+        faired = project_curve(seed.curve, equidistributed_space(*density, n, 3)).curve
+        other, bound = probe.bound(faired)
+        refuted[n] = probe.refutes(faired, other, bound, tol)
+        if refuted[n]:
+            assert probe.max_deviation(faired)[0] > tol
+    assert refuted == {4: True, 8: True, 16: True, 32: True, 64: False, 128: False}
+
+
+@given(seed=st.integers(0, 2**31 - 1), tol=st.sampled_from([0.005, 0.02, 0.08]))
+@settings(max_examples=15, deadline=None)
+def test_a_curve_verdict_measures_the_way_back_only_where_the_way_there_is_within_tol(seed,
+                                                                                       tol):
+    """As for surfaces: ``verdict=True`` gives the two-sided value wherever the source's
+    distance to the candidate is within tol, and a value above tol elsewhere."""
+    curve = noisy_curve(40, 0.02, seed % 1000)
+    faired = project_curve(curve, target_space(curve.space, 9)).curve
+    probe = M.CurveProbe(curve)
+    other, bound = probe.bound(faired)
+    idx = np.flatnonzero(bound > tol)
+    both = probe.true_distance(faired, other, idx, tol=tol)
+    either = probe.true_distance(faired, other, idx, tol=tol, verdict=True)
+    assert np.array_equal(both > tol, either > tol)
+    within = either <= tol
+    assert np.array_equal(either[within], both[within])
+    assert np.all(either[~within] <= both[~within])

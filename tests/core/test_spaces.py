@@ -26,6 +26,24 @@ def test_evaluation_and_derivatives_match_scipy(degree, extra, seed):
         assert np.allclose(ours, ref, rtol=1e-10, atol=1e-9 * np.abs(ref).max()), nu
 
 
+@given(degree=st.integers(1, 7), extra=st.integers(1, 12), seed=st.integers(0, 2**31 - 1))
+def test_derivatives_at_repeated_knots_match_scipy(degree, extra, seed):
+    """Interior knots repeated up to ``degree`` times (zero-width spans, where A2.3's
+    divisions by knot differences give 0), every derivative up to the degree, between
+    the knots and at them."""
+    rng = np.random.default_rng(seed)
+    distinct = np.sort(rng.uniform(0.05, 0.95, extra))
+    inner = np.repeat(distinct, rng.integers(1, degree + 1, extra))
+    knots = np.concatenate([np.zeros(degree + 1), inner, np.ones(degree + 1)])
+    space = SplineSpace.from_knots(knots, degree)
+    c = rng.normal(size=(space.dimension, 3))
+    x = np.concatenate([rng.random(40), [0.0, 1.0], distinct])
+    for nu in range(degree + 1):
+        ours = space.evaluate(c, x, nu)
+        ref = BSpline(knots, c, degree)(x, nu)
+        assert np.allclose(ours, ref, rtol=1e-9, atol=1e-9 * max(np.abs(ref).max(), 1.0)), nu
+
+
 @given(degrees=st.tuples(st.integers(1, 5), st.integers(1, 5)),
        extra=st.tuples(st.integers(0, 12), st.integers(0, 12)), rational=st.booleans(),
        seed=st.integers(0, 2**31 - 1))
