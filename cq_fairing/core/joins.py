@@ -370,7 +370,7 @@ def _checked(patches, joins, continuity):
             raise InvalidInputError(f"patch {i} must be a JointPatch, got {type(patch).__name__}.")
     used = set()
     for join in joins:
-        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+        for index, side in _join_sides(join):
             if side not in SIDES:
                 raise InvalidInputError(f"a join side must be one of {SIDES}, got {side!r}.")
             if not 0 <= index < len(patches):
@@ -392,6 +392,11 @@ def _along(side):
 def _end(side):
     """0 for the low side (``"u0"``, ``"v0"``), -1 for the high one."""
     return 0 if side[1] == "0" else -1
+
+
+def _join_sides(join):
+    """``((a, side_a), (b, side_b))``."""
+    return (join.a, join.side_a), (join.b, join.side_b)
 
 
 def _net(surface, lifted):
@@ -648,7 +653,7 @@ def _edges(patches, joins, spaces, chords, vertices, lifted):
     out = []
     for join in joins:
         flips = {(i, s): chords.find((i, _along(s)))[1]
-                 for i, s in ((join.a, join.side_a), (join.b, join.side_b))}
+                 for i, s in _join_sides(join)}
         unit = _unit_space(spaces, _solved_side(patches, join), flips)
         index, side = (join.b, join.side_b) if patches[join.b].kept else (join.a, join.side_a)
         space, poles = _border(patches[index].source, _net(patches[index].source, lifted), side)
@@ -667,7 +672,7 @@ def _held_rows(patches, edges, poles):
     held = {}
     for edge, x in zip(edges, poles):
         join = edge.join
-        for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+        for index, side in _join_sides(join):
             if not patches[index].kept:
                 held.setdefault(index, {})[side] = x[::-1] if edge.flips[index, side] else x
     return held
@@ -873,10 +878,10 @@ def _cross_rows(work, join, chords, depth=2):
     shape ``(depth, poles along, dimension)``."""
     solved = _solved_side(work.patches, join)
     flips = {(i, s): chords.find((i, _along(s)))[1]
-             for i, s in ((join.a, join.side_a), (join.b, join.side_b))}
+             for i, s in _join_sides(join)}
     unit = _unit_space(work.spaces, solved, flips)
     out = []
-    for index, side in ((join.a, join.side_a), (join.b, join.side_b)):
+    for index, side in _join_sides(join):
         flip = flips[index, side]
         rows = (0, 1, 2)[:depth] if side[1] == "0" else (-1, -2, -3)[:depth]
         if work.patches[index].kept:
@@ -947,7 +952,7 @@ def _conditions(work, join, mu, curvature):
     if not curvature:
         return out
     (da, ha), (db, hb) = (_second_derivative(_cross_space(work, index, side), side)
-                          for index, side in ((join.a, join.side_a), (join.b, join.side_b)))
+                          for index, side in _join_sides(join))
     kappa = mu * hb / ha
     scale = np.abs(da).max()
     out.append((tuple(da / scale), tuple(-kappa ** 2 * db / scale)))
@@ -1102,10 +1107,6 @@ def _curved(work, joins, edges, crossings, continuity):
         root for root, entries in crossings.items() if _full(candidates, entries)}
     return {k: tuple(root in open_ for root in edges[k].roots) for k in candidates}
 
-
-def _join_sides(join):
-    """``((a, side_a), (b, side_b))``."""
-    return (join.a, join.side_a), (join.b, join.side_b)
 
 
 def _straightened(ratios, crossings):

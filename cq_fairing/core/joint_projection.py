@@ -334,8 +334,10 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
         return JointProjection({}, {}, [], {})
     members = {face: [m for m in group if group[m] == face] for face in faces}
     refined = dict.fromkeys(faces, 0)
+    curved = _curvature_continuous(sources, border, group) if continuity == "G2" else set()
     while True:
-        solve = _solve(sources, targets, faces, kept, refined, border, group, pins, continuity)
+        solve = _solve(sources, targets, faces, kept, refined, border, group, pins, continuity,
+                       curved)
         solved = {m: collapsed_kept(sources[m], solve.result.surfaces[k])
                   for k, face in enumerate(faces) if face not in kept for m in members[face]}
         deviations = {m: check(m, s) if _positive(s) else np.inf for m, s in solved.items()}
@@ -444,10 +446,24 @@ class _Solve:
     curved: list
 
 
-def _solve(sources, targets, faces, kept, refined, border, group, pins, continuity):
+def _curvature_continuous(sources, border, group):
+    """``{id(join)}``: the smooth joins of ``border`` whose sources are
+    curvature-continuous across (:func:`~cq_fairing.core.joins.holds_curvature`), measured
+    once for all the solves."""
+    out = set()
+    for join in border:
+        a, b = join.sides
+        core = BorderJoin(group[a.face], a.side, group[b.face], b.side, runs_reversed(join))
+        if join.kind == "smooth" and holds_curvature(sources, core):
+            out.add(id(join))
+    return out
+
+
+def _solve(sources, targets, faces, kept, refined, border, group, pins, continuity, curved):
     """The core's joint projection of ``faces`` (``kept`` fixed; a face stands for every
     face of ``group`` it represents; the sides of ``pins`` held at their sources by
-    pinning patches after them)."""
+    pinning patches after them; the joins of ``curved`` held in G2 where ``continuity``
+    asks it)."""
     position = {face: k for k, face in enumerate(faces)}
     patches = [JointPatch(sources[i], None if i in kept else _targets(targets[i], refined[i]))
                for i in faces]
@@ -456,9 +472,7 @@ def _solve(sources, targets, faces, kept, refined, border, group, pins, continui
         a, b = join.sides
         core = BorderJoin(position[group[a.face]], a.side, position[group[b.face]], b.side,
                           runs_reversed(join), join.kind == "smooth")
-        curvature = continuity == "G2" and core.smooth and holds_curvature(
-            [p.source for p in patches], core)
-        core_joins[replace(core, curvature=curvature)] = join
+        core_joins[replace(core, curvature=id(join) in curved)] = join
     pinning = []
     for face in faces:
         for side, smooth in pins.get(face, {}).items() if face not in kept else ():
