@@ -85,6 +85,7 @@ from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
            "pinning_patch", "side_parameters", "turned_patches", "JoinTurns", "mirror_ratio", "UnionFind",
+           "mean_normal",
            "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
            "holds_curvature", "CURVATURE_SLACK"]
 
@@ -584,7 +585,7 @@ def _vertices(patches, joins, lifted):
         chosen = kept[:1] or members
         point = np.mean([_net(patches[i].source, lifted)[c] for i, c in chosen], axis=0)
         smooth = root not in creased_roots
-        normal = _vertex_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
+        normal = mean_normal([_corner_normal(patches[i].source, c) for i, c in chosen]) \
             if smooth and not lifted else None
         out.update({key: _Vertex(point, normal, root) for key in members})
     return out
@@ -609,7 +610,7 @@ def _corner_normal(surface, corner):
     return n / length if length > 1e-12 * max(surface.size, 1e-300) else None
 
 
-def _vertex_normal(normals):
+def mean_normal(normals):
     """Mean of unit normals with their signs aligned to the first (``None`` if none)."""
     normals = [n for n in normals if n is not None]
     if not normals:

@@ -23,16 +23,30 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   :math:`w_{a,i} + \mu w_{b,i} = 0`, :math:`w = c_{inner} - c_{border}`, with one
   :math:`\mu` per join (the geometric mean of the source's length ratios), which makes
   the tangent planes agree along the whole join
-  (:mod:`cq_fairing.core.joins`, step 5).  A row that would close a cycle of rows (around
-  a vertex) is left out.
+  (:mod:`cq_fairing.core.joins`, step 5).
+* **Vertices.**  Around a vertex the rows next to it tie the patches' twist poles in a
+  cycle.  Its system has determinant :math:`1 - (-1)^n\prod\mu` for :math:`n` patches:
+  at odd valence it determines the twists and every row is kept; at even valence it is
+  singular where :math:`\prod\mu = 1`, and a row that closes a singular cycle, or that
+  would fix poles already fixed, is left out (:class:`_RowCycles`).  At a *crossing*
+  (four moving patches, four smooth joins) opposite joins share one ratio and the
+  mirrored rows at the vertex make its two lines of edges straight, so the cycle closes
+  as in one surface cut into four (:func:`_straightened`).  At any other vertex of three
+  or more patches the rows at the vertex itself would make the edges collinear in pairs;
+  they are replaced by the vertex's tangent plane, which holds the first pole of every
+  edge (:func:`_plane_rows`; these rows act on the three coordinates together).
+* **Open vertices.**  Where the kept patches' corners do not meet in the source (farther
+  apart than :data:`SPREAD` times the network's size), the other patches' corners there
+  keep their source points (:func:`_split_vertices`): closed onto one kept corner, a
+  patch would open its join to the other.
 
 The borders move with the patches: the energy runs across the joins.  :math:`\lambda`
 is the largest (bisection on its logarithm) for which every patch stays within the
 tolerance of its source by the same-parameter distance on :data:`SAMPLES` x
 :data:`SAMPLES` points, an upper bound of the true distance.  The G0 rows and the kept
 patches' poles are identities, eliminated exactly (one unknown per class of tied poles);
-the G1 rows remain in one regularised KKT system, one factorization per :math:`\lambda`
-for x, y and z.
+the G1 and tangent-plane rows remain in one regularised KKT system over x, y and z,
+one factorization per :math:`\lambda`.
 
 This module imports numpy and scipy only.
 """
@@ -47,7 +61,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
-from .joins import JoinTurns, UnionFind, mirror_ratio
+from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio
 from .patch_grid import insert_knot
 
 __all__ = ["NetworkResult", "PatchNetwork", "fair_network", "network_joinable"]
@@ -58,6 +72,9 @@ HELD = -1            # the class of every kept pole in the constraints' union-fi
 LAMBDA_RANGE = (1e-8, 1e4)
 BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
+SPREAD = 1e-7       # x the network's size: held poles farther apart do not close a join
+STRAIGHT = 0.1      # relative residual of a source's rows at a vertex for its lines to stay
+SINGULAR = 0.2      # relative coefficient below which a cycle of mirrored rows is singular
 
 
 @dataclass(frozen=True)
@@ -154,6 +171,7 @@ class PatchNetwork:
         self.continuity = continuity
         self.forms = _Forms([_refined(p) for p in self.sources])
         self.probes = _Probes(self.sources, self.forms.patches)
+        self.spread = SPREAD * _diagonal(self.forms.source)
         self.sides = _join_sides(self.forms, self.joins)
         self.turns = JoinTurns(self.sources, self.joins) if continuity == "G1" else None
 
@@ -185,10 +203,11 @@ def _smoothest(network, tols, kept):
     kept = set(kept)
     count = len(sources)
     for _ in range(count):
-        system = _System(network.forms, kept, network.sides, network.continuity)
+        system = _System(network.forms, kept, network.sides, network.continuity,
+                         network.spread)
         solve = _solver(system, network.probes, kept)
         best = solve(0.0)
-        over = {f for f in range(count) if best[1][f] > tols[f]} - kept
+        over = ({f for f in range(count) if best[1][f] > tols[f]} | system.pinched) - kept
         if not over:
             break
         kept |= over     # the joins hold these too far: they constrain their neighbours
@@ -287,32 +306,36 @@ class _System:
     The poles tied by G0 rows form classes; a class tied to a kept pole takes that
     pole's source position (a constant), every other class is one unknown, so that the
     poles are :math:`C = P z + h` (:math:`P` a 0/1 matrix, :math:`h` the held
-    positions).  The G1 rows remain as constraints :math:`A C = 0`."""
+    positions), per coordinate.  The G1 rows remain as constraints :math:`A C = 0`, per
+    coordinate, and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
+    over the three coordinates together (:func:`_constraints`)."""
 
-    def __init__(self, forms, kept, sides, continuity):
+    def __init__(self, forms, kept, sides, continuity, spread):
         self.patches = forms.patches
         self.offsets, self.mass, self.energy = forms.offsets, forms.mass, forms.energy
         self.source = forms.source
         fixed = np.zeros(self.offsets[-1], dtype=bool)
         for f in kept:
             fixed[self.offsets[f]:self.offsets[f + 1]] = True
+        split = _split_vertices(self.source, fixed, sides, spread)
+        fixed[split] = True
         self.fixed = fixed
-        ties, mirrored, self.g1_rows = _constraints(self, sides, continuity)
-        self.basis, self.held = self._eliminated(ties)
-        self.kkt, self.rhs = self._kkt(mirrored)
+        ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split)
+        self.basis, self.held, self.on_held = self._eliminated(ties)
+        self.pinched = self._pinched(sides, spread)
+        self.kkt, self.rhs = self._kkt(mirrored, planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
 
     def _eliminated(self, ties):
-        """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
-        indices, a forest: each joins two classes, at most one kept pole per class)."""
+        """``(P, h, held)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of
+        pole indices, a forest: each joins two classes, at most one kept pole per class);
+        ``held`` marks the poles of classes with a kept pole."""
         size = int(self.offsets[-1])
         pairs = np.array(ties, dtype=int).reshape(-1, 2)
         graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                               shape=(size, size))
         count, label = connected_components(graph, directed=False)
-        anchor = np.full(count, -1)
-        kept = np.flatnonzero(self.fixed)
-        anchor[label[kept]] = kept
+        anchor = self._anchors(count, label)
         held = np.zeros((size, 3))
         on_kept = anchor[label] >= 0
         held[on_kept] = self.source[anchor[label[on_kept]]]
@@ -320,43 +343,81 @@ class _System:
         classes, column = np.unique(label[free], return_inverse=True)
         basis = sp.csr_matrix((np.ones(free.size), (free, column)),
                               shape=(size, classes.size))
-        return basis, held
+        return basis, held, on_kept
 
-    def _kkt(self, mirrored):
+    def _anchors(self, count, label):
+        """Per class of tied poles, the kept pole it is held at (-1: none): of several,
+        the one nearest the mean source position of the class's free poles, so that the
+        free patches close onto the kept corner they met in the source."""
+        free = ~self.fixed
+        total = np.zeros((count, 3))
+        np.add.at(total, label[free], self.source[free])
+        number = np.bincount(label[free], minlength=count)[:, None]
+        centre = total / np.maximum(number, 1)
+        kept = np.flatnonzero(self.fixed)
+        distance = np.linalg.norm(self.source[kept] - centre[label[kept]], axis=1)
+        anchor = np.full(count, -1)
+        order = np.argsort(-distance)        # the nearest written last
+        anchor[label[kept[order]]] = kept[order]
+        return anchor
+
+    def _pinched(self, sides, spread):
+        """The patches that may move with a border pole tied to two held poles farther
+        apart than the two poles' sources plus ``spread`` (corners of kept patches that do
+        not meet in the source): closed onto one of them, such a patch would open its join
+        to the other."""
+        out = set()
+        for _, border_a, _, border_b, _, _ in sides:
+            source = np.linalg.norm(self.source[border_a] - self.source[border_b], axis=1)
+            held = np.linalg.norm(self.held[border_a] - self.held[border_b], axis=1)
+            apart = self.on_held[border_a] & self.on_held[border_b] & (held > source + spread)
+            for index in np.concatenate([border_a[apart], border_b[apart]]):
+                patch = int(np.searchsorted(self.offsets, index, side="right")) - 1
+                if not self.fixed[index]:
+                    out.add(patch)
+        return out
+
+    def _kkt(self, mirrored, planes):
         r"""The KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and the right-hand
-        side :math:`b_M + \lambda b_H` and :math:`s b_A` in parts:
+        side :math:`b_M + \lambda b_H` and :math:`s b_A` in parts, over the three
+        coordinates' unknowns :math:`\mathrm{vec}(z)` (coordinate after coordinate):
 
-        .. math:: K_M = \begin{bmatrix}P^T M P & 0\\ 0 & 0\end{bmatrix},\;
-                  K_H = \begin{bmatrix}P^T H P & 0\\ 0 & 0\end{bmatrix},\;
-                  K_A = \begin{bmatrix}0 & A_P^T\\ A_P & -\varepsilon I\end{bmatrix},
+        .. math:: K_M = \begin{bmatrix}I_3\otimes P^T M P & 0\\ 0 & 0\end{bmatrix},\;
+                  K_H = \begin{bmatrix}I_3\otimes P^T H P & 0\\ 0 & 0\end{bmatrix},\;
+                  K_A = \begin{bmatrix}0 & B^T\\ B & -\varepsilon I\end{bmatrix},
 
-        :math:`A_P = A P`, :math:`b_M = P^T M (C_0 - h)`, :math:`b_H = -P^T H h`,
-        :math:`b_A = -A h` (:math:`C_0` the sources' poles, :math:`\varepsilon` =
-        :data:`KKT_EPS`)."""
-        unknowns, rows = self.basis.shape[1], mirrored.shape[0]
-        a = (mirrored @ self.basis).tocsr()
+        :math:`B = \begin{bmatrix}I_3\otimes A\\ R\end{bmatrix}(I_3\otimes P)`,
+        :math:`b_M = \mathrm{vec}(P^T M (C_0 - h))`, :math:`b_H = -\mathrm{vec}(P^T H h)`,
+        :math:`b_A = -\begin{bmatrix}I_3\otimes A\\ R\end{bmatrix}\mathrm{vec}(h)`
+        (:math:`C_0` the sources' poles, :math:`\varepsilon` = :data:`KKT_EPS`)."""
+        three = sp.identity(3, format="csr")
+        constraint = sp.vstack([sp.kron(three, mirrored), planes], format="csr")
+        b = (constraint @ sp.kron(three, self.basis)).tocsr()
+        unknowns, rows = 3 * self.basis.shape[1], b.shape[0]
         empty = sp.csr_matrix((rows, rows))
-        parts = [sp.block_diag([self.basis.T @ form @ self.basis, empty], format="csc")
-                 for form in (self.mass, self.energy)]
-        parts.append(sp.bmat([[sp.csr_matrix((unknowns, unknowns)), a.T],
-                              [a, -KKT_EPS * sp.identity(rows)]], format="csc")
+        parts = [sp.block_diag([sp.kron(three, self.basis.T @ form @ self.basis), empty],
+                               format="csc") for form in (self.mass, self.energy)]
+        parts.append(sp.bmat([[sp.csr_matrix((unknowns, unknowns)), b.T],
+                              [b, -KKT_EPS * sp.identity(rows)]], format="csc")
                      if rows else sp.csc_matrix((unknowns, unknowns)))
-        rhs = [self.basis.T @ (self.mass @ (self.source - self.held)),
-               -(self.basis.T @ (self.energy @ self.held)), -(mirrored @ self.held)]
+        held = self.held.T.ravel()
+        rhs = [(self.basis.T @ (self.mass @ (self.source - self.held))).T.ravel(),
+               -(self.basis.T @ (self.energy @ self.held)).T.ravel(), -(constraint @ held)]
         return parts, rhs
 
     def solve(self, lam):
         r"""Poles of all patches, :math:`P z + h`: :math:`z` from the KKT system
-        :math:`\begin{bmatrix}P^T(M + \lambda H)P & s A_P^T\\ s A_P & -\varepsilon s I
-        \end{bmatrix}` (:meth:`_kkt`; :math:`s` the mean diagonal of :math:`M + \lambda
-        H`, which scales the G1 rows like the rest)."""
+        :math:`\begin{bmatrix}I_3\otimes P^T(M + \lambda H)P & s B^T\\ s B &
+        -\varepsilon s I\end{bmatrix}` (:meth:`_kkt`; :math:`s` the mean diagonal of
+        :math:`M + \lambda H`, which scales the constraint rows like the rest)."""
         unknowns = self.basis.shape[1]
         if unknowns == 0:
             return self.held
         scale = float(np.mean(self.diagonals[0] + lam * self.diagonals[1]))
         kkt = self.kkt[0] + lam * self.kkt[1] + scale * self.kkt[2]
         rhs = np.concatenate([self.rhs[0] + lam * self.rhs[1], scale * self.rhs[2]])
-        return self.basis @ spla.splu(kkt).solve(rhs)[:unknowns] + self.held
+        z = spla.splu(kkt).solve(rhs)[:3 * unknowns].reshape(3, unknowns).T
+        return self.basis @ z + self.held
 
     def surfaces(self, poles):
         out = []
@@ -394,33 +455,276 @@ def _side_rows(forms, patch, side):
     return index[end], index[inner]
 
 
-def _constraints(system, sides, continuity):
-    """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows and
-    their number.
+def _vertices(sides):
+    """The border poles tied by the joins (:class:`UnionFind` of pole indices): a set of
+    corners is one vertex of the network, a set of other border poles one pole of a
+    shared border."""
+    vertices = UnionFind()
+    for _, border_a, _, border_b, _, _ in sides:
+        for a, b in zip(border_a.tolist(), border_b.tolist()):
+            vertices.tie(a, b)
+    return vertices
 
-    A row that would tie two poles already tied (through other rows, or both held by
-    kept patches) is left out: it could only repeat or contradict the others."""
+
+def _corners_at(system, vertices):
+    """``{vertex: [(corner, edge_u, edge_v)]}`` of every corner on a join
+    (:func:`_corners`)."""
+    at = {}
+    for corner in _corners(system):
+        if corner[0] in vertices.parent:
+            at.setdefault(vertices.find(corner[0])[0], []).append(corner)
+    return at
+
+
+def _split_vertices(source, fixed, sides, spread):
+    """The corner poles of the vertices whose kept corners lie more than ``spread`` apart
+    (a source whose vertex is open): the other patches' corners there are held at their
+    own source points and tied to none, so that each join at the vertex keeps its
+    source's gap there (closed onto one kept corner, a patch would open its join to the
+    other by their distance)."""
+    out = []
+    corners = {int(x) for _, border_a, _, border_b, _, _ in sides
+               for x in (border_a[0], border_a[-1], border_b[0], border_b[-1])}
+    for group in _vertices(sides).members().values():
+        poles = np.array([key for key, _ in group])
+        if poles[0] not in corners:
+            continue
+        kept = source[poles[fixed[poles]]]
+        if len(kept) > 1 and np.linalg.norm(kept - kept.mean(axis=0), axis=1).max() > 0.5 * spread:
+            out.extend(poles.tolist())
+    return np.array(out, dtype=int)
+
+
+def _constraints(system, sides, continuity, split):
+    """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows (per
+    coordinate), the vertices' tangent-plane rows (over the three coordinates) and the
+    number of G1 rows.
+
+    A mirrored row that would tie two poles already tied (through other rows, or both
+    held by kept patches) is left out: it could only repeat or contradict the others.
+    At a fan vertex (:func:`_fans`) the mirrored rows at the vertex itself are left out
+    too: there they would make the edges from the vertex collinear in pairs, which three
+    or five edges cannot be; its edges' first poles are held in one tangent plane
+    instead (:func:`_plane_rows`)."""
     g0 = UnionFind()   # G0 identifications of poles, then (cycles) of their classes
     for index in np.flatnonzero(system.fixed).tolist():
         g0.tie(HELD, index)      # the kept patches' poles: one held class
+    apart = set(split.tolist())
     ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
-            for a, b in zip(border_a.tolist(), border_b.tolist()) if g0.tie(a, b) is None]
-    rows = []
+            for a, b in zip(border_a.tolist(), border_b.tolist())
+            if a not in apart and b not in apart and g0.tie(a, b) is None]
+    rows, planes = [], []
     if continuity == "G1":
-        cycles = UnionFind()
-        for join, border_a, inner_a, border_b, inner_b, mu in sides:
+        vertices = _vertices(sides)
+        at = _corners_at(system, vertices)
+        fans = _fans(system, sides, vertices, at)
+        crossings = _crossings(system, sides, vertices,
+                               {root: c for root, c in at.items() if root not in fans})
+        ratios = _straightened(sides, crossings)
+        cycles = _RowCycles(g0.find(HELD)[0])
+        for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
             if not join.smooth:
                 continue
+            mu = ratios[k]
             for ia, na, ib, nb in zip(*(x.tolist() for x in (border_a, inner_a, border_b,
                                                                inner_b))):
-                if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
+                if vertices.find(ia)[0] in fans:
+                    continue
+                if cycles.tie(g0.find(na)[0], g0.find(nb)[0], mu):
                     rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
+        planes = _plane_rows(system, fans, g0)
+    size = int(system.offsets[-1])
     columns = np.array([c for c, _ in rows], dtype=int).reshape(-1, 4)
     values = np.array([v for _, v in rows], dtype=float).reshape(-1, 4)
     matrix = sp.csr_matrix((values.ravel(), (np.repeat(np.arange(len(rows)), 4),
                                              columns.ravel())),
-                           shape=(len(rows), int(system.offsets[-1])))
-    return ties, matrix, len(rows)
+                           shape=(len(rows), size))
+    plane_matrix = sp.csr_matrix(
+        (np.concatenate([v for _, v in planes]) if planes else [],
+         (np.repeat(np.arange(len(planes)), 6), np.concatenate([c for c, _ in planes])
+          if planes else [])), shape=(len(planes), 3 * size))
+    return ties, matrix, plane_matrix, len(rows)
+
+
+class _RowCycles:
+    r"""Which mirrored rows determine the inner poles they tie, and which would repeat or
+    contradict the others.
+
+    A row ties two classes of inner poles, :math:`a + \mu b = c`.  Tied classes are kept
+    as :math:`x = w_x r + \text{const}` against a root :math:`r`.  A row between two
+    trees links them.  A row inside one tree closes a cycle (around a vertex: the
+    patches' twist poles) and reads :math:`(w_a + \mu w_b)\, r = \text{const}`: it
+    fixes the root, and is kept, unless it ties the same two classes as another row
+    (two rows on one pair with other ratios would pull both onto the border), the
+    coefficient is below :data:`SINGULAR` of its terms (around a vertex of even valence whose ratios' product is 1: the vertex
+    enclosure condition) or the root is fixed already (by another cycle, or by a held
+    pole: the class ``held``).  Around a vertex of odd valence the cycle's coefficient
+    is :math:`1 + \prod\mu` in magnitude: never singular, the twists follow."""
+
+    def __init__(self, held):
+        self.parent, self.weight, self.fixed = {}, {}, {held}
+        self.pairs = set()
+
+    def find(self, key):
+        """``(root, w)`` with ``key = w root + const``."""
+        weight = 1.0
+        while self.parent.get(key, key) != key:
+            weight *= self.weight[key]
+            key = self.parent[key]
+        return key, weight
+
+    def tie(self, a, b, mu):
+        r"""Whether the row :math:`a + \mu b = c` is kept (then it is recorded)."""
+        if frozenset((a, b)) in self.pairs:
+            return False      # a second row on the same pair: both would collapse to c
+        self.pairs.add(frozenset((a, b)))
+        (ra, wa), (rb, wb) = self.find(a), self.find(b)
+        if ra != rb:
+            if ra in self.fixed and rb in self.fixed:
+                return False
+            self.parent[rb], self.weight[rb] = ra, -wa / (mu * wb)
+            if rb in self.fixed:
+                self.fixed.add(ra)
+            return True
+        coefficient = wa + mu * wb
+        if ra in self.fixed or abs(coefficient) < SINGULAR * max(abs(wa), mu * abs(wb)):
+            return False
+        self.fixed.add(ra)
+        return True
+
+
+def _diagonal(points):
+    """The bounding-box diagonal of ``points``."""
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+
+
+def _corners(system):
+    """``(corner, edge_u, edge_v)`` pole indices of every patch corner: the corner pole
+    and its neighbours along u and along v."""
+    out = []
+    for f, patch in enumerate(system.patches):
+        ku, kv = patch.shape
+        index = system.offsets[f] + np.arange(ku * kv).reshape(ku, kv)
+        for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+            out.append((int(index[i, j]), int(index[1 if i == 0 else -2, j]),
+                        int(index[i, 1 if j == 0 else -2])))
+    return out
+
+
+def _fans(system, sides, vertices, at):
+    """``{vertex: [(corner, edge_u, edge_v)]}``: the vertices (:func:`_vertices`,
+    :func:`_corners_at`) whose mirrored rows at the vertex itself would make one edge
+    from it collinear with two others (around three or five patches, along a fan of
+    three or more joins), or that the source does not follow (its edges from the vertex
+    further than :data:`STRAIGHT` from the rows), where no crease ends and at most one
+    of the patches is kept (around two kept patches whose tangent planes differ there no
+    one plane can be held; their mirrored rows hold the others).  Where each edge is
+    made collinear with one other at most (two patches, an L of three, a crossing of
+    four) and the source's edges are nearly so, the rows are lines through the vertex
+    and stay."""
+    creased, links, bent = set(), {}, set()
+    source = system.source
+    for join, border_a, inner_a, border_b, inner_b, mu in sides:
+        for i in (0, -1):
+            root = vertices.find(int(border_a[i]))[0]
+            if not join.smooth:
+                creased.add(root)
+                continue
+            pair = frozenset(vertices.find(int(x[i]))[0] for x in (inner_a, inner_b))
+            links.setdefault(root, set()).add(pair)
+            wa, wb = source[inner_a[i]] - source[border_a[i]], source[inner_b[i]] - source[border_b[i]]
+            if np.linalg.norm(wa + mu * wb) > STRAIGHT * np.linalg.norm(wa):
+                bent.add(root)
+    out = {}
+    for root, corners in at.items():
+        degree = {}
+        for pair in links.get(root, ()):
+            for node in pair:
+                degree[node] = degree.get(node, 0) + 1
+        lines = max(degree.values(), default=0) < 2 and root not in bent
+        if (len(corners) >= 3 and not lines and root not in creased
+                and sum(bool(system.fixed[c[1]]) for c in corners) <= 1):
+            out[root] = corners
+    return out
+
+
+def _crossings(system, sides, vertices, at):
+    """``{vertex: [(join, opposite join, same)]}``: the crossings (four patches, none
+    kept, four smooth joins, each patch in two of them), with each join's opposite one
+    (no patch in common) and whether their sides ``a`` are neighbours (so that the two
+    mirror ratios are one, not one and its inverse)."""
+    ends = {}
+    for k, (_, border_a, *_rest) in enumerate(sides):
+        for index in (border_a[0], border_a[-1]):
+            ends.setdefault(vertices.find(int(index))[0], []).append(k)
+    out = {}
+    for root, corners in at.items():
+        around = ends.get(root, [])
+        pairs = [{sides[k][0].a, sides[k][0].b} for k in around]
+        members = [p for pair in pairs for p in pair]
+        if (len(corners) != 4 or len(around) != 4 or any(system.fixed[c[0]] for c in corners)
+                or not all(sides[k][0].smooth for k in around)
+                or any(members.count(p) != 2 for p in members)):
+            continue
+        out[root] = [(k, o, {sides[k][0].a, sides[o][0].a} in pairs)
+                     for k in around for o in around if not pairs[around.index(k)]
+                     & pairs[around.index(o)]]
+    return out
+
+
+def _straightened(sides, crossings):
+    """Per side, its mirror ratio, with the joins opposite each other at a crossing given
+    one ratio (the geometric mean over each line of joins through crossings, inverted
+    where their sides ``a`` lie on opposite sides of the line): the mirrored rows at the
+    vertex then make its two lines of edges straight, and the cycle of rows around it
+    closes, as in one surface cut into four (:mod:`cq_fairing.core.joins`, step 6)."""
+    lines = UnionFind()
+    for crossing in crossings.values():
+        for k, o, same in crossing:
+            lines.tie(k, o, parity=not same)
+    ratios = [side[-1] for side in sides]
+    for group in lines.members().values():
+        mean = np.mean([-np.log(ratios[k]) if flip else np.log(ratios[k]) for k, flip in group])
+        ratios = [r for r in ratios]
+        for k, flip in group:
+            ratios[k] = float(np.exp(-mean if flip else mean))
+    return ratios
+
+
+def _plane_rows(system, fans, g0):
+    r"""Rows :math:`n\cdot(e - c) = 0` over the three coordinates: the first pole
+    :math:`e` of every edge from a fan vertex :math:`c` in the plane of the vertex
+    normal :math:`n` (the mean unit normal of the sources' corners there, signs aligned;
+    a kept patch's own where one is kept), so that the patches around it share one
+    tangent plane at the vertex.  Per pair of pole classes one row; none between held
+    poles.  Each row: ``(columns, values)`` of six entries."""
+    size = int(system.offsets[-1])
+    held = g0.find(HELD)[0]
+    rows, seen = [], set()
+    for root, corners in fans.items():
+        kept = [c for c in corners if system.fixed[c[1]]]     # a kept patch's corner
+        normal = mean_normal([_source_normal(system.source, c) for c in kept[:1] or corners])
+        if normal is None:
+            continue
+        for corner, *edges in corners:
+            for edge in edges:
+                key = (g0.find(edge)[0], root)
+                if key in seen or key[0] == held:
+                    continue
+                seen.add(key)
+                columns = [d * size + index for index in (edge, corner) for d in range(3)]
+                rows.append((np.array(columns), np.concatenate([normal, -normal])))
+    return rows
+
+
+def _source_normal(source, corner):
+    """Unit normal of a source patch at a corner, :math:`(e_u - c)\times(e_v - c)` from
+    its poles (``None`` where it vanishes)."""
+    c, eu, ev = (source[i] for i in corner)
+    n = np.cross(eu - c, ev - c)
+    length = np.linalg.norm(n)
+    scale = max(np.linalg.norm(eu - c) * np.linalg.norm(ev - c), 1e-300)
+    return n / length if length > 1e-9 * scale else None
 
 
 class _Probes:
