@@ -207,7 +207,7 @@ def _smoothest(network, tols, kept):
                          network.spread)
         solve = _solver(system, network.probes, kept)
         best = solve(0.0)
-        over = ({f for f in range(count) if best[1][f] > tols[f]} | system.pinched) - kept
+        over = {f for f in range(count) if best[1][f] > tols[f]} - kept
         if not over:
             break
         kept |= over     # the joins hold these too far: they constrain their neighbours
@@ -321,21 +321,21 @@ class _System:
         fixed[split] = True
         self.fixed = fixed
         ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split)
-        self.basis, self.held, self.on_held = self._eliminated(ties)
-        self.pinched = self._pinched(sides, spread)
+        self.basis, self.held = self._eliminated(ties)
         self.kkt, self.rhs = self._kkt(mirrored, planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
 
     def _eliminated(self, ties):
-        """``(P, h, held)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of
-        pole indices, a forest: each joins two classes, at most one kept pole per class);
-        ``held`` marks the poles of classes with a kept pole."""
+        """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
+        indices, a forest: each joins two classes, at most one kept pole per class)."""
         size = int(self.offsets[-1])
         pairs = np.array(ties, dtype=int).reshape(-1, 2)
         graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                               shape=(size, size))
         count, label = connected_components(graph, directed=False)
-        anchor = self._anchors(count, label)
+        anchor = np.full(count, -1)
+        kept = np.flatnonzero(self.fixed)
+        anchor[label[kept]] = kept
         held = np.zeros((size, 3))
         on_kept = anchor[label] >= 0
         held[on_kept] = self.source[anchor[label[on_kept]]]
@@ -343,39 +343,7 @@ class _System:
         classes, column = np.unique(label[free], return_inverse=True)
         basis = sp.csr_matrix((np.ones(free.size), (free, column)),
                               shape=(size, classes.size))
-        return basis, held, on_kept
-
-    def _anchors(self, count, label):
-        """Per class of tied poles, the kept pole it is held at (-1: none): of several,
-        the one nearest the mean source position of the class's free poles, so that the
-        free patches close onto the kept corner they met in the source."""
-        free = ~self.fixed
-        total = np.zeros((count, 3))
-        np.add.at(total, label[free], self.source[free])
-        number = np.bincount(label[free], minlength=count)[:, None]
-        centre = total / np.maximum(number, 1)
-        kept = np.flatnonzero(self.fixed)
-        distance = np.linalg.norm(self.source[kept] - centre[label[kept]], axis=1)
-        anchor = np.full(count, -1)
-        order = np.argsort(-distance)        # the nearest written last
-        anchor[label[kept[order]]] = kept[order]
-        return anchor
-
-    def _pinched(self, sides, spread):
-        """The patches that may move with a border pole tied to two held poles farther
-        apart than the two poles' sources plus ``spread`` (corners of kept patches that do
-        not meet in the source): closed onto one of them, such a patch would open its join
-        to the other."""
-        out = set()
-        for _, border_a, _, border_b, _, _ in sides:
-            source = np.linalg.norm(self.source[border_a] - self.source[border_b], axis=1)
-            held = np.linalg.norm(self.held[border_a] - self.held[border_b], axis=1)
-            apart = self.on_held[border_a] & self.on_held[border_b] & (held > source + spread)
-            for index in np.concatenate([border_a[apart], border_b[apart]]):
-                patch = int(np.searchsorted(self.offsets, index, side="right")) - 1
-                if not self.fixed[index]:
-                    out.add(patch)
-        return out
+        return basis, held
 
     def _kkt(self, mirrored, planes):
         r"""The KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and the right-hand
