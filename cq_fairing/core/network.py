@@ -72,7 +72,7 @@ HELD = -1            # the class of every kept pole in the constraints' union-fi
 LAMBDA_RANGE = (1e-8, 1e4)
 BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
-SPREAD = 1e-7       # x the network's size: held poles farther apart do not close a join
+SPREAD = 1e-7       # x the network's size: kept corners farther apart leave their vertex open
 STRAIGHT = 0.1      # relative residual of a source's rows at a vertex for its lines to stay
 SINGULAR = 0.2      # relative coefficient below which a cycle of mirrored rows is singular
 
