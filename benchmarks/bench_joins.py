@@ -9,8 +9,10 @@
    samples per join, deviation as the largest distance to the source at equal
    parameters (41 x 41 per patch), curvature sign changes along 16 lines across joins.
 2. Whole models faired with joins held (``joins="smooth"``, the default) against each
-   face alone (``joins="free"``): time, faces faired, poles, and every join's gap and
-   normal angle measured by projection both ways (``ShapeFairResult.joins``).
+   face alone (``joins="free"``): time, faces faired, poles, every join's gap and
+   normal angle measured by projection both ways (``ShapeFairResult.joins``), and the
+   curvature sign changes along curves across the smooth joins, source and faired
+   (:func:`crossing_sign_changes`).
 
     python benchmarks/bench_joins.py    # grid; fuselage 2.5, testtoler 0.01, shell_patches
                                         # 0.083 (its default), linkrods 0.01, impeller 0.2
@@ -47,9 +49,54 @@ def run(name, tol, joins):
     s = result.joins.summary()
     poles = sum(r.poles_after[0] * r.poles_after[1] for r in result.faces if r.poles_after)
     worst = max(((r.max_deviation or 0.0) for r in result.faces if r.faired), default=0.0)
+    crossing = result.joins.adjacency.joins
     return (f"| {name} | {tol:g} | {joins} | {seconds:.2f} | {result.n_faired} | {poles} | "
             f"{s['held']}/{s['joins']} | {s['max_gap_opened']:.2g} | "
-            f"{s['max_angle_excess']:.3f} | {worst / tol:.2f} | {result.valid} |")
+            f"{s['max_angle_excess']:.3f} | {worst / tol:.2f} | {result.valid} | "
+            f"{crossing_sign_changes(shape, crossing)} -> "
+            f"{crossing_sign_changes(result.shape, crossing)} |")
+
+
+def crossing_sign_changes(shape, joins, samples=41):
+    """Normal-curvature sign changes along curves that cross the smooth joins between two
+    B-spline faces, both faces' whole sides: at a quarter, half and three quarters along
+    each join, the iso-line of each face across it, from its far side to the join and on
+    into the other face; second differences of the points projected on the surfaces'
+    normals, below 1e-3 of the largest on the curve ignored."""
+    faces = indexed_faces(shape)
+    count = 0
+    for join in joins:
+        if join.kind != "smooth" or any(s.side is None or not s.full for s in join.sides):
+            continue
+        a, b = join.sides
+        for t in (0.25, 0.5, 0.75):
+            first = _across(face_to_surface(faces[a.face])[0], a, t, samples)
+            second = _across(face_to_surface(faces[b.face])[0], b, t, samples)
+            points = np.concatenate([first[0], second[0][::-1][1:]])
+            normals = np.concatenate([first[1], second[1][::-1][1:]])
+            d2 = np.einsum("ij,ij->i", np.diff(points, 2, axis=0), normals[1:-1])
+            signs = np.sign(d2[np.abs(d2) > 1e-3 * np.abs(d2).max()])
+            count += int(np.count_nonzero(signs[1:] != signs[:-1]))
+    return count
+
+
+def _across(surface, side, t, samples):
+    """Points and unit normals (signs aligned with the first) along the iso-line across
+    ``side`` at the fraction ``t`` of its edge, from the far side to the border."""
+    (u0, u1), (v0, v1) = surface.domain
+    along = side.along[0] + t * (side.along[1] - side.along[0])
+    across = np.linspace(0.0, 1.0, samples)
+    if side.side[0] == "u":
+        u = (u1 + (u0 - u1) * across) if side.side[1] == "0" else (u0 + (u1 - u0) * across)
+        grid = [(u, [along])]
+    else:
+        v = (v1 + (v0 - v1) * across) if side.side[1] == "0" else (v0 + (v1 - v0) * across)
+        grid = [([along], v)]
+    point, du, dv = (surface.evaluate_grid(*grid[0], nu, nv).reshape(samples, 3)
+                     for nu, nv in ((0, 0), (1, 0), (0, 1)))
+    normal = np.cross(du, dv)
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    return point, normal * np.sign(normal @ normal[0])[:, None]
 
 
 def _border(surface, side, t):
@@ -163,8 +210,9 @@ def main():
     synthetic()
     print()
     print("| model | tol | joins | s | faces faired | poles | joins held | largest gap "
-          "opened | largest smooth-join angle excess (deg) | worst deviation / tol | valid |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "opened | largest smooth-join angle excess (deg) | worst deviation / tol | valid | "
+          "curvature sign changes across smooth joins, source -> faired |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, tol in CASES:
         for joins in ("smooth", "free"):
             print(run(name, tol, joins))

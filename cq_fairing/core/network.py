@@ -25,16 +25,18 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   the tangent planes agree along the whole join
   (:mod:`cq_fairing.core.joins`, step 5).
 * **Vertices.**  Around a vertex the rows next to it tie the patches' twist poles in a
-  cycle.  Its system has determinant :math:`1 - (-1)^n\prod\mu` for :math:`n` patches:
-  at odd valence it determines the twists and every row is kept; at even valence it is
-  singular where :math:`\prod\mu = 1`, and a row that closes a singular cycle, or that
-  would fix poles already fixed, is left out (:class:`_RowCycles`).  At a *crossing*
-  (four moving patches, four smooth joins) opposite joins share one ratio and the
-  mirrored rows at the vertex make its two lines of edges straight, so the cycle closes
-  as in one surface cut into four (:func:`_straightened`).  At any other vertex of three
-  or more patches the rows at the vertex itself would make the edges collinear in pairs;
-  they are replaced by the vertex's tangent plane, which holds the first pole of every
-  edge (:func:`_plane_rows`; these rows act on the three coordinates together).
+  cycle, singular where the ratios' product is 1 (the vertex enclosure condition); a
+  row that would close a cycle of rows is left out.  At a *crossing* (four moving
+  patches, four smooth joins) opposite joins share one ratio and the mirrored rows at
+  the vertex make its two lines of edges straight, so the cycle closes as in one
+  surface cut into four and the row left out holds by itself (:func:`_straightened`).
+  At any other vertex of three or more patches where the rows at the vertex itself
+  would make an edge collinear with two others, or where the source's edges are not
+  straight through it, those rows are replaced by the vertex's tangent plane, which
+  holds the first pole of every edge (:func:`_plane_rows`; these rows act on the three
+  coordinates together).  Around an odd number of patches the rows that close the
+  cycle would determine the twist poles; held, they make the patches wavier across
+  their joins, so they are left out there too.
 * **Open vertices.**  Where the kept patches' corners do not meet in the source (farther
   apart than :data:`SPREAD` times the network's size), the other patches' corners there
   keep their source points (:func:`_split_vertices`): closed onto one kept corner, a
@@ -74,7 +76,6 @@ BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
 SPREAD = 1e-7       # x the network's size: kept corners farther apart leave their vertex open
 STRAIGHT = 0.1      # relative residual of a source's rows at a vertex for its lines to stay
-SINGULAR = 0.2      # relative coefficient below which a cycle of mirrored rows is singular
 
 
 @dataclass(frozen=True)
@@ -489,7 +490,7 @@ def _constraints(system, sides, continuity, split):
         crossings = _crossings(system, sides, vertices,
                                {root: c for root, c in at.items() if root not in fans})
         ratios = _straightened(sides, crossings)
-        cycles = _RowCycles(g0.find(HELD)[0])
+        cycles = UnionFind()
         for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
             if not join.smooth:
                 continue
@@ -498,7 +499,7 @@ def _constraints(system, sides, continuity, split):
                                                                inner_b))):
                 if vertices.find(ia)[0] in fans:
                     continue
-                if cycles.tie(g0.find(na)[0], g0.find(nb)[0], mu):
+                if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
                     rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
         planes = _plane_rows(system, fans, g0)
     size = int(system.offsets[-1])
@@ -512,53 +513,6 @@ def _constraints(system, sides, continuity, split):
          (np.repeat(np.arange(len(planes)), 6), np.concatenate([c for c, _ in planes])
           if planes else [])), shape=(len(planes), 3 * size))
     return ties, matrix, plane_matrix, len(rows)
-
-
-class _RowCycles:
-    r"""Which mirrored rows determine the inner poles they tie, and which would repeat or
-    contradict the others.
-
-    A row ties two classes of inner poles, :math:`a + \mu b = c`.  Tied classes are kept
-    as :math:`x = w_x r + \text{const}` against a root :math:`r`.  A row between two
-    trees links them.  A row inside one tree closes a cycle (around a vertex: the
-    patches' twist poles) and reads :math:`(w_a + \mu w_b)\, r = \text{const}`: it
-    fixes the root, and is kept, unless it ties the same two classes as another row
-    (two rows on one pair with other ratios would pull both onto the border), the
-    coefficient is below :data:`SINGULAR` of its terms (around a vertex of even valence whose ratios' product is 1: the vertex
-    enclosure condition) or the root is fixed already (by another cycle, or by a held
-    pole: the class ``held``).  Around a vertex of odd valence the cycle's coefficient
-    is :math:`1 + \prod\mu` in magnitude: never singular, the twists follow."""
-
-    def __init__(self, held):
-        self.parent, self.weight, self.fixed = {}, {}, {held}
-        self.pairs = set()
-
-    def find(self, key):
-        """``(root, w)`` with ``key = w root + const``."""
-        weight = 1.0
-        while self.parent.get(key, key) != key:
-            weight *= self.weight[key]
-            key = self.parent[key]
-        return key, weight
-
-    def tie(self, a, b, mu):
-        r"""Whether the row :math:`a + \mu b = c` is kept (then it is recorded)."""
-        if frozenset((a, b)) in self.pairs:
-            return False      # a second row on the same pair: both would collapse to c
-        self.pairs.add(frozenset((a, b)))
-        (ra, wa), (rb, wb) = self.find(a), self.find(b)
-        if ra != rb:
-            if ra in self.fixed and rb in self.fixed:
-                return False
-            self.parent[rb], self.weight[rb] = ra, -wa / (mu * wb)
-            if rb in self.fixed:
-                self.fixed.add(ra)
-            return True
-        coefficient = wa + mu * wb
-        if ra in self.fixed or abs(coefficient) < SINGULAR * max(abs(wa), mu * abs(wb)):
-            return False
-        self.fixed.add(ra)
-        return True
 
 
 def _diagonal(points):

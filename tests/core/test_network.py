@@ -4,21 +4,11 @@ deviation on a dense grid, against the sources and the joint projection."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.joins import BorderJoin
-from cq_fairing.core.network import (
-    SAMPLES,
-    SINGULAR,
-    PatchNetwork,
-    _Forms,
-    _RowCycles,
-    fair_network,
-    network_joinable,
-)
+from cq_fairing.core.network import SAMPLES, PatchNetwork, _Forms, fair_network, network_joinable
 from cq_fairing.core.patch_grid import insert_knot
 from cq_fairing.errors import InvalidInputError
 
@@ -210,51 +200,6 @@ def test_the_grid_crossing_holds_g1_exactly(grid, tol):
     result = fair_network(grid.patches, grid.joins, tol)
     assert not result.kept
     assert _joins_measured(result.surfaces, grid.joins)[1] <= 1e-4
-
-
-def _cycle_matrix(mus):
-    r"""The rows :math:`a_k + \mu_k a_{k+1} = c_k` around a cycle, as a dense matrix."""
-    n = len(mus)
-    m = np.eye(n)
-    for k, mu in enumerate(mus):
-        m[k, (k + 1) % n] += mu
-    return m
-
-
-@settings(max_examples=60, deadline=None)
-@given(n=st.integers(3, 7), logs=st.lists(st.floats(-1.0, 1.0), min_size=7, max_size=7))
-def test_rows_around_a_cycle_are_kept_as_far_as_they_are_independent(n, logs):
-    """Around a vertex the mirrored rows tie the patches' twist poles in a cycle; the rows
-    kept are as many as the rank of the cycle's system (numpy's), where that system is
-    not near-singular: every row at odd valence (its determinant is 1 + prod mu), one
-    less at even valence when prod mu = 1 (the vertex enclosure condition)."""
-    mus = list(np.exp(logs[:n]))
-    if n % 2 == 0 and np.isclose(np.prod(mus[:-1]) * mus[-1], 1.0, rtol=0.5):
-        mus[-1] = 1.0 / np.prod(mus[:-1])              # exactly singular
-    cycles = _RowCycles("held")
-    kept = sum(cycles.tie(k, (k + 1) % n, mu) for k, mu in enumerate(mus))
-    assert kept == np.linalg.matrix_rank(_cycle_matrix(mus), tol=1e-9)
-    assert 1.0 + np.prod(mus) > SINGULAR or n % 2 == 0
-
-
-def test_a_cycle_through_held_poles_keeps_only_what_it_can_hold():
-    """A class tied to a held pole is fixed: a second row that fixes it again would ask
-    for something else there and is left out; a row between two free classes is kept."""
-    cycles = _RowCycles("held")
-    assert cycles.tie("a", "held", 1.3)
-    assert not cycles.tie("a", "held", 0.8)
-    assert cycles.tie("b", "c", 0.9)
-    assert cycles.tie("c", "a", 1.1)
-    assert not cycles.tie("b", "held", 1.0)
-
-
-def test_a_second_row_on_the_same_pair_is_left_out():
-    """Two rows on one pair of classes with other ratios, a + mu b = (1 + mu) c twice,
-    would put both on c (the cross rows collapse); the second is left out."""
-    cycles = _RowCycles("held")
-    assert cycles.tie("a", "b", 1.2)
-    assert not cycles.tie("b", "a", 0.5)
-    assert np.linalg.matrix_rank(_cycle_matrix([1.2, 1 / 0.5])) == 2   # it would fix both
 
 
 def test_a_vertex_open_between_kept_patches_stays_as_open_as_in_the_source(grid):
