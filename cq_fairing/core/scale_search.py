@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import InvalidInputError, ToleranceNotMetError
 from .banded import BandedSPD
-from .geometry import BSplineSurface, fewest_spans
+from .geometry import BSplineSurface, fewest_spans, one_thread_product
 from .gram import gram_matrix
 from .plans import target_space
 from .results import cartesian_poles, homogeneous_coefficients
@@ -75,7 +75,7 @@ def project_u(surface, target_u):
     """Homogeneous (or Cartesian) net projected along u only, shape (k_tu, k_v, d')."""
     net = homogeneous_coefficients(surface)
     au = _operator(surface.u_space, target_u)
-    return net if au is None else np.tensordot(au, net, axes=(1, 0))
+    return net if au is None else one_thread_product(au, net)
 
 
 def max_scales(surface, target_degree):
@@ -226,11 +226,13 @@ def target_degrees(surface, target_degree):
 
 
 class SurfaceSampler:
-    """Original points on a UV grid of the face (inside the trim), for the search.
+    r"""Original points on a UV grid of the face (inside the trim), for the search.
 
     ``grid`` is ``(u, v, inside)``: the grid's parameters and the ``(u.size, v.size)``
-    mask of the samples that lie on the face.  Collocation matrices are cached per
-    spline space, so a candidate costs two small dense products.
+    mask of the samples that lie on the face.  The sparse collocation matrices
+    (:math:`p + 1` non-zeros per row) are cached per spline space, so a candidate's
+    grid :math:`M_u P M_v^T` costs :math:`O((n_u k_v + n_u n_v)(p + 1))` work
+    (:func:`_on_grid`), where dense factors cost :math:`O(n_u k_u k_v + n_u n_v k_v)`.
     """
 
     def __init__(self, grid, surface):
@@ -242,13 +244,13 @@ class SurfaceSampler:
     def _matrix(self, space, x, nu=0):
         key = (space.key, x.size, nu)
         if key not in self._cache:
-            self._cache[key] = space.collocation(x, nu).toarray()
+            self._cache[key] = space.collocation(x, nu)
         return self._cache[key]
 
     def evaluate(self, surface):
         net = surface.homogeneous() if surface.is_rational else surface.poles
         mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
-        grid = np.matmul(mv, np.tensordot(mu, net, axes=(1, 0)))[self.inside]
+        grid = _on_grid(mu, mv, net)[self.inside]
         return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
 
     def parametric(self, faired):
@@ -266,10 +268,9 @@ class SurfaceSampler:
         mu, mv = self._matrix(faired.u_space, self.u), self._matrix(faired.v_space, self.v)
         du = self._matrix(faired.u_space, self.u, 1)
         dv = self._matrix(faired.v_space, self.v, 1)
-        along_u = np.tensordot(mu, net, axes=(1, 0))
-        h = np.matmul(mv, along_u)[self.inside]
-        hu = np.matmul(mv, np.tensordot(du, net, axes=(1, 0)))[self.inside]
-        hv = np.matmul(dv, along_u)[self.inside]
+        h = _on_grid(mu, mv, net)[self.inside]
+        hu = _on_grid(du, mv, net)[self.inside]
+        hv = _on_grid(mu, dv, net)[self.inside]
         if faired.is_rational:  # quotient rule: S = X / w, S_u = (X_u - w_u S) / w
             w = h[:, -1:]
             points = h[:, :-1] / w
@@ -284,3 +285,19 @@ class SurfaceSampler:
         ok = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
         dist[ok] = np.abs(np.einsum("ij,ij->i", offset[ok], normal[ok])) / length[ok]
         return float(dist.max())
+
+
+def _on_grid(mu, mv, net):
+    r"""The grid :math:`G_{ab} = \sum_{ij} (M_u)_{ai} P_{ij} (M_v)_{bj}`, shape
+    (n_u, n_v, d), from sparse collocation matrices ``mu`` (n_u, k_u) and ``mv``
+    (n_v, k_v) and the net ``P`` (k_u, k_v, d): two sparse products, each on one thread.
+    """
+    along_u = _rows(mu, net).swapaxes(0, 1)           # (k_v, n_u, d)
+    return _rows(mv, along_u).swapaxes(0, 1)
+
+
+def _rows(matrix, array):
+    """``matrix @ array`` over the first axis of ``array`` (k, ...), a sparse matrix
+    times a dense array."""
+    flat = matrix @ array.reshape(array.shape[0], -1)
+    return flat.reshape((matrix.shape[0],) + array.shape[1:])

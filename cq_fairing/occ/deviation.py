@@ -13,7 +13,7 @@ upper bound of :math:`d_i` (fairing keeps the parameter domain).
 
 **Batched, then judged by OCCT.**  On B-spline faces (``projection="local"``) every
 sample is measured at once by the core's vectorized Newton iteration
-(:func:`~cq_fairing.core.measures.closest_points_surface_restarted`: started at the
+(:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`: started at the
 sample's own parameters, where both surfaces share their parametrization, and again
 from the nearest of a coarse sampling where that is nearer): each value is the
 distance to an actual point of the surface, so it bounds the true distance from above
@@ -66,6 +66,7 @@ DEFAULT_DENSITY = 40
 JUDGED_FRACTION = 0.9   # OCCT measures again every sample at least this share of the maximum
 JUDGED_BLOCK = 64       # samples OCCT measures again per step of the walk down from the largest
 SAME_GEOMETRY = 1e-9    # the core's and OCCT's points agree within this share of the size
+PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured before a full check
 
 
 def _density(density):
@@ -269,15 +270,66 @@ def _judged_distances(target_face, target, source_face, points, uv):
     surface (the core's ``target``) and the nearest points found.
 
     The core's batched Newton projection from ``uv``, restarted from a coarse sample
-    where one is nearer (:func:`~cq_fairing.core.measures.closest_points_surface_restarted`),
+    where one is nearer (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`),
     gives every sample an upper bound; OCCT then judges the samples near the maximum
     (:func:`_judge`).
     """
-    s, t, distance = closest_points_surface_restarted(target, points, uv[:, 0], uv[:, 1])
-    feet = np.column_stack([s, t])
-    projected = _core_points(target, feet)
+    distance, feet, projected = _batched_distances(target, points, uv)
     _judge(target_face, source_face, uv, feet, points, distance, projected, target.size)
     return distance, projected
+
+
+def _batched_distances(target, points, uv):
+    """The core's distances of ``points`` to ``target`` from ``uv`` (restarted Newton,
+    :func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`), their foot
+    parameters and foot points."""
+    s, t, distance = closest_points_surface_restarted(target, points, uv[:, 0], uv[:, 1])
+    feet = np.column_stack([s, t])
+    return distance, feet, _core_points(target, feet)
+
+
+def exceeds_on_widest(original_face, faired_face, surfaces, reference, tol,
+                      samples=PREFILTER_SAMPLES):
+    r"""True when a lower bound of :func:`deviation_on_grid`'s ``max`` (batched, on the
+    same ``reference`` and ``surfaces``) exceeds ``tol``: a candidate certain to fail
+    the full check, found at a fraction of its cost.
+
+    Only a sample whose parametric distance :math:`|S_1(u_i, v_i) - p_i|` exceeds ``tol``
+    can exceed it either way (every distance of the check is at most the parametric
+    one).  The ``samples`` of them with the largest parametric distance are measured as
+    the check measures them: the core's batched projection both ways, and where one
+    exceeds ``tol``, OCCT's judge (:func:`_judge`) on those samples.  Each sample's value
+    in the full check comes from the same per-sample steps, each taking the nearer point
+    (the batched value, OCCT's Newton projection from its foot, the global projection and
+    the border curves), and the judge leaves the subset's maximum measured by all of
+    them: no value of the full check at that sample is below it, so the full check's
+    maximum is at least the subset's (the batched check's, which is the check wherever
+    OCCT's points agree with the core's).  ``False`` says nothing (the full check
+    decides), as where the judge finds that OCCT's points differ from the core's.
+    """
+    uv, points, _ = reference
+    original, faired = surfaces
+    faired_points = _core_points(faired, uv)
+    parametric = np.linalg.norm(faired_points - points, axis=1)
+    widest = np.argsort(parametric)[::-1][:samples]
+    widest = widest[parametric[widest] > tol]
+    if widest.size == 0:
+        return False
+    uv = uv[widest]
+    ways = ((faired_face, faired, original_face, points[widest]),
+            (original_face, original, faired_face, faired_points[widest]))
+    for target_face, target, source_face, from_points in ways:
+        distance, feet, projected = _batched_distances(target, from_points, uv)
+        if distance.max() <= tol:
+            continue
+        try:
+            _judge(target_face, source_face, uv, feet, from_points, distance, projected,
+                   target.size)
+        except _NotTheSameGeometry:
+            return False
+        if distance.max() > tol:
+            return True
+    return False
 
 
 def _judge(target_face, source_face, uv, feet, points, distance, projected, size):

@@ -54,7 +54,7 @@ from ..errors import (
 )
 from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
-from .deviation import deviation_on_grid, face_uv_grid, reference_samples
+from .deviation import deviation_on_grid, exceeds_on_widest, face_uv_grid, reference_samples
 from .trims import face_region
 
 if TYPE_CHECKING:
@@ -344,9 +344,12 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
 
     ``criteria`` are the attempts of :func:`_criteria`; the first whose rebuilt face
     passes the check wins.  The OCCT check runs on the search grid plus the centres of
-    its cells.
+    its cells; a candidate whose samples of largest parametric distance already put a
+    lower bound of the check's maximum above ``tol``
+    (:func:`~cq_fairing.occ.deviation.exceeds_on_widest`) fails without the full check,
+    which then runs only if every attempt fails (for the error's best deviation).
     """
-    measured, refusals = [], []
+    measured, refusals, prefiltered = [], [], []
     check = None
     region = face_region(face) if info.trimmed else None
     window = _uv_window(face, source) if info.trimmed else None
@@ -366,6 +369,9 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
                               "as the source; nothing to reduce", tol)
         new_face = surface_to_face(faired, face)
         check = check or _check_samples(face, sampler.grid, info.trimmed, surface)
+        if tol is not None and exceeds_on_widest(face, new_face, (surface, faired), check, tol):
+            prefiltered.append((new_face, faired))
+            continue
         deviation = deviation_on_grid(face, new_face, None, reference=check,
                                       surfaces=(surface, faired))
         if tol is None or deviation["max"] <= tol:
@@ -379,6 +385,9 @@ def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish,
                 max_deviation=deviation["max"], tolerance=tol, deviation=deviation,
                 surface=faired)
         measured.append(deviation["max"])
+    measured += [deviation_on_grid(face, new_face, None, reference=check,
+                                   surfaces=(surface, faired))["max"]
+                 for new_face, faired in prefiltered]
     best = min(d for d in measured if d is not None) if any(
         d is not None for d in measured) else float("inf")
     where = "by OCCT's measure"

@@ -179,3 +179,37 @@ def test_core_surfaces_that_are_not_the_faces_fall_back_to_occt(real):
     np.testing.assert_array_equal(wrong["distance"], by_occt)
     np.testing.assert_array_equal(wrong["distance_back"], back)
     assert wrong["max"] == pytest.approx(right["max"], abs=1e-6 * tol)
+
+
+def test_the_widest_samples_bound_the_full_check_from_below(real):
+    """A testtoler strip faired onto 8 x 4 poles (``n=(5, 1)``) leaves the face by far.
+    At tolerances from a quarter of the full check's maximum up to above it, the
+    prefilter on its widest samples says "exceeds" only where the full check's maximum
+    (both ways, OCCT judging) is above the tolerance; it does say so well below the
+    maximum, and never at or above it.  OCCT's own global projection, both ways, finds
+    the same maximum (on the way back: the faired face reaches beyond the original)."""
+    from cq_fairing.occ import face_to_surface, fair_face
+    from cq_fairing.occ.deviation import (
+        deviation_on_grid,
+        exceeds_on_widest,
+        face_uv_grid,
+        reference_samples,
+    )
+    from tests.occ.helpers import faces_of
+
+    face = next(f for f in faces_of(real("testtoler.brep"))
+                if face_to_surface(f)[0].shape[0] > 100)
+    report = fair_face(face, n=(5, 1), details=False)
+    surfaces = face_to_surface(face)[0], report.surface
+    reference = reference_samples(face, face_uv_grid(face, 40, classify=False),
+                                  surface=surfaces[0])
+    full = deviation_on_grid(face, report.face, None, reference=reference, surfaces=surfaces)
+    largest = full["max"]
+    verdicts = {share: exceeds_on_widest(face, report.face, surfaces, reference, share * largest)
+                for share in (0.25, 0.5, 0.9, 0.99, 1.0, 1.5)}
+    assert verdicts[0.25] and verdicts[0.5]
+    assert not verdicts[1.0] and not verdicts[1.5]
+    assert all(not said or largest > share * largest for share, said in verdicts.items())
+    occt = np.r_[global_distance(full["points"], report.face),
+                 global_distance(full["faired_points"], face)]
+    assert occt[np.isfinite(occt)].max() == pytest.approx(largest, rel=1e-9)
