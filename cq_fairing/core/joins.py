@@ -79,6 +79,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import InvalidInputError
 from .banded import BandedSPD, kron_solve
+from .evaluation import surface_derivatives
 from .geometry import BSplineSurface
 from .gram import gram_matrix
 from .spaces import SplineSpace
@@ -275,16 +276,22 @@ def side_parameters(surface, side, t):
 def join_angles(surfaces, join, t):
     """Angle (degrees) between the two patches' normals at the normalised parameters
     ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count)."""
-    normals = []
-    for index, side, along in ((join.a, join.side_a, t),
-                               (join.b, join.side_b, 1.0 - t if join.reversed else t)):
-        surface = surfaces[index]
-        u, v = side_parameters(surface, side, along)
-        n = np.cross(surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1))
-        n = n.reshape(-1, 3)
-        normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300))
+    t = np.asarray(t, dtype=float)
+    normals = [_side_normals(surfaces[index], side, along)
+               for index, side, along in ((join.a, join.side_a, t),
+                                          (join.b, join.side_b, 1.0 - t if join.reversed else t))]
     cos = np.clip(np.abs(np.sum(normals[0] * normals[1], axis=1)), 0.0, 1.0)
     return np.degrees(np.arccos(cos))
+
+
+def _side_normals(surface, side, along):
+    """Unit normals :math:`S_u\times S_v` along ``side`` at the normalised parameters
+    ``along`` (from the surface's Taylor form: :func:`~cq_fairing.core.evaluation.surface_derivatives`)."""
+    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
+            for x in side_parameters(surface, side, along))
+    d = surface_derivatives(surface, u, v, 1)
+    n = np.cross(d[(1, 0)], d[(0, 1)])
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
 def cross_curvatures(surfaces, join, t):
