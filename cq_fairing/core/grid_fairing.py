@@ -17,11 +17,9 @@ along eight lines across the joins, against 24 face by face and 82 in the source
 
 Each piece is then checked against its own face by the backend's two-sided measure
 (``check``: OCCT's in the OCP layer, the workbench's through FreeCAD's Part module).
-When a piece is over its face's tolerance the block is faired again at a smaller goal,
-:data:`RETRIES` times at most: the goal scaled by :data:`MARGIN` times the worst piece's
-tolerance over its deviation (the merged search's measure and the backend's differ by a
-few per cent where they differ), at least by :data:`SHRINK`; a block that still misses
-is left to the face-by-face and joint passes.  The merged surface's border rows are averages of the
+When a piece is over its face's tolerance the block is faired again at :data:`SHRINK`
+times the tolerance, :data:`RETRIES` times at most; a block that still misses is left to
+the face-by-face and joint passes.  The merged surface's border rows are averages of the
 patches' border rows, which lie within ``merge_gap(tol)`` of each other.
 
 Patches whose parametrizations do not match across their joins (the speed of u jumps
@@ -45,11 +43,10 @@ from .patch_layout import find_grids
 from .scale_search import SurfaceSampler, search_scales, target_degrees
 
 __all__ = ["fair_grids", "fair_merged", "source_merge_gap", "GridFairing", "RETRIES",
-           "SHRINK", "MARGIN", "SAMPLES"]
+           "SHRINK", "SAMPLES"]
 
 RETRIES = 2
-SHRINK = 0.5   # the smallest factor a retry scales the goal by
-MARGIN = 0.9   # a retry's goal below tolerance / deviation of the worst piece
+SHRINK = 0.5
 SAMPLES = 17   # same-parameter samples per patch and direction in the merged search
 
 
@@ -182,15 +179,8 @@ def _fair_block(block, cell_faces, sources, tolerances, check, target_degree, me
         if all(deviations[f] <= tolerances[f] for f in surfaces):
             return GridFairing([f for column in cell_faces for f in column], block.shape,
                                merged.surface, faired, goal, surfaces)
-        goal *= _retry_factor(deviations, tolerances)
+        goal *= SHRINK
     return None
-
-
-def _retry_factor(deviations, tolerances):
-    """The factor of a retry's goal: :data:`MARGIN` times :math:`\\min_f t_f / d_f` over
-    the pieces (deviation :math:`d_f`, tolerance :math:`t_f`), at least :data:`SHRINK`."""
-    worst = min(tolerances[f] / deviations[f] for f in deviations)
-    return max(SHRINK, MARGIN * worst)
 
 
 def fair_merged(merged, tol, target_degree=None):
