@@ -32,8 +32,9 @@ halved, :data:`REFINEMENTS` times at most), then is kept as it was, and the join
 runs again with it fixed, so its neighbours close onto it.  A face on a smooth join that
 turns more than the source's angle + :data:`~cq_fairing.core.joins.ANGLE_SLACK` degrees
 (next to a vertex, where a mirrored row of the cycle around it is left out) gets its
-targets refined the same way.  A face whose pinned sides leave it a net no smaller than
-its source's is kept: nothing is left to fair.
+targets refined the same way, and is kept as it was where it still turns after
+:data:`REFINEMENTS`.  A face whose pinned sides leave it a net no smaller than its
+source's is kept: nothing is left to fair.
 
 This module imports numpy only (and the core).
 """
@@ -154,6 +155,10 @@ class JointProjection:
         ``{join: {(face, side)}}``: the other joins with a side pinned to its source.
     curved : list of Join
         The joins of ``held`` also held curvature-continuous (``continuity="G2"``).
+    turned : list of int
+        The faces kept as they were because a smooth join of theirs still turned more
+        than the source's angle + :data:`~cq_fairing.core.joins.ANGLE_SLACK` after
+        :data:`REFINEMENTS`.
     """
 
     surfaces: dict
@@ -161,6 +166,7 @@ class JointProjection:
     held: list
     pinned: dict
     curved: list = field(default_factory=list)
+    turned: list = field(default_factory=list)
 
 
 def locate_side(face, edge, uv, bounds, point, edge_tolerance, size):
@@ -334,6 +340,7 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
         return JointProjection({}, {}, [], {})
     members = {face: [m for m in group if group[m] == face] for face in faces}
     refined = dict.fromkeys(faces, 0)
+    stuck = set()      # kept: still turned after REFINEMENTS
     curved = _curvature_continuous(sources, border, group) if continuity == "G2" else set()
     while True:
         solve = _solve(sources, targets, faces, kept, refined, border, group, pins, continuity,
@@ -342,8 +349,7 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
                   for k, face in enumerate(faces) if face not in kept for m in members[face]}
         deviations = {m: check(m, s) if _positive(s) else np.inf for m, s in solved.items()}
         over = sorted({group[m] for m, d in deviations.items() if d > tolerances[m]})
-        turned = [i for i in _turned(solve, faces, kept) if refined[i] < REFINEMENTS
-                  and i not in over]
+        turned = [i for i in _turned(solve, faces, kept) if i not in over]
         grown = _grown(solve.result, sources, faces, kept, pins)
         kept.update(dict.fromkeys(grown))
         for face in over:
@@ -352,17 +358,23 @@ def project_jointly(sources, targets, joins, border, tolerances, check, *, conti
             else:
                 kept[face] = max(deviations[m] for m in members[face])
         for face in turned:
-            refined[face] += 1
+            if refined[face] < REFINEMENTS:
+                refined[face] += 1
+            else:
+                kept[face] = None
+                stuck.add(face)
         if not over and not turned and not grown:
             break
     inside = [j for j in joins if j.faces[0] != j.faces[1]
               and group.get(j.faces[0], -1) == group.get(j.faces[1], -2)
               and group[j.faces[0]] not in kept]
     pinned = {(face, side) for face, side in solve.pinned if face not in kept}
-    return JointProjection(solved, {m: d for face, d in kept.items() if face in targets
-                                      for m in members[face]},
+    return JointProjection(solved, {m: d for face, d in kept.items()
+                                    if face in targets and face not in stuck
+                                    for m in members[face]},
                            solve.imposed + inside, _pinned_joins(joins, border, group, pinned),
-                           solve.curved)
+                           solve.curved, sorted(m for face in stuck for m in members[face]
+                                                if face in targets))
 
 
 def surface_key(surface):

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.join_summary import summarize, summary_line
+from ..core.joins import ANGLE_SLACK
 from ..core.joint_projection import (
     REFINEMENTS,
     SOURCE_GAP,
@@ -130,6 +131,8 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded):
         _install(job.reports[face], *measured[face])
     for face, deviation in joint.kept.items():
         _keep(job, face, deviation, adjacency.joins_of(face))
+    for face in joint.turned:
+        _keep_turned(job, face, adjacency.joins_of(face))
     return joint
 
 
@@ -180,6 +183,16 @@ def _keep(job, index, deviation, joins):
     job.reports[index] = job.kept(index, "tolerance-not-met", (
         f"with its joins closed the face {what}; kept as it was, and its neighbours close "
         f"onto it (joins with faces {neighbours})"))
+
+
+def _keep_turned(job, index, joins):
+    """Keep a face whose smooth joins still turn more than the source's angle + the slack
+    after :data:`~cq_fairing.core.joint_projection.REFINEMENTS`; name its joins."""
+    neighbours = sorted({f + 1 for join in joins for f in join.faces if f != index})
+    job.reports[index] = job.kept(index, "unchanged", (
+        f"with its joins held its smooth joins (with faces {neighbours}) would turn more "
+        f"than the source's angle + {ANGLE_SLACK:g} deg after {REFINEMENTS} refinements; "
+        "kept as it was, and its neighbours close onto it"))
 
 
 @dataclass(eq=False)

@@ -48,7 +48,9 @@ import Part
 import cq_fairing as cf
 from cq_fairing.core.grid_fairing import fair_grids
 from cq_fairing.core.join_summary import summarize, summary_line
+from cq_fairing.core.joins import ANGLE_SLACK
 from cq_fairing.core.joint_projection import (
+    REFINEMENTS,
     Join,
     JoinSide,
     border_joins,
@@ -62,10 +64,13 @@ from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
 
 from . import analysis, conversion
 
-__all__ = ["JOINS", "SAMPLES", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
+__all__ = ["JOINS", "SAMPLES", "TURNED", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
            "measure_joins", "hold_joins", "check_joins"]
 
 SAMPLES = 24              # points measured along each join
+TURNED = (f"with its joins held its smooth joins would turn more than the source's angle "
+          f"+ {ANGLE_SLACK:g} deg after {REFINEMENTS} refinements; its neighbours close "
+          "onto it")
 
 
 @dataclass(frozen=True)
@@ -299,7 +304,8 @@ class HeldJoins:
     kept : dict
         ``{face: deviation}``: the faces the joint projection kept as they were (the
         deviation they stayed at with their joins closed, over their tolerance; ``None``
-        where their pinned sides left nothing to fair) and no network moved.
+        where their pinned sides left nothing to fair; :data:`TURNED` where a smooth
+        join still turned after the refinements) and no network moved.
     held : list of Join
         The joins held closed.
     grids : list of GridFairing
@@ -371,6 +377,7 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
                    if set(j.faces) & set(network.surfaces)]
     surfaces = {**pieces, **projection.surfaces, **moved}
     kept = {face: d for face, d in projection.kept.items() if face not in moved}
+    kept.update({face: TURNED for face in projection.turned if face not in moved})
     still = {face for face in found.boxes
              if face not in surfaces and (face not in faired or face in kept)}
     return HeldJoins(surfaces, kept, in_grids + held_joins(projection, still) + in_networks,

@@ -641,10 +641,13 @@ def _kept_by_joins(element, why, tolerance):
     """:class:`FairedShape` of a face kept as it is for its joins: ``why`` is the
     deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
     all positive), ``None`` where its pinned joins leave it no net smaller than its
-    source's, or the names of the neighbours whose joins run across its surface."""
+    source's, the reason itself (``joins.TURNED``), or the names of the neighbours whose
+    joins run across its surface."""
     if why is None:
         text = "its joins, held where the source has them, leave no net smaller than the " \
                "source's"
+    elif isinstance(why, str):
+        text = why
     elif isinstance(why, list):
         text = (f"its joins with {', '.join(why)} run across its surface, where no "
                 "fairing can hold them (Joins=free fairs it alone)")
