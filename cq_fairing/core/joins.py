@@ -273,15 +273,40 @@ def side_parameters(surface, side, t):
     return u0 + (u1 - u0) * np.asarray(t), [v0 if side[1] == "0" else v1]
 
 
-def join_angles(surfaces, join, t):
+def join_angles(surfaces, join, t, t_b=None):
     """Angle (degrees) between the two patches' normals at the normalised parameters
-    ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count)."""
+    ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count);
+    ``t_b``: side ``b``'s own normalised parameters of those points, where its
+    parametrization along the join differs (default: the same ``t``, reversed with the
+    join)."""
     t = np.asarray(t, dtype=float)
+    if t_b is None:
+        t_b = 1.0 - t if join.reversed else t
     normals = [_side_normals(surfaces[index], side, along)
                for index, side, along in ((join.a, join.side_a, t),
-                                          (join.b, join.side_b, 1.0 - t if join.reversed else t))]
+                                          (join.b, join.side_b, np.asarray(t_b, dtype=float)))]
     cos = np.clip(np.abs(np.sum(normals[0] * normals[1], axis=1)), 0.0, 1.0)
     return np.degrees(np.arccos(cos))
+
+
+def _nearest_along(surfaces, join, t, samples=ANGLE_SAMPLES * 16):
+    """Side ``b``'s normalised parameters of the points of its border nearest to side
+    ``a``'s border points at ``t`` (among ``samples`` points of side ``b``): where the
+    two sources run along the join at different speeds, equal parameters are different
+    places."""
+    dense = np.linspace(0.0, 1.0, samples)
+    points = [_side_points(surfaces[index], side, along)
+              for index, side, along in ((join.a, join.side_a, np.asarray(t, dtype=float)),
+                                         (join.b, join.side_b, dense))]
+    nearest = np.argmin(np.linalg.norm(points[0][:, None] - points[1][None], axis=2), axis=1)
+    return dense[nearest]
+
+
+def _side_points(surface, side, along):
+    """Points along ``side`` at the normalised parameters ``along``."""
+    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
+            for x in side_parameters(surface, side, along))
+    return surface_derivatives(surface, u, v, 0)[(0, 0)]
 
 
 def _side_normals(surface, side, along):
@@ -345,13 +370,16 @@ class JoinTurns:
     def __init__(self, sources, joins):
         self.joins = list(joins)
         self.samples = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
-        self.source = {k: join_angles(sources, join, self.samples)
+        self.source = {k: join_angles(sources, join, self.samples,
+                                      _nearest_along(sources, join, self.samples))
                        for k, join in enumerate(self.joins) if join.smooth}
 
     def turned(self, surfaces, moved):
         """The patches of ``moved`` on a smooth join whose normals turn, somewhere along
         it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle at the same
-        place."""
+        place (the faired patches share their border's parametrization, so their angle
+        is measured at equal parameters; the sources' at each point of side ``a`` and the
+        nearest point of side ``b``: :func:`_nearest_along`)."""
         out, moved = set(), set(moved)
         for k, angles in self.source.items():
             join = self.joins[k]

@@ -10,7 +10,14 @@ from hypothesis import strategies as st
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.geometry import BSplineSurface
-from cq_fairing.core.joins import BorderJoin, JointPatch, fair_patches, pinning_patch
+from cq_fairing.core.joins import (
+    BorderJoin,
+    JointPatch,
+    JoinTurns,
+    fair_patches,
+    join_angles,
+    pinning_patch,
+)
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
@@ -330,3 +337,36 @@ def test_bad_input_is_refused_with_what_to_do():
         fair_patches(targets, [BorderJoin(0, "u1", 1, "u1"), BorderJoin(0, "u1", 2, "v0")])
     with pytest.raises(InvalidInputError, match="continuity"):
         fair_patches(targets, joins, continuity="C1")
+
+
+def _bezier_patch(f):
+    """The biquadratic Bezier patch of ``f(u, v) -> (x, y, z)`` (exact for a map of degree
+    two in each parameter), its poles from nine samples."""
+    knots = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
+    x = np.array([0.0, 0.5, 1.0])
+    b = SplineSpace(2, knots).collocation(x).toarray()
+    values = np.array([[f(u, v) for v in x] for u in x])
+    poles = np.einsum("ai,ijd,bj->abd", np.linalg.inv(b), values, np.linalg.inv(b))
+    return BSplineSurface(poles, knots, knots, 2, 2)
+
+
+def test_source_angles_are_measured_between_the_same_places_of_both_sides():
+    """Two patches of z = 0.2 x^2 + 0.1 y (+ 0.3 (x - 1) y beyond x = 1) meet along x = 1,
+    the second one parametrized along the join by y = (s + s^2) / 2.  The sources' angle
+    along the join is the analytic angle at each point (side b's nearest point), not at
+    equal parameters, which are other places."""
+    a = _bezier_patch(lambda u, v: (u, v, 0.2 * u * u + 0.1 * v))
+    def y(s):
+        return 0.5 * (s + s * s)
+
+    b = _bezier_patch(lambda u, s: (1 + u, y(s), 0.2 * (1 + u) ** 2 + 0.1 * y(s)
+                                    + 0.3 * u * y(s)))
+    join = BorderJoin(0, "u1", 1, "u0", reversed=False, smooth=True)
+    turns = JoinTurns([a, b], [join])
+    t = turns.samples
+    n_a = np.array([-0.4, -0.1, 1.0])
+    n_b = np.stack([-(0.4 + 0.3 * t), np.full_like(t, -0.1), np.ones_like(t)], axis=1)
+    cos = n_b @ n_a / np.linalg.norm(n_b, axis=1) / np.linalg.norm(n_a)
+    exact = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    assert np.abs(turns.source[0] - exact).max() <= 0.05
+    assert np.abs(join_angles([a, b], join, t) - exact).max() > 0.5

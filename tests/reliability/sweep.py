@@ -5,7 +5,9 @@ Every run ends in exactly one of three outcomes, or it is a failure:
 ``valid``
     The output was written through the product's own validation (``write_shape``: read
     back, ``BRepCheck_Analyzer``, same faces), the faired shape is valid, no edge became
-    free (closed shells and solids stay closed), every faired face is within the
+    free (closed shells and solids stay closed), no join opened by more than 1e-7 of the
+    model's size beyond its source's gap and no smooth join turns more than its
+    source's angle + 0.05 deg (:func:`_join_problems`), every faired face is within the
     tolerance by OCCT's measure and keeps the closed (or periodic) directions of its
     source surface (``IsUClosed``/``IsVClosed``), and every selected B-spline face was
     faired.
@@ -81,6 +83,7 @@ def run_cell(name, method, factor, faces, work):
     except InvalidOutputError as exc:
         return dict(outcome="failure", why=f"invalid output: {exc}", poles={})
     problems = [] if result.valid else ["the faired shape fails BRepCheck"]
+    problems += _join_problems(result, 1e3 * default_tolerance(shape))
     if free_edge_count(result.shape) > free_edge_count(shape):
         problems.append(f"free edges {free_edge_count(shape)} -> "
                         f"{free_edge_count(result.shape)}")
@@ -97,6 +100,23 @@ def run_cell(name, method, factor, faces, work):
         return dict(outcome="failure", why="; ".join(problems[:3]), poles=poles)
     why = f"{len(kept)} kept" if kept else ""
     return dict(outcome="kept" if kept else "valid", why=why, poles=poles)
+
+
+def _join_problems(result, size):
+    """The joins held (``joins="smooth"``, the default) that opened more than 1e-7 of the
+    model's ``size`` beyond their source's gap, or whose smooth joins turn more than the
+    source's angle + :data:`~cq_fairing.core.joins.ANGLE_SLACK` degrees."""
+    from cq_fairing.core.joins import ANGLE_SLACK
+
+    summary = result.joins.summary()
+    problems = []
+    if summary["max_gap_opened"] > 1e-7 * size:
+        problems.append(f"a join opened by {summary['max_gap_opened']:.3g} beyond its "
+                        f"source's gap (> 1e-7 x {size:.4g})")
+    if summary["max_angle_excess"] > ANGLE_SLACK + 1e-9:
+        problems.append(f"a smooth join turns {summary['max_angle_excess']:.3g} deg beyond "
+                        f"its source's angle (> {ANGLE_SLACK:g})")
+    return problems
 
 
 def _face_problems(report, tol):
