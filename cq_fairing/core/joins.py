@@ -319,17 +319,20 @@ def _side_normals(surface, side, along):
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
-def cross_curvatures(surfaces, join, t):
+def cross_curvatures(surfaces, join, t, t_b=None):
     r"""Normal curvatures :math:`\kappa = n\cdot S_{cc} / |S_c|^2` of the two patches of
     ``join`` in their cross directions (:math:`c`), at the normalised parameters ``t``
-    along it, the second patch's normal turned to the first's: ``(kappa_a, kappa_b)``;
+    along it (``t_b``: side ``b``'s own parameters of those points, as in
+    :func:`join_angles`), the second patch's normal turned to the first's:
+    ``(kappa_a, kappa_b)``;
     NaN where the cross derivative vanishes (below :data:`DEGENERATE` of its largest
     along the join: a collapsed border).
     The curve that crosses a curvature-continuous (G2) join has one normal curvature
     there, whichever way it runs, so the two agree."""
     out, reference = [], None
-    for index, side, along in ((join.a, join.side_a, t),
-                               (join.b, join.side_b, 1.0 - t if join.reversed else t)):
+    if t_b is None:
+        t_b = 1.0 - t if join.reversed else t
+    for index, side, along in ((join.a, join.side_a, t), (join.b, join.side_b, t_b)):
         surface = surfaces[index]
         u, v = side_parameters(surface, side, along)
         order = (1, 0) if side[0] == "u" else (0, 1)
@@ -351,8 +354,10 @@ def holds_curvature(sources, join):
     """Whether the sources are curvature-continuous across ``join``: the cross normal
     curvatures of its two sides (:func:`cross_curvatures`, :data:`ANGLE_SAMPLES`
     samples) differ nowhere by more than :data:`CURVATURE_SLACK` of the larger curvature
-    along it, or both stay below :data:`FLAT` over the larger patch's size (flat)."""
-    ka, kb = cross_curvatures(sources, join, np.linspace(0.0, 1.0, ANGLE_SAMPLES))
+    along it, or both stay below :data:`FLAT` over the larger patch's size (flat); each
+    point of side ``a`` against the nearest of side ``b`` (:func:`_nearest_along`)."""
+    t = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
+    ka, kb = cross_curvatures(sources, join, t, _nearest_along(sources, join, t))
     both = ~(np.isnan(ka) | np.isnan(kb))
     if not both.any():
         return False
