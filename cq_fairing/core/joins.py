@@ -304,19 +304,24 @@ def _nearest_along(surfaces, join, t, samples=ANGLE_SAMPLES * 16):
 
 def _side_points(surface, side, along):
     """Points along ``side`` at the normalised parameters ``along``."""
-    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
-            for x in side_parameters(surface, side, along))
-    return surface_derivatives(surface, u, v, 0)[(0, 0)]
+    return _side_derivatives(surface, side, along, 0)[(0, 0)]
 
 
 def _side_normals(surface, side, along):
     """Unit normals :math:`S_u\times S_v` along ``side`` at the normalised parameters
-    ``along`` (from the surface's Taylor form: :func:`~cq_fairing.core.evaluation.surface_derivatives`)."""
-    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
-            for x in side_parameters(surface, side, along))
-    d = surface_derivatives(surface, u, v, 1)
+    ``along``."""
+    d = _side_derivatives(surface, side, along, 1)
     n = np.cross(d[(1, 0)], d[(0, 1)])
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def _side_derivatives(surface, side, along, order):
+    """Partial derivatives up to ``order`` along ``side`` at the normalised parameters
+    ``along``, from the surface's Taylor form
+    (:func:`~cq_fairing.core.evaluation.surface_derivatives`)."""
+    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
+            for x in side_parameters(surface, side, along))
+    return surface_derivatives(surface, u, v, order)
 
 
 def cross_curvatures(surfaces, join, t, t_b=None):

@@ -174,6 +174,7 @@ class PatchNetwork:
         self.probes = _Probes(self.sources, self.forms.patches)
         self.spread = SPREAD * _diagonal(self.forms.source)
         self.sides = _join_sides(self.forms, self.joins)
+        self.vertices = _vertices(self.sides)
         self.turns = JoinTurns(self.sources, self.joins) if continuity == "G1" else None
 
     def fair(self, tol, *, kept=()):
@@ -205,7 +206,7 @@ def _smoothest(network, tols, kept):
     count = len(sources)
     for _ in range(count):
         system = _System(network.forms, kept, network.sides, network.continuity,
-                         network.spread)
+                         network.spread, network.vertices)
         solve = _solver(system, network.probes, kept)
         best = solve(0.0)
         over = {f for f in range(count) if best[1][f] > tols[f]} - kept
@@ -311,17 +312,18 @@ class _System:
     coordinate, and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
     over the three coordinates together (:func:`_constraints`)."""
 
-    def __init__(self, forms, kept, sides, continuity, spread):
+    def __init__(self, forms, kept, sides, continuity, spread, vertices):
         self.patches = forms.patches
         self.offsets, self.mass, self.energy = forms.offsets, forms.mass, forms.energy
         self.source = forms.source
         fixed = np.zeros(self.offsets[-1], dtype=bool)
         for f in kept:
             fixed[self.offsets[f]:self.offsets[f + 1]] = True
-        split = _split_vertices(self.source, fixed, sides, spread)
+        split = _split_vertices(self.source, fixed, sides, spread, vertices)
         fixed[split] = True
         self.fixed = fixed
-        ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split)
+        ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split,
+                                                            vertices)
         self.basis, self.held = self._eliminated(ties)
         self.kkt, self.rhs = self._kkt(mirrored, planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
@@ -445,7 +447,7 @@ def _corners_at(system, vertices):
     return at
 
 
-def _split_vertices(source, fixed, sides, spread):
+def _split_vertices(source, fixed, sides, spread, vertices):
     """The corner poles of the vertices whose kept corners lie more than ``spread`` apart
     (a source whose vertex is open): the other patches' corners there are held at their
     own source points and tied to none, so that each join at the vertex keeps its
@@ -454,7 +456,7 @@ def _split_vertices(source, fixed, sides, spread):
     out = []
     corners = {int(x) for _, border_a, _, border_b, _, _ in sides
                for x in (border_a[0], border_a[-1], border_b[0], border_b[-1])}
-    for group in _vertices(sides).members().values():
+    for group in vertices.members().values():
         poles = np.array([key for key, _ in group])
         if poles[0] not in corners:
             continue
@@ -464,7 +466,7 @@ def _split_vertices(source, fixed, sides, spread):
     return np.array(out, dtype=int)
 
 
-def _constraints(system, sides, continuity, split):
+def _constraints(system, sides, continuity, split, vertices):
     """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows (per
     coordinate), the vertices' tangent-plane rows (over the three coordinates) and the
     number of G1 rows.
@@ -484,7 +486,6 @@ def _constraints(system, sides, continuity, split):
             if a not in apart and b not in apart and g0.tie(a, b) is None]
     rows, planes = [], []
     if continuity == "G1":
-        vertices = _vertices(sides)
         at = _corners_at(system, vertices)
         fans = _fans(system, sides, vertices, at)
         crossings = _crossings(system, sides, vertices,
@@ -607,7 +608,6 @@ def _straightened(sides, crossings):
     ratios = [side[-1] for side in sides]
     for group in lines.members().values():
         mean = np.mean([-np.log(ratios[k]) if flip else np.log(ratios[k]) for k, flip in group])
-        ratios = [r for r in ratios]
         for k, flip in group:
             ratios[k] = float(np.exp(-mean if flip else mean))
     return ratios
