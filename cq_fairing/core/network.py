@@ -47,8 +47,9 @@ is the largest (bisection on its logarithm) for which every patch stays within t
 tolerance of its source by the same-parameter distance on :data:`SAMPLES` x
 :data:`SAMPLES` points, an upper bound of the true distance.  The G0 rows and the kept
 patches' poles are identities, eliminated exactly (one unknown per class of tied poles);
-the G1 and tangent-plane rows remain in one regularised KKT system over x, y and z,
-one factorization per :math:`\lambda`.
+the G1 rows remain in one regularised KKT system, the same for x, y and z and factorized
+once per :math:`\lambda`; the tangent-plane rows, the only ones that couple the
+coordinates, come in exactly by their Schur complement.
 
 This module imports numpy and scipy only.
 """
@@ -153,8 +154,9 @@ def fair_network(patches, joins, tol, *, kept=(), continuity="G1"):
 
 class PatchNetwork:
     """A network of patches prepared for :meth:`fair` (:func:`fair_network`): its forms,
-    samples and joins' rows, which do not depend on the tolerance, built once for any
-    number of tolerances.
+    samples, joins' rows and vertices (:class:`_Vertices`), which depend neither on the
+    tolerance nor on the patches kept, built once for any number of tolerances and of
+    kept patches.
 
     Parameters
     ----------
@@ -174,7 +176,7 @@ class PatchNetwork:
         self.probes = _Probes(self.sources, self.forms.patches)
         self.spread = SPREAD * _diagonal(self.forms.source)
         self.sides = _join_sides(self.forms, self.joins)
-        self.vertices = _vertices(self.sides)
+        self.vertices = _Vertices(self.forms, self.sides)
         self.turns = JoinTurns(self.sources, self.joins) if continuity == "G1" else None
 
     def fair(self, tol, *, kept=()):
@@ -310,7 +312,7 @@ class _System:
     poles are :math:`C = P z + h` (:math:`P` a 0/1 matrix, :math:`h` the held
     positions), per coordinate.  The G1 rows remain as constraints :math:`A C = 0`, per
     coordinate, and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
-    over the three coordinates together (:func:`_constraints`)."""
+    over the three coordinates together (:func:`_constraints`, :func:`_plane_rows`)."""
 
     def __init__(self, forms, kept, sides, continuity, spread, vertices):
         self.patches = forms.patches
@@ -319,13 +321,14 @@ class _System:
         fixed = np.zeros(self.offsets[-1], dtype=bool)
         for f in kept:
             fixed[self.offsets[f]:self.offsets[f + 1]] = True
-        split = _split_vertices(self.source, fixed, sides, spread, vertices)
+        split = _split_vertices(self.source, fixed, spread, vertices.groups)
         fixed[split] = True
         self.fixed = fixed
         ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split,
                                                             vertices)
         self.basis, self.held = self._eliminated(ties)
-        self.kkt, self.rhs = self._kkt(mirrored, planes)
+        self.kkt, self.rhs = self._kkt(mirrored)
+        self.coupling = self._coupling(planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
 
     def _eliminated(self, ties):
@@ -348,47 +351,78 @@ class _System:
                               shape=(size, classes.size))
         return basis, held
 
-    def _kkt(self, mirrored, planes):
-        r"""The KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and the right-hand
-        side :math:`b_M + \lambda b_H` and :math:`s b_A` in parts, over the three
-        coordinates' unknowns :math:`\mathrm{vec}(z)` (coordinate after coordinate):
+    def _kkt(self, mirrored):
+        r"""The per-coordinate KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and
+        its right-hand sides :math:`b_M + \lambda b_H` and :math:`s b_A` in parts, one
+        column per coordinate:
 
-        .. math:: K_M = \begin{bmatrix}I_3\otimes P^T M P & 0\\ 0 & 0\end{bmatrix},\;
-                  K_H = \begin{bmatrix}I_3\otimes P^T H P & 0\\ 0 & 0\end{bmatrix},\;
+        .. math:: K_M = \begin{bmatrix}P^T M P & 0\\ 0 & 0\end{bmatrix},\;
+                  K_H = \begin{bmatrix}P^T H P & 0\\ 0 & 0\end{bmatrix},\;
                   K_A = \begin{bmatrix}0 & B^T\\ B & -\varepsilon I\end{bmatrix},
 
-        :math:`B = \begin{bmatrix}I_3\otimes A\\ R\end{bmatrix}(I_3\otimes P)`,
-        :math:`b_M = \mathrm{vec}(P^T M (C_0 - h))`, :math:`b_H = -\mathrm{vec}(P^T H h)`,
-        :math:`b_A = -\begin{bmatrix}I_3\otimes A\\ R\end{bmatrix}\mathrm{vec}(h)`
-        (:math:`C_0` the sources' poles, :math:`\varepsilon` = :data:`KKT_EPS`)."""
-        three = sp.identity(3, format="csr")
-        constraint = sp.vstack([sp.kron(three, mirrored), planes], format="csr")
-        b = (constraint @ sp.kron(three, self.basis)).tocsr()
-        unknowns, rows = 3 * self.basis.shape[1], b.shape[0]
-        empty = sp.csr_matrix((rows, rows))
-        parts = [sp.block_diag([sp.kron(three, self.basis.T @ form @ self.basis), empty],
-                               format="csc") for form in (self.mass, self.energy)]
-        parts.append(sp.bmat([[sp.csr_matrix((unknowns, unknowns)), b.T],
+        :math:`B = A P`, :math:`b_M = P^T M (C_0 - h)`, :math:`b_H = -P^T H h`,
+        :math:`b_A = -A h` (:math:`C_0` the sources' poles, :math:`\varepsilon` =
+        :data:`KKT_EPS`)."""
+        b = (mirrored @ self.basis).tocsc()
+        unknowns, rows = self.basis.shape[1], b.shape[0]
+        empty = sp.csc_matrix((rows, rows))
+        parts = [sp.block_diag([self.basis.T @ form @ self.basis, empty], format="csc")
+                 for form in (self.mass, self.energy)]
+        parts.append(sp.bmat([[sp.csc_matrix((unknowns, unknowns)), b.T],
                               [b, -KKT_EPS * sp.identity(rows)]], format="csc")
                      if rows else sp.csc_matrix((unknowns, unknowns)))
-        held = self.held.T.ravel()
-        rhs = [(self.basis.T @ (self.mass @ (self.source - self.held))).T.ravel(),
-               -(self.basis.T @ (self.energy @ self.held)).T.ravel(), -(constraint @ held)]
+        rhs = [self.basis.T @ (self.mass @ (self.source - self.held)),
+               -(self.basis.T @ (self.energy @ self.held)), -(mirrored @ self.held)]
         return parts, rhs
 
+    def _coupling(self, planes):
+        r"""The tangent-plane rows :math:`R = [\,\mathrm{diag}(n_1) D\;\;
+        \mathrm{diag}(n_2) D\;\;\mathrm{diag}(n_3) D\,]` (:func:`_plane_rows`) on the
+        unknowns: ``(G, E, N, p)``, :math:`G = D P` (sparse), :math:`E =
+        \begin{bmatrix}G^T\\ 0\end{bmatrix}` (dense, on the rows of the per-coordinate
+        KKT system), :math:`N = [n_1\;n_2\;n_3]` the rows' normals (r, 3) and
+        :math:`p = -R\,\mathrm{vec}(h)`."""
+        difference, normals = planes
+        plane_rows = (difference @ self.basis).tocsr()
+        plane_columns = np.zeros((self.kkt[2].shape[0], plane_rows.shape[0]))
+        plane_columns[:plane_rows.shape[1]] = plane_rows.T.toarray()
+        plane_rhs = -np.einsum("rd,rd->r", normals, difference @ self.held)
+        return plane_rows, plane_columns, normals, plane_rhs
+
     def solve(self, lam):
-        r"""Poles of all patches, :math:`P z + h`: :math:`z` from the KKT system
-        :math:`\begin{bmatrix}I_3\otimes P^T(M + \lambda H)P & s B^T\\ s B &
-        -\varepsilon s I\end{bmatrix}` (:meth:`_kkt`; :math:`s` the mean diagonal of
-        :math:`M + \lambda H`, which scales the constraint rows like the rest)."""
+        r"""Poles of all patches, :math:`P z + h`, from the KKT system of the three
+        coordinates, :math:`x_d = (z_d, \mu_d)` for :math:`d = 1, 2, 3` and the tangent
+        planes' multipliers :math:`\nu`:
+
+        .. math:: K x_d + s E\,\mathrm{diag}(n_d)\,\nu = f_d,\qquad
+                  s \sum_d \mathrm{diag}(n_d) E^T x_d - \varepsilon s\,\nu = s p,
+
+        :math:`K = K_M + \lambda K_H + s K_A`, the same for x, y and z, and :math:`f_d`
+        column :math:`d` of :math:`[b_M + \lambda b_H;\; s b_A]` (:meth:`_kkt`);
+        :math:`s` the mean diagonal of :math:`M + \lambda H`, which scales the
+        constraint rows like the rest; :math:`E, n_d, p` the tangent-plane rows
+        (:meth:`_coupling`).  Only :math:`K` is factorized; the plane rows, which couple
+        the coordinates, come in exactly by their Schur complement, :math:`W = K^{-1}E`:
+
+        .. math:: \bigl(\varepsilon I + s\,(E^T W)\circ N N^T\bigr)\,\nu =
+                  \sum_d n_d \circ E^T K^{-1} f_d - p,\qquad
+                  x_d = K^{-1} f_d - s W\,(n_d \circ \nu)."""
         unknowns = self.basis.shape[1]
         if unknowns == 0:
             return self.held
         scale = float(np.mean(self.diagonals[0] + lam * self.diagonals[1]))
-        kkt = self.kkt[0] + lam * self.kkt[1] + scale * self.kkt[2]
-        rhs = np.concatenate([self.rhs[0] + lam * self.rhs[1], scale * self.rhs[2]])
-        z = spla.splu(kkt).solve(rhs)[:3 * unknowns].reshape(3, unknowns).T
-        return self.basis @ z + self.held
+        lu = spla.splu(self.kkt[0] + lam * self.kkt[1] + scale * self.kkt[2])
+        plane_rows, plane_columns, normals, plane_rhs = self.coupling
+        rhs = np.vstack([self.rhs[0] + lam * self.rhs[1], scale * self.rhs[2]])
+        solved = lu.solve(np.hstack([rhs, plane_columns]))
+        x, w = solved[:, :3], solved[:, 3:]
+        if plane_rhs.size:
+            schur = (KKT_EPS * np.identity(plane_rhs.size)
+                     + scale * (plane_rows @ w[:unknowns]) * (normals @ normals.T))
+            nu = np.linalg.solve(schur, np.einsum("rd,rd->r", normals,
+                                                  plane_rows @ x[:unknowns]) - plane_rhs)
+            x = x - scale * w @ (normals * nu[:, None])
+        return self.basis @ x[:unknowns] + self.held
 
     def surfaces(self, poles):
         out = []
@@ -426,40 +460,78 @@ def _side_rows(forms, patch, side):
     return index[end], index[inner]
 
 
-def _vertices(sides):
-    """The border poles tied by the joins (:class:`UnionFind` of pole indices): a set of
-    corners is one vertex of the network, a set of other border poles one pole of a
-    shared border."""
-    vertices = UnionFind()
-    for _, border_a, _, border_b, _, _ in sides:
-        for a, b in zip(border_a.tolist(), border_b.tolist()):
-            vertices.tie(a, b)
-    return vertices
+class _Vertices:
+    """The network's vertices and what about them does not depend on the kept patches,
+    found once per network.
+
+    Attributes
+    ----------
+    poles : UnionFind
+        The border poles tied by the joins (pole indices): a set of corners is one
+        vertex of the network, a set of other border poles one pole of a shared border.
+    corners : dict
+        ``{vertex: [(corner, edge_u, edge_v)]}`` of every corner on a join
+        (:func:`_corners`).
+    groups : list of numpy.ndarray
+        The poles of each vertex at the ends of the joins (:func:`_split_vertices`).
+    along : list of list
+        Per join, the vertex of each border pole of its side ``a``.
+    fans, crossings : dict
+        The vertices that are fans (:func:`_fans`) while at most one of their patches
+        is kept (:meth:`fans_among`), and crossings (:func:`_crossings`) while none is
+        (:meth:`crossings_among`).
+    normals : dict
+        ``{corner: unit normal or None}`` of the sources at the fans' corners
+        (:func:`_source_normal`).
+    """
+
+    def __init__(self, forms, sides):
+        self.poles = UnionFind()
+        for _, border_a, _, border_b, _, _ in sides:
+            for a, b in zip(border_a.tolist(), border_b.tolist()):
+                self.poles.tie(a, b)
+        self.corners = {}
+        for corner in _corners(forms):
+            if corner[0] in self.poles.parent:
+                self.corners.setdefault(self.root(corner[0]), []).append(corner)
+        ends = {int(x) for _, border_a, _, border_b, _, _ in sides
+                for x in (border_a[0], border_a[-1], border_b[0], border_b[-1])}
+        self.groups = [poles for poles in (np.array([key for key, _ in group])
+                                           for group in self.poles.members().values())
+                       if poles[0] in ends]
+        self.along = [[self.root(a) for a in side[1].tolist()] for side in sides]
+        self.fans = _fans(forms.source, sides, self)
+        self.crossings = _crossings(sides, self)
+        self.normals = {c: _source_normal(forms.source, c)
+                        for corners in self.fans.values() for c in corners}
+
+    def root(self, pole):
+        """The vertex of a border pole (its class's root)."""
+        return self.poles.find(pole)[0]
+
+    def fans_among(self, fixed):
+        """The fans at which at most one patch is kept (``fixed``: the held poles; an
+        edge from the vertex is held with its patch): around two kept patches whose
+        tangent planes differ there no one plane can be held, and their mirrored rows
+        hold the others."""
+        return {root: corners for root, corners in self.fans.items()
+                if sum(bool(fixed[c[1]]) for c in corners) <= 1}
+
+    def crossings_among(self, fixed, fans):
+        """The crossings that are no fan (``fans``) and at which no corner is held
+        (``fixed``)."""
+        return {root: pairs for root, pairs in self.crossings.items()
+                if root not in fans and not any(fixed[c[0]] for c in self.corners[root])}
 
 
-def _corners_at(system, vertices):
-    """``{vertex: [(corner, edge_u, edge_v)]}`` of every corner on a join
-    (:func:`_corners`)."""
-    at = {}
-    for corner in _corners(system):
-        if corner[0] in vertices.parent:
-            at.setdefault(vertices.find(corner[0])[0], []).append(corner)
-    return at
-
-
-def _split_vertices(source, fixed, sides, spread, vertices):
-    """The corner poles of the vertices whose kept corners lie more than ``spread`` apart
-    (a source whose vertex is open): the other patches' corners there are held at their
-    own source points and tied to none, so that each join at the vertex keeps its
-    source's gap there (closed onto one kept corner, a patch would open its join to the
-    other by their distance)."""
+def _split_vertices(source, fixed, spread, groups):
+    """The poles of the vertices (``groups``: each vertex's poles) whose kept corners lie
+    more than ``spread`` apart (a source whose vertex is open): the other patches'
+    corners there are held at their own source points and tied to none, so that each
+    join at the vertex keeps its source's gap there (closed onto one kept corner, a
+    patch would open its join to the other by their distance)."""
     out = []
-    corners = {int(x) for _, border_a, _, border_b, _, _ in sides
-               for x in (border_a[0], border_a[-1], border_b[0], border_b[-1])}
-    for group in vertices.members().values():
-        poles = np.array([key for key, _ in group])
-        if poles[0] not in corners:
-            continue
+    for poles in groups:
         kept = source[poles[fixed[poles]]]
         if len(kept) > 1 and np.linalg.norm(kept - kept.mean(axis=0), axis=1).max() > 0.5 * spread:
             out.extend(poles.tolist())
@@ -468,8 +540,8 @@ def _split_vertices(source, fixed, sides, spread, vertices):
 
 def _constraints(system, sides, continuity, split, vertices):
     """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows (per
-    coordinate), the vertices' tangent-plane rows (over the three coordinates) and the
-    number of G1 rows.
+    coordinate), the vertices' tangent-plane rows (over the three coordinates:
+    :func:`_plane_rows`) and the number of G1 rows.
 
     A mirrored row that would tie two poles already tied (through other rows, or both
     held by kept patches) is left out: it could only repeat or contradict the others.
@@ -484,36 +556,28 @@ def _constraints(system, sides, continuity, split, vertices):
     ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
             for a, b in zip(border_a.tolist(), border_b.tolist())
             if a not in apart and b not in apart and g0.tie(a, b) is None]
-    rows, planes = [], []
+    rows, fans = [], {}
     if continuity == "G1":
-        at = _corners_at(system, vertices)
-        fans = _fans(system, sides, vertices, at)
-        crossings = _crossings(system, sides, vertices,
-                               {root: c for root, c in at.items() if root not in fans})
-        ratios = _straightened(sides, crossings)
+        fans = vertices.fans_among(system.fixed)
+        ratios = _straightened(sides, vertices.crossings_among(system.fixed, fans))
         cycles = UnionFind()
         for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
             if not join.smooth:
                 continue
             mu = ratios[k]
-            for ia, na, ib, nb in zip(*(x.tolist() for x in (border_a, inner_a, border_b,
-                                                               inner_b))):
-                if vertices.find(ia)[0] in fans:
+            for root, ia, na, ib, nb in zip(vertices.along[k], *(
+                    x.tolist() for x in (border_a, inner_a, border_b, inner_b))):
+                if root in fans:
                     continue
                 if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
                     rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
-        planes = _plane_rows(system, fans, g0)
     size = int(system.offsets[-1])
     columns = np.array([c for c, _ in rows], dtype=int).reshape(-1, 4)
     values = np.array([v for _, v in rows], dtype=float).reshape(-1, 4)
     matrix = sp.csr_matrix((values.ravel(), (np.repeat(np.arange(len(rows)), 4),
                                              columns.ravel())),
                            shape=(len(rows), size))
-    plane_matrix = sp.csr_matrix(
-        (np.concatenate([v for _, v in planes]) if planes else [],
-         (np.repeat(np.arange(len(planes)), 6), np.concatenate([c for c, _ in planes])
-          if planes else [])), shape=(len(planes), 3 * size))
-    return ties, matrix, plane_matrix, len(rows)
+    return ties, matrix, _plane_rows(system, fans, vertices.normals, g0), len(rows)
 
 
 def _diagonal(points):
@@ -521,72 +585,69 @@ def _diagonal(points):
     return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
 
 
-def _corners(system):
+def _corners(forms):
     """``(corner, edge_u, edge_v)`` pole indices of every patch corner: the corner pole
     and its neighbours along u and along v."""
     out = []
-    for f, patch in enumerate(system.patches):
+    for f, patch in enumerate(forms.patches):
         ku, kv = patch.shape
-        index = system.offsets[f] + np.arange(ku * kv).reshape(ku, kv)
+        index = forms.offsets[f] + np.arange(ku * kv).reshape(ku, kv)
         for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
             out.append((int(index[i, j]), int(index[1 if i == 0 else -2, j]),
                         int(index[i, 1 if j == 0 else -2])))
     return out
 
 
-def _fans(system, sides, vertices, at):
-    """``{vertex: [(corner, edge_u, edge_v)]}``: the vertices (:func:`_vertices`,
-    :func:`_corners_at`) whose mirrored rows at the vertex itself would make one edge
+def _fans(source, sides, vertices):
+    """``{vertex: [(corner, edge_u, edge_v)]}``: the vertices of three or more patches
+    (:class:`_Vertices`) whose mirrored rows at the vertex itself would make one edge
     from it collinear with two others (around three or five patches, along a fan of
     three or more joins), or that the source does not follow (its edges from the vertex
-    further than :data:`STRAIGHT` from the rows), where no crease ends and at most one
-    of the patches is kept (around two kept patches whose tangent planes differ there no
-    one plane can be held; their mirrored rows hold the others).  Where each edge is
-    made collinear with one other at most (two patches, an L of three, a crossing of
+    further than :data:`STRAIGHT` from the rows), where no crease ends.  Where each edge
+    is made collinear with one other at most (two patches, an L of three, a crossing of
     four) and the source's edges are nearly so, the rows are lines through the vertex
-    and stay."""
+    and stay.  (A fan is one while at most one of its patches is kept:
+    :meth:`_Vertices.fans_among`.)"""
     creased, links, bent = set(), {}, set()
-    source = system.source
     for join, border_a, inner_a, border_b, inner_b, mu in sides:
         for i in (0, -1):
-            root = vertices.find(int(border_a[i]))[0]
+            root = vertices.root(int(border_a[i]))
             if not join.smooth:
                 creased.add(root)
                 continue
-            pair = frozenset(vertices.find(int(x[i]))[0] for x in (inner_a, inner_b))
+            pair = frozenset(vertices.root(int(x[i])) for x in (inner_a, inner_b))
             links.setdefault(root, set()).add(pair)
             wa, wb = source[inner_a[i]] - source[border_a[i]], source[inner_b[i]] - source[border_b[i]]
             if np.linalg.norm(wa + mu * wb) > STRAIGHT * np.linalg.norm(wa):
                 bent.add(root)
     out = {}
-    for root, corners in at.items():
+    for root, corners in vertices.corners.items():
         degree = {}
         for pair in links.get(root, ()):
             for node in pair:
                 degree[node] = degree.get(node, 0) + 1
         lines = max(degree.values(), default=0) < 2 and root not in bent
-        if (len(corners) >= 3 and not lines and root not in creased
-                and sum(bool(system.fixed[c[1]]) for c in corners) <= 1):
+        if len(corners) >= 3 and not lines and root not in creased:
             out[root] = corners
     return out
 
 
-def _crossings(system, sides, vertices, at):
-    """``{vertex: [(join, opposite join, same)]}``: the crossings (four patches, none
-    kept, four smooth joins, each patch in two of them), with each join's opposite one
-    (no patch in common) and whether their sides ``a`` are neighbours (so that the two
-    mirror ratios are one, not one and its inverse)."""
+def _crossings(sides, vertices):
+    """``{vertex: [(join, opposite join, same)]}``: the crossings (four patches, four
+    smooth joins, each patch in two of them), with each join's opposite one (no patch in
+    common) and whether their sides ``a`` are neighbours (so that the two mirror ratios
+    are one, not one and its inverse).  (A crossing is one while none of its patches
+    is kept and it is no fan: :meth:`_Vertices.crossings_among`.)"""
     ends = {}
     for k, (_, border_a, *_rest) in enumerate(sides):
         for index in (border_a[0], border_a[-1]):
-            ends.setdefault(vertices.find(int(index))[0], []).append(k)
+            ends.setdefault(vertices.root(int(index)), []).append(k)
     out = {}
-    for root, corners in at.items():
+    for root, corners in vertices.corners.items():
         around = ends.get(root, [])
         pairs = [{sides[k][0].a, sides[k][0].b} for k in around]
         members = [p for pair in pairs for p in pair]
-        if (len(corners) != 4 or len(around) != 4 or any(system.fixed[c[0]] for c in corners)
-                or not all(sides[k][0].smooth for k in around)
+        if (len(corners) != 4 or len(around) != 4 or not all(sides[k][0].smooth for k in around)
                 or any(members.count(p) != 2 for p in members)):
             continue
         out[root] = [(k, o, {sides[k][0].a, sides[o][0].a} in pairs)
@@ -613,19 +674,29 @@ def _straightened(sides, crossings):
     return ratios
 
 
-def _plane_rows(system, fans, g0):
+def _plane_rows(system, fans, normals, g0):
     r"""Rows :math:`n\cdot(e - c) = 0` over the three coordinates: the first pole
     :math:`e` of every edge from a fan vertex :math:`c` in the plane of the vertex
-    normal :math:`n` (the mean unit normal of the sources' corners there, signs aligned;
-    a kept patch's own where one is kept), so that the patches around it share one
+    normal :math:`n` (the mean unit normal of the sources' corners there, ``normals``,
+    signs aligned; a kept patch's own where one is kept), so that the patches around it share one
     tangent plane at the vertex.  Per pair of pole classes one row; none between held
-    poles.  Each row: ``(columns, values)`` of six entries."""
+    poles.
+
+    Returns
+    -------
+    difference : scipy.sparse.csr_matrix
+        :math:`D` (r, poles): per row +1 at :math:`e`, -1 at :math:`c`.
+    normals : numpy.ndarray
+        :math:`N` (r, 3): per row its :math:`n`; the rows are
+        :math:`R = [\,\mathrm{diag}(N_{:,0}) D\;\;\mathrm{diag}(N_{:,1}) D\;\;
+        \mathrm{diag}(N_{:,2}) D\,]` on the coordinates' poles one after the other.
+    """
     size = int(system.offsets[-1])
     held = g0.find(HELD)[0]
-    rows, seen = [], set()
+    pairs, directions, seen = [], [], set()
     for root, corners in fans.items():
         kept = [c for c in corners if system.fixed[c[1]]]     # a kept patch's corner
-        normal = mean_normal([_source_normal(system.source, c) for c in kept[:1] or corners])
+        normal = mean_normal([normals[c] for c in kept[:1] or corners])
         if normal is None:
             continue
         for corner, *edges in corners:
@@ -634,9 +705,13 @@ def _plane_rows(system, fans, g0):
                 if key in seen or key[0] == held:
                     continue
                 seen.add(key)
-                columns = [d * size + index for index in (edge, corner) for d in range(3)]
-                rows.append((np.array(columns), np.concatenate([normal, -normal])))
-    return rows
+                pairs.append((edge, corner))
+                directions.append(normal)
+    pairs = np.array(pairs, dtype=int).reshape(-1, 2)
+    difference = sp.csr_matrix((np.tile([1.0, -1.0], len(pairs)),
+                                (np.repeat(np.arange(len(pairs)), 2), pairs.ravel())),
+                               shape=(len(pairs), size))
+    return difference, np.array(directions, dtype=float).reshape(-1, 3)
 
 
 def _source_normal(source, corner):
@@ -670,9 +745,10 @@ class _Probes:
         spaces ``key``, at their samples: (g, n_u, n_v, 3) each."""
         (bu, du), (bv, dv) = self.bases[key]
         g, ku, kv, d = poles.shape
-        along_u = np.matmul(bu, poles.reshape(g, ku, kv * d)).reshape(g, -1, kv, d)
+        along_u, slope_u = (np.matmul(b, poles.reshape(g, ku, kv * d)).reshape(g, -1, kv, d)
+                            for b in (bu, du))
         points = np.einsum("gijd,kj->gikd", along_u, bv)
-        su = np.einsum("ia,gabd,jb->gijd", du, poles, bv)
+        su = np.einsum("gijd,kj->gikd", slope_u, bv)
         sv = np.einsum("gijd,kj->gikd", along_u, dv)
         return points, np.cross(su, sv)
 

@@ -8,8 +8,18 @@ import pytest
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.joins import BorderJoin
-from cq_fairing.core.network import SAMPLES, PatchNetwork, _Forms, fair_network, network_joinable
+from cq_fairing.core.network import (
+    KKT_EPS,
+    SAMPLES,
+    PatchNetwork,
+    _constraints,
+    _Forms,
+    _System,
+    fair_network,
+    network_joinable,
+)
 from cq_fairing.core.patch_grid import insert_knot
+from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
 from .naive import basis_matrix, dense_gram
@@ -227,3 +237,71 @@ def _inner_corner(patch):
     net = patch.poles
     candidates = [(0, 0), (0, -1), (-1, 0), (-1, -1)]
     return min(candidates, key=lambda c: np.linalg.norm(net[c][:2] - [1.0, 1.0]))
+
+
+def _fan(poles=6, noise=0.003, seed=3):
+    """Three bicubic patches around the vertex (0.5, 0.5) of z = 0.3 sin 2x cos 1.5y + 0.1 xy:
+    the rhombi between the rays at 90, 210 and 330 degrees, poles on the bilinear map of
+    each rhombus with noise on the z of those off its two joined sides.  Patch k runs along ray k in u
+    and along ray k + 1 in v, so its side v0 is side u0 of patch k - 1: three smooth
+    joins meet at the vertex, a fan (no two of its edges in line)."""
+    centre = np.array([0.5, 0.5])
+    rays = [np.array([np.cos(a), np.sin(a)]) for a in np.radians([90.0, 210.0, 330.0])]
+    s = np.linspace(0.0, 1.0, poles)[:, None, None]
+    t = np.linspace(0.0, 1.0, poles)[None, :, None]
+    knots = SplineSpace.quasi_uniform(poles - 3, 3).knots
+    rng = np.random.default_rng(seed)
+    patches = []
+    for k in range(3):
+        xy = centre + s * rays[k] + t * rays[(k + 1) % 3]
+        z = 0.3 * np.sin(2 * xy[..., 0]) * np.cos(1.5 * xy[..., 1]) + 0.1 * xy[..., 0] * xy[..., 1]
+        z[1:, 1:] += rng.normal(0.0, noise, z[1:, 1:].shape)
+        patches.append(BSplineSurface(np.dstack([xy, z]), knots, knots, 3, 3))
+    return patches, [BorderJoin(k, "v0", (k + 2) % 3, "u0") for k in range(3)]
+
+
+def _coupled_kkt_poles(network, system, mirrored, planes, lam):
+    """The poles from a dense solve of the whole KKT system over x, y and z together, as
+    the module documents it: the constraints on vec(C) (coordinate after coordinate) are
+    the mirrored rows A per coordinate and the tangent-plane rows R = [diag(n_d) D]_d,
+    on C = P z + h."""
+    forms, three = network.forms, np.identity(3)
+    basis, held = system.basis.toarray(), system.held
+    mass, energy = forms.mass.toarray(), forms.energy.toarray()
+    difference, normals = planes
+    rows = np.vstack([np.kron(three, mirrored.toarray()),
+                      np.hstack([normals[:, [d]] * difference.toarray() for d in range(3)])])
+    b = rows @ np.kron(three, basis)
+    scale = np.mean(np.diag(mass) + lam * np.diag(energy))
+    kkt = np.block([[np.kron(three, basis.T @ (mass + lam * energy) @ basis), scale * b.T],
+                    [scale * b, -KKT_EPS * scale * np.identity(len(b))]])
+    forms_rhs = basis.T @ (mass @ (forms.source - held) - lam * energy @ held)
+    rhs = np.concatenate([forms_rhs.T.ravel(), -scale * rows @ held.T.ravel()])
+    unknowns = basis.shape[1]
+    z = np.linalg.solve(kkt, rhs)[:3 * unknowns].reshape(3, unknowns).T
+    return basis @ z + held
+
+
+@pytest.mark.parametrize("kept", [(), (0,)])
+def test_the_schur_complement_solves_the_coupled_kkt_system_of_a_fan(kept):
+    """At the fan vertex the tangent-plane rows couple x, y and z: the system factorizes
+    one coordinate's KKT matrix and brings the plane rows in by their Schur complement.
+    Its poles are those of a dense solve of the whole coupled system, to round-off, with
+    and without a kept patch (whose poles the plane rows then hold on their right-hand
+    side); and the edges from the vertex lie in its tangent plane."""
+    patches, joins = _fan()
+    network = PatchNetwork(patches, joins)
+    system = _System(network.forms, set(kept), network.sides, "G1", network.spread,
+                     network.vertices)
+    assert np.array_equal(np.flatnonzero(system.fixed), np.arange(6 * 6 * len(kept)))  # no split
+    _, mirrored, planes, g1_rows = _constraints(system, network.sides, "G1",
+                                                np.array([], dtype=int), network.vertices)
+    difference, normals = planes
+    assert g1_rows > 0 and difference.shape[0] == (1 if kept else 3)   # one per free edge
+    assert np.all(np.abs(normals).max(axis=0) > 0.1)           # x, y and z coupled
+    size = np.ptp(network.forms.source, axis=0).max()
+    for lam in (0.0, 1e-3, 1.0):
+        poles = system.solve(lam)
+        assert np.abs(poles - _coupled_kkt_poles(network, system, mirrored, planes, lam)).max() \
+            <= 1e-11 * size
+        assert np.abs(np.einsum("rd,rd->r", normals, difference @ poles)).max() <= 1e-9 * size
