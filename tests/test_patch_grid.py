@@ -10,7 +10,14 @@ from scipy.interpolate import BSpline
 import cq_fairing as cf
 from cq_fairing import InvalidInputError, InvalidToleranceError, UnsupportedGeometryError
 from cq_fairing.core.geometry import BSplineSurface, make_surface
-from cq_fairing.core.patch_grid import insert_knot, merge_grid, oriented, split_grid
+from cq_fairing.core.patch_grid import (
+    cut_surface,
+    insert_knot,
+    join_pieces,
+    merge_grid,
+    oriented,
+    split_grid,
+)
 from tests.core.naive import basis_matrix
 
 seeds = st.integers(0, 2**31 - 1)
@@ -169,6 +176,43 @@ def test_split_of_any_surface_on_the_merged_domain_is_exact(seed, m, n, p, q, on
                 assert np.array_equal(piece.poles[-1], pieces[i + 1][j].poles[0])
             if j + 1 < n:
                 assert np.array_equal(piece.poles[:, -1], pieces[i][j + 1].poles[:, 0])
+
+
+@given(seed=seeds, p=st.integers(1, 4), q=st.integers(1, 4), cuts=st.tuples(
+    st.integers(0, 3), st.integers(0, 3)))
+def test_pieces_cut_from_a_surface_join_back_into_it(seed, p, q, cuts):
+    """cut_surface against scipy's evaluation of the uncut surface, and join_pieces of
+    the pieces (some of them refined first, as a fairing may return them) against it."""
+    rng = np.random.default_rng(seed)
+    knots = [clamped(random_inner(rng, rng.integers(0, 5)), d, 0.0, w)
+             for d, w in ((p, 3.0), (q, 2.0))]
+    poles = rng.normal(size=(knots[0].size - p - 1, knots[1].size - q - 1, 3))
+    surface = BSplineSurface(poles, knots[0], knots[1], p, q)
+    u_cuts = np.sort(rng.uniform(0.1, 2.9, cuts[0]))
+    v_cuts = np.sort(rng.uniform(0.1, 1.9, cuts[1]))
+    pieces = cut_surface(surface, u_cuts, v_cuts)
+    assert (len(pieces), len(pieces[0])) == (cuts[0] + 1, cuts[1] + 1)
+    scale = 1e-12 * size(poles)
+    for row in pieces:
+        for piece in row:
+            u, v = inside(rng, piece.domain[0]), inside(rng, piece.domain[1])
+            assert np.abs(evaluate(piece, u, v) - evaluate(surface, u, v)).max() <= scale
+    refined = [[_refined_inside(piece, rng) for piece in row] for row in pieces]
+    joined = join_pieces(refined)
+    u, v = inside(rng, (0.0, 3.0), 23), inside(rng, (0.0, 2.0), 19)
+    assert np.abs(evaluate(joined, u, v) - evaluate(surface, u, v)).max() <= 1e3 * scale
+    for x, degree, t in ((u_cuts, p, joined.u_knots), (v_cuts, q, joined.v_knots)):
+        assert all(np.count_nonzero(t == c) == degree for c in x)
+
+
+def _refined_inside(piece, rng):
+    """``piece`` with a knot inserted in u, half of the time: the same surface on finer
+    knots."""
+    if rng.random() < 0.5:
+        return piece
+    (lo, hi), _ = piece.domain
+    t, net = insert_knot(piece.u_knots, piece.u_degree, piece.poles, lo + 0.37 * (hi - lo))
+    return BSplineSurface(net, t, piece.v_knots, piece.u_degree, piece.v_degree)
 
 
 def rational_points(poles, weights, tu, tv, p, q, u, v):

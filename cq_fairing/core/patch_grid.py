@@ -30,7 +30,8 @@ from .geometry import BSplineSurface, extent, make_surface
 from .gram import gram_matrix
 from .spaces import SplineSpace
 
-__all__ = ["MergedGrid", "merge_grid", "split_grid", "oriented", "insert_knot"]
+__all__ = ["MergedGrid", "merge_grid", "split_grid", "cut_surface", "join_pieces", "oriented",
+           "insert_knot"]
 
 # largest difference of two normalised knot vectors (on [0, 1]) that still counts as equal
 KNOT_TOLERANCE = 1e-9
@@ -547,16 +548,121 @@ def split_grid(merged, surface):
             f"split_grid expects a MergedGrid (from merge_grid) and a BSplineSurface, got "
             f"{type(merged).__name__} and {type(surface).__name__}.")
     _require_merged_domain(merged, surface)
+    pieces = cut_surface(surface, merged.u_breaks[1:-1], merged.v_breaks[1:-1])
+    return [[_mapped(piece, merged.domains[i, j]) for j, piece in enumerate(row)]
+            for i, row in enumerate(pieces)]
+
+
+def cut_surface(surface, u_cuts=(), v_cuts=()):
+    r"""Cut a surface at interior parameters into a grid of pieces, exactly.
+
+    Every cut is inserted into the knots until its multiplicity is the degree
+    (:func:`insert_knot`; knots within :data:`SNAP` of the domain width of a cut are taken
+    as the cut).  The spline is then the same, and the poles between two cuts with the
+    knots between them, clamped, are the piece on that interval, on the surface's own
+    parameters; neighbouring pieces share the pole row at their cut (bit-equal).
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        Rational surfaces are cut in homogeneous coordinates.
+    u_cuts, v_cuts : sequence of float
+        Increasing parameters inside the open domain.
+
+    Returns
+    -------
+    list of list of BSplineSurface
+        ``pieces[i][j]`` on :math:`[u_i, u_{i+1}] \times [v_j, v_{j+1}]`, with the cuts
+        and the domain's ends as :math:`u_i` and :math:`v_j`.
+
+    Raises
+    ------
+    InvalidInputError
+        More knots than the degree lie (within :data:`SNAP`) on a cut.
+    """
+    u_cuts, v_cuts = (np.asarray(c, dtype=float) for c in (u_cuts, v_cuts))
     net = surface.homogeneous() if surface.is_rational else surface.poles
-    tu, net = _refined(surface.u_knots, surface.u_degree, net, merged.u_breaks[1:-1])
-    tv, net_t = _refined(surface.v_knots, surface.v_degree, net.transpose(1, 0, 2),
-                         merged.v_breaks[1:-1])
+    tu, net = _refined(surface.u_knots, surface.u_degree, net, u_cuts)
+    tv, net_t = _refined(surface.v_knots, surface.v_degree, net.transpose(1, 0, 2), v_cuts)
     net = net_t.transpose(1, 0, 2)
-    u_pieces = _pieces(tu, surface.u_degree, merged.u_breaks[1:-1])
-    v_pieces = _pieces(tv, surface.v_degree, merged.v_breaks[1:-1])
-    return [[_piece(merged, surface, net, (i, ku, su), (j, kv, sv))
-             for j, (kv, sv) in enumerate(v_pieces)]
-            for i, (ku, su) in enumerate(u_pieces)]
+    return [[_piece(surface, net, ku, su, kv, sv)
+             for kv, sv in _pieces(tv, surface.v_degree, v_cuts)]
+            for ku, su in _pieces(tu, surface.u_degree, u_cuts)]
+
+
+def join_pieces(pieces):
+    r"""The surface that is exactly a grid of pieces (the inverse of :func:`cut_surface`).
+
+    Piece ``[i][j]`` is followed in u by ``[i + 1][j]`` and in v by ``[i][j + 1]``, on
+    the same parameters (piece ``[i][j]`` ends in u where ``[i + 1][j]`` begins).  The
+    pieces of one grid column (same u interval) get the union of their u knots, those of
+    one grid row the union of their v knots (:func:`insert_knot`: the same pieces);
+    neighbouring border pole rows are averaged into one row, and each cut becomes a knot
+    of multiplicity equal to the degree, so the surface is C0 in the parameter there and
+    as smooth in space as the pieces meet.
+
+    Parameters
+    ----------
+    pieces : sequence of sequences of BSplineSurface
+        Polynomial pieces of equal degrees, m rows of n.
+
+    Returns
+    -------
+    BSplineSurface
+    """
+    grid = [list(row) for row in pieces]
+    p, q = grid[0][0].u_degree, grid[0][0].v_degree
+    u_knots = [_knot_union([s.u_knots for s in row], p) for row in grid]
+    v_knots = [_knot_union([s.v_knots for s in col], q) for col in zip(*grid)]
+    nets = [[_with_knots(s, u_knots[i], v_knots[j]) for j, s in enumerate(row)]
+            for i, row in enumerate(grid)]
+    rows = [_stacked([net for net in row], axis=1) for row in nets]
+    return BSplineSurface(_stacked(rows, axis=0), _chained(u_knots, p), _chained(v_knots, q),
+                          p, q)
+
+
+def _knot_union(knot_vectors, degree):
+    """The clamped knot vector holding every interior knot of ``knot_vectors`` (one
+    interval) as often as the most of them does."""
+    inner = [t[degree + 1:-degree - 1] for t in knot_vectors]
+    values = np.unique(np.concatenate(inner))
+    counts = [max(int(np.count_nonzero(t == x)) for t in inner) for x in values]
+    t = knot_vectors[0]
+    return np.concatenate([t[:degree + 1], np.repeat(values, counts), t[-degree - 1:]])
+
+
+def _with_knots(surface, u_knots, v_knots):
+    """The poles of ``surface`` on the finer knots ``u_knots`` and ``v_knots``."""
+    net = surface.poles
+    for axis, (have, want, p) in enumerate(((surface.u_knots, u_knots, surface.u_degree),
+                                            (surface.v_knots, v_knots, surface.v_degree))):
+        moved, t = np.moveaxis(net, axis, 0), have
+        for x in np.unique(want[p + 1:-p - 1]):
+            missing = int(np.count_nonzero(want == x) - np.count_nonzero(t == x))
+            if missing > 0:
+                t, moved = _insert(t, p, moved, x, missing)
+        net = np.moveaxis(moved, 0, axis)
+    return net
+
+
+def _stacked(nets, axis):
+    """Nets following each other along ``axis``, each shared border row averaged."""
+    out = nets[0]
+    for net in nets[1:]:
+        first, rest = np.split(net, [1], axis=axis)
+        last = np.take(out, [-1], axis=axis)
+        out = np.concatenate([np.delete(out, -1, axis=axis), 0.5 * (last + first), rest],
+                             axis=axis)
+    return out
+
+
+def _chained(knot_vectors, degree):
+    """Clamped knot vectors of consecutive intervals as one, each joint a knot of
+    multiplicity ``degree``."""
+    out = knot_vectors[0][:-1]
+    for t in knot_vectors[1:]:
+        out = np.concatenate([out, t[degree + 1:-1]])
+    return np.concatenate([out, knot_vectors[-1][-1:]])
 
 
 def _require_merged_domain(merged, surface):
@@ -599,14 +705,19 @@ def _pieces(t, p, cuts):
     return out
 
 
-def _piece(merged, surface, net, u_part, v_part):
-    """Piece ``[i][j]`` of the refined net, mapped onto its patch's original domain."""
-    (i, ku, su), (j, kv, sv) = u_part, v_part
-    (u0, u1), (v0, v1) = merged.domains[i, j]
+def _piece(surface, net, ku, su, kv, sv):
+    """The piece of the refined net ``net`` on the knots ``ku`` x ``kv``."""
     block = net[su, sv].copy()
     poles, weights = block, None
     if surface.is_rational:
         poles, weights = block[..., :-1] / block[..., -1:], block[..., -1]
-    return BSplineSurface(poles, _affine(ku, (ku[0], ku[-1]), (u0, u1)),
-                          _affine(kv, (kv[0], kv[-1]), (v0, v1)),
-                          surface.u_degree, surface.v_degree, weights)
+    return BSplineSurface(poles, ku, kv, surface.u_degree, surface.v_degree, weights)
+
+
+def _mapped(piece, domain):
+    """``piece`` with its knots mapped affinely onto ``domain`` ``((u0, u1), (v0, v1))``."""
+    (u0, u1), (v0, v1) = domain
+    ku, kv = piece.u_knots, piece.v_knots
+    return BSplineSurface(piece.poles, _affine(ku, (ku[0], ku[-1]), (u0, u1)),
+                          _affine(kv, (kv[0], kv[-1]), (v0, v1)), piece.u_degree,
+                          piece.v_degree, piece.weights)
