@@ -146,6 +146,10 @@ class BorderJoin:
     curvature : bool
         With ``continuity="G2"``, also the normal curvature across a smooth join (G2);
         ``False`` where the curvature jumps by design (a fillet meeting a plane).
+    cut : bool
+        The patches are pieces of one surface cut apart along the join, ``a`` before
+        ``b`` in its cross parameter: the energy network
+        (:mod:`cq_fairing.core.network`) holds them C2 across, as one surface.
     """
 
     a: int
@@ -155,6 +159,7 @@ class BorderJoin:
     reversed: bool = False
     smooth: bool = True
     curvature: bool = True
+    cut: bool = False
 
 
 @dataclass(frozen=True)

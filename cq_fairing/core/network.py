@@ -54,6 +54,7 @@ coordinates, come in exactly by their Schur complement.
 This module imports numpy and scipy only.
 """
 
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,6 +67,7 @@ from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
 from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio
 from .patch_grid import insert_knot
+from .spaces import SplineSpace
 
 __all__ = ["NetworkResult", "PatchNetwork", "fair_network", "network_joinable"]
 
@@ -94,7 +96,7 @@ class NetworkResult:
     deviations : numpy.ndarray
         Each patch's largest same-parameter distance from its source on the samples.
     g1_rows : int
-        Mirrored-row constraints imposed.
+        Mirrored-row constraints imposed (with the C2 rows across cuts).
     kept : set of int
         The patches that kept their surfaces: those asked for, and those the joins would
         hold out of their tolerance even without energy (they then constrain their
@@ -178,6 +180,12 @@ class PatchNetwork:
         self.sides = _join_sides(self.forms, self.joins)
         self.vertices = _Vertices(self.forms, self.sides)
         self.turns = JoinTurns(self.sources, self.joins) if continuity == "G1" else None
+
+    @property
+    def refined(self):
+        """The sources on the spaces the patches are solved on (each one-span direction's
+        span halved: :func:`_refined`), the same surfaces."""
+        return self.forms.patches
 
     def fair(self, tol, *, kept=()):
         """:func:`fair_network` of the prepared network within ``tol`` (per patch or for
@@ -277,27 +285,42 @@ def _checked(patches, joins, continuity):
 class _Forms:
     """Every patch's poles numbered together, with the block-diagonal L2 form and scaled
     thin-plate energy (:math:`M_f` and :math:`s_f H_f`); the same whichever patches are
-    kept, so built once per network, and once per distinct pair of spaces."""
+    kept, so built once per network, from Gram matrices computed once per distinct
+    normalised knot vector (:func:`_unit_grams`)."""
 
     def __init__(self, patches):
         self.patches = patches
         self.offsets = np.cumsum([0] + [p.shape[0] * p.shape[1] for p in patches])
-        by_spaces = {}
-        for patch in patches:
-            key = (patch.u_space.key, patch.v_space.key)
-            if key not in by_spaces:
-                by_spaces[key] = _patch_forms(patch.u_space, patch.v_space)
-        blocks = [by_spaces[p.u_space.key, p.v_space.key] for p in patches]
+        unit = {}
+        blocks = [_patch_forms(*(_scaled_grams(space, unit)
+                                 for space in (p.u_space, p.v_space))) for p in patches]
         self.mass = sp.block_diag([m for m, _ in blocks], format="csr")
         self.energy = sp.block_diag([h for _, h in blocks], format="csr")
         self.source = np.concatenate([p.poles.reshape(-1, 3) for p in patches])
 
 
-def _patch_forms(u_space, v_space):
-    r"""``(M, s H)`` of a patch on ``u_space`` x ``v_space``: its L2 Gram matrix
-    :math:`G_u\otimes G_v` and its thin-plate energy scaled by
-    :math:`s = \mathrm{tr} M / \mathrm{tr} H`."""
-    g = [[gram_matrix(s, nu=nu) for nu in (0, 1, 2)] for s in (u_space, v_space)]
+def _scaled_grams(space, unit):
+    r"""The Gram matrices :math:`G, G', G''` of ``space`` (its basis functions and their
+    first and second derivatives): those of its knots mapped onto :math:`[0, 1]`
+    (cached in ``unit``) times :math:`h`, :math:`1/h` and :math:`1/h^3`, :math:`h` the
+    domain's width."""
+    lo, hi = space.domain
+    width = hi - lo
+    normalised = np.round((space.knots - lo) / width, 12)
+    key = (space.degree, normalised.tobytes())
+    if key not in unit:
+        on_unit = SplineSpace.from_knots(normalised, space.degree)
+        unit[key] = [gram_matrix(on_unit, nu=nu) for nu in (0, 1, 2)]
+    g0, g1, g2 = unit[key]
+    return g0 * width, g1 / width, g2 / width ** 3
+
+
+def _patch_forms(u_grams, v_grams):
+    r"""``(M, s H)`` of a patch whose directions have the Gram matrices ``u_grams`` and
+    ``v_grams`` (:func:`_scaled_grams`): its L2 Gram matrix :math:`G_u\otimes G_v` and
+    its thin-plate energy :math:`H = G''_u\otimes G_v + 2 G'_u\otimes G'_v + G_u\otimes
+    G''_v` scaled by :math:`s = \mathrm{tr} M / \mathrm{tr} H`."""
+    g = (u_grams, v_grams)
     m = sp.kron(g[0][0], g[1][0])
     h = sp.kron(g[0][2], g[1][0]) + 2 * sp.kron(g[0][1], g[1][1]) + sp.kron(g[0][0], g[1][2])
     return m, m.diagonal().sum() / max(h.diagonal().sum(), 1e-300) * h
@@ -449,15 +472,15 @@ def _join_sides(forms, joins):
     return out
 
 
-def _side_rows(forms, patch, side):
-    """``(border, inner)``: the indices of the poles along ``side`` of ``patch`` and of the
-    poles next to them inside, in the order of its along-parameter."""
+def _side_rows(forms, patch, side, count=2):
+    """The indices of the poles along ``side`` of ``patch`` and of the ``count - 1`` rows
+    next to them inside (``forms``: a :class:`_Forms` or :class:`_System`), each in the
+    order of its along-parameter."""
     ku, kv = forms.patches[patch].shape
     index = forms.offsets[patch] + np.arange(ku * kv).reshape(ku, kv)
     if side[0] == "v":
         index = index.T
-    end, inner = (0, 1) if side[1] == "0" else (-1, -2)
-    return index[end], index[inner]
+    return [index[k if side[1] == "0" else -1 - k] for k in range(count)]
 
 
 class _Vertices:
@@ -476,6 +499,12 @@ class _Vertices:
         The poles of each vertex at the ends of the joins (:func:`_split_vertices`).
     along : list of list
         Per join, the vertex of each border pole of its side ``a``.
+    sizes : collections.Counter
+        ``{vertex: number of border poles tied there}``.
+    cut_rows : dict
+        ``{join: rows}``: the C2 rows across each cut of one surface
+        (:func:`_curvature_rows`); :func:`_constraints` leaves out those whose second
+        rows are tied already.
     fans, crossings : dict
         The vertices that are fans (:func:`_fans`) while at most one of their patches
         is kept (:meth:`fans_among`), and crossings (:func:`_crossings`) while none is
@@ -500,6 +529,9 @@ class _Vertices:
                                            for group in self.poles.members().values())
                        if poles[0] in ends]
         self.along = [[self.root(a) for a in side[1].tolist()] for side in sides]
+        self.sizes = Counter(self.root(pole) for pole in list(self.poles.parent))
+        self.cut_rows = {k: _curvature_rows(forms, side[0], self)
+                         for k, side in enumerate(sides) if side[0].cut}
         self.fans = _fans(forms.source, sides, self)
         self.crossings = _crossings(sides, self)
         self.normals = {c: _source_normal(forms.source, c)
@@ -539,9 +571,11 @@ def _split_vertices(source, fixed, spread, groups):
 
 
 def _constraints(system, sides, continuity, split, vertices):
-    """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows (per
-    coordinate), the vertices' tangent-plane rows (over the three coordinates:
-    :func:`_plane_rows`) and the number of G1 rows.
+    """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows and
+    the C2 rows across cuts of one surface (per coordinate; across a cut with any
+    ``continuity``: :func:`_curvature_rows`), the vertices' tangent-plane rows (over the
+    three coordinates: :func:`_plane_rows`) and the number of those rows per
+    coordinate.
 
     A mirrored row that would tie two poles already tied (through other rows, or both
     held by kept patches) is left out: it could only repeat or contradict the others.
@@ -556,28 +590,60 @@ def _constraints(system, sides, continuity, split, vertices):
     ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
             for a, b in zip(border_a.tolist(), border_b.tolist())
             if a not in apart and b not in apart and g0.tie(a, b) is None]
-    rows, fans = [], {}
+    rows, fans, ratios = [], {}, [side[-1] for side in sides]
     if continuity == "G1":
         fans = vertices.fans_among(system.fixed)
         ratios = _straightened(sides, vertices.crossings_among(system.fixed, fans))
-        cycles = UnionFind()
-        for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
-            if not join.smooth:
+    cycles = UnionFind()
+    for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
+        if not (join.cut or (join.smooth and continuity == "G1")):
+            continue
+        mu = ratios[k]
+        for root, ia, na, ib, nb in zip(vertices.along[k], *(
+                x.tolist() for x in (border_a, inner_a, border_b, inner_b))):
+            if root in fans:
                 continue
-            mu = ratios[k]
-            for root, ia, na, ib, nb in zip(vertices.along[k], *(
-                    x.tolist() for x in (border_a, inner_a, border_b, inner_b))):
-                if root in fans:
-                    continue
-                if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
-                    rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
+            if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
+                rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
+        for poles, values in vertices.cut_rows.get(k, ()):
+            if cycles.tie(g0.find(poles[2])[0], g0.find(poles[5])[0]) is None:
+                rows.append((poles, values))
     size = int(system.offsets[-1])
-    columns = np.array([c for c, _ in rows], dtype=int).reshape(-1, 4)
-    values = np.array([v for _, v in rows], dtype=float).reshape(-1, 4)
-    matrix = sp.csr_matrix((values.ravel(), (np.repeat(np.arange(len(rows)), 4),
-                                             columns.ravel())),
+    columns = np.concatenate([np.asarray(c, dtype=int) for c, _ in rows]) if rows else []
+    values = np.concatenate([np.asarray(v, dtype=float) for _, v in rows]) if rows else []
+    counts = [len(c) for c, _ in rows]
+    matrix = sp.csr_matrix((values, (np.repeat(np.arange(len(rows)), counts), columns)),
                            shape=(len(rows), size))
     return ties, matrix, _plane_rows(system, fans, vertices.normals, g0), len(rows)
+
+
+def _curvature_rows(forms, join, vertices):
+    r"""Rows that hold two pieces of one surface C2 across their cut (``join.cut``): the
+    second cross derivatives at the cut agree,
+
+    .. math:: \sum_{k<3} a_k P^a_k - \sum_{k<3} b_k P^b_k = 0
+
+    per pole along the cut (:math:`P_0` the border row, :math:`P_1, P_2` the rows inside,
+    :math:`a_k, b_k` the second derivatives of the cross basis functions at the cut).
+    Where the cut ends at a vertex with other patches (a T-junction, ``vertices``: a
+    :class:`_Vertices`) the row there is left out: it would also tie the borders of the
+    two patches beside the cut's end, which the vertex's rows hold.  Each row:
+    ``(columns, values)`` of six entries, the second rows' poles at columns 2 and 5."""
+    weights = []
+    for patch, side in ((join.a, join.side_a), (join.b, join.side_b)):
+        space = forms.patches[patch].u_space if side[0] == "u" else forms.patches[patch].v_space
+        end = space.domain[0 if side[1] == "0" else 1]
+        second = space.collocation(np.array([end]), 2).toarray()[0]
+        weights.append(second[:3] if side[1] == "0" else second[::-1][:3])
+    values = tuple(weights[0]) + tuple(-weights[1])
+    lines_a = _side_rows(forms, join.a, join.side_a, 3)
+    lines_b = _side_rows(forms, join.b, join.side_b, 3)
+    if join.reversed:
+        lines_b = [line[::-1] for line in lines_b]
+    count = len(lines_a[0])
+    return [([int(line[i]) for line in lines_a] + [int(line[i]) for line in lines_b], values)
+            for i in range(count)
+            if i not in (0, count - 1) or vertices.sizes[vertices.root(int(lines_a[0][i]))] <= 2]
 
 
 def _diagonal(points):
@@ -659,7 +725,8 @@ def _crossings(sides, vertices):
 def _straightened(sides, crossings):
     """Per side, its mirror ratio, with the joins opposite each other at a crossing given
     one ratio (the geometric mean over each line of joins through crossings, inverted
-    where their sides ``a`` lie on opposite sides of the line): the mirrored rows at the
+    where their sides ``a`` lie on opposite sides of the line; the mean of its cuts' where
+    the line holds a cut of one surface, whose ratio is exact): the mirrored rows at the
     vertex then make its two lines of edges straight, and the cycle of rows around it
     closes, as in one surface cut into four (:mod:`cq_fairing.core.joins`, step 6)."""
     lines = UnionFind()
@@ -668,7 +735,9 @@ def _straightened(sides, crossings):
             lines.tie(k, o, parity=not same)
     ratios = [side[-1] for side in sides]
     for group in lines.members().values():
-        mean = np.mean([-np.log(ratios[k]) if flip else np.log(ratios[k]) for k, flip in group])
+        cuts = [(k, flip) for k, flip in group if sides[k][0].cut]
+        mean = np.mean([-np.log(ratios[k]) if flip else np.log(ratios[k])
+                        for k, flip in cuts or group])
         for k, flip in group:
             ratios[k] = float(np.exp(-mean if flip else mean))
     return ratios

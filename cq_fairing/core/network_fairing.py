@@ -8,13 +8,14 @@ them, each in its own parametrization, under the joins' G0 and G1 constraints, w
 each face's tolerance.  The borders move with the faces, so the fairing runs across
 the joins.
 
-The network is the faces left unchanged that meet along whole sides with the same
-knots (:func:`~cq_fairing.core.network.network_joinable`), across joins whose faces lie
-within ``SOURCE_GAP`` times the tolerance of each other
-(:func:`~cq_fairing.core.joint_projection.border_joins`).
-A member with any other join (to a faired face, a partial or trimmed side, other knots)
-keeps its surface and constrains its neighbours, so every join of a moved face is held
-closed.  Each moved face is then checked against its own face by the backend's two-sided
+The network is the faces left unchanged that meet along their borders, laid out as
+pieces that meet side to side (:func:`~cq_fairing.core.network_pieces.lay_out_pieces`:
+a face with a T-junction on a side is cut there, and the cut runs on across its
+neighbours), joined where their borders share degree and knots and lie within
+``SOURCE_GAP`` times the tolerance of each other.  A piece along any other join (to a
+faired face, a trimmed side, other knots) keeps its surface and constrains its
+neighbours, so every join of a moved face is held closed.  Each moved face, its pieces
+put back together, is then checked against its own face by the backend's two-sided
 measure (``check``); if one is over its tolerance the network is solved again with
 :data:`SHRINK` times the tolerances, :data:`RETRIES` times at most (its forms and
 samples prepared once, :class:`~cq_fairing.core.network.PatchNetwork`), and otherwise
@@ -25,12 +26,12 @@ faces at tol 0.01) is then refused after one measure instead of 22.
 This module imports numpy only (and the core).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from .geometry import collapsed_kept
-from .joins import BorderJoin
 from .joint_projection import runs_reversed
-from .network import PatchNetwork, network_joinable
+from .network import PatchNetwork
+from .network_pieces import lay_out_pieces
 
 __all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK"]
 
@@ -47,7 +48,7 @@ class NetworkFairing:
     moved : list of int
         The faces faired.
     kept : list of int
-        The faces of the network that kept their surfaces (they have other joins).
+        The faces of the network that kept their surfaces.
     joins : list of Join
         The joins held closed (G0, and G1 where smooth).
     smoothing : float
@@ -63,9 +64,9 @@ class NetworkFairing:
     surfaces: dict
 
 
-def fair_networks(sources, unchanged, joins, border, tolerances, check, *,
-                  continuity="G1", reversed_=runs_reversed):
-    """Fair the ``unchanged`` faces among ``border`` as networks.
+def fair_networks(sources, unchanged, joins, tolerances, check, *, continuity="G1",
+                  reversed_=runs_reversed):
+    """Fair the ``unchanged`` faces as networks across their joins.
 
     Parameters
     ----------
@@ -74,9 +75,9 @@ def fair_networks(sources, unchanged, joins, border, tolerances, check, *,
     unchanged : collection of int
         The faces left as their sources, that may be faired here.
     joins : sequence of Join
-        Every join of the model: a face with a join outside the network keeps its surface.
-    border : sequence of Join
-        Whole-side joins between faces of ``sources``.
+        Every join of the model: those between two of the faces along their borders are
+        faired across (:func:`~cq_fairing.core.network_pieces.lay_out_pieces`, which cuts
+        the faces at T-junctions); the pieces along any other join keep their surfaces.
     tolerances : dict
         ``{face: tol}`` of the faces that may move (a face without one is left out).
     check : callable
@@ -96,69 +97,69 @@ def fair_networks(sources, unchanged, joins, border, tolerances, check, *,
     list of NetworkFairing
         The networks whose every moved face is within its tolerance.
     """
-    unchanged = {f for f in sources if f in unchanged and tolerances.get(f) is not None}
-    links = [j for j in border if set(j.faces) <= unchanged and
-             network_joinable(sources[j.faces[0]], j.sides[0].side, sources[j.faces[1]],
-                              j.sides[1].side, reversed_(j))]
-    linked = {id(j) for j in links}
+    faces = {f for f in sources if f in unchanged and tolerances.get(f) is not None}
+    layout = lay_out_pieces(sources, faces, joins, tolerances, reversed_)
     out = []
-    for component in _components(links):
-        moving = {f for f in component
-                  if all(id(j) in linked for j in joins if f in j.faces)}
-        if moving:
-            done = _fair_component(sources, sorted(component), moving,
-                                   [j for j in links if set(j.faces) <= component],
-                                   tolerances, check, reversed_,
+    for component in _components(layout.joins):
+        if component - layout.held:
+            done = _fair_component(layout, sources, sorted(component), tolerances, check,
                                    "G0" if continuity == "G0" else "G1")
             if done is not None:
                 out.append(done)
     return out
 
 
-def _components(links):
-    """The face sets connected by ``links``."""
+def _components(joins):
+    """The piece sets connected by ``joins``."""
     neighbours = {}
-    for join in links:
-        a, b = join.faces
-        neighbours.setdefault(a, set()).add(b)
-        neighbours.setdefault(b, set()).add(a)
+    for join in joins:
+        neighbours.setdefault(join.a, set()).add(join.b)
+        neighbours.setdefault(join.b, set()).add(join.a)
     seen, out = set(), []
     for start in neighbours:
         if start in seen:
             continue
         stack, part = [start], set()
         while stack:
-            face = stack.pop()
-            if face not in part:
-                part.add(face)
-                stack.extend(neighbours[face] - part)
+            piece = stack.pop()
+            if piece not in part:
+                part.add(piece)
+                stack.extend(neighbours[piece] - part)
         seen |= part
         out.append(part)
     return out
 
 
-def _fair_component(sources, faces, moving, links, tolerances, check, reversed_,
-                    continuity):
-    """Solve one network, retried at smaller tolerances while a moved face misses its
-    own: its :class:`NetworkFairing`, or ``None``."""
-    position = {face: k for k, face in enumerate(faces)}
-    core_joins = [BorderJoin(position[a.face], a.side, position[b.face], b.side,
-                             reversed_(j), j.kind == "smooth")
-                  for j in links for a, b in [j.sides]]
-    kept = [position[f] for f in faces if f not in moving]
-    tols = [tolerances[f] for f in faces]
-    network = PatchNetwork([sources[f] for f in faces], core_joins, continuity)
+def _fair_component(layout, sources, pieces, tolerances, check, continuity):
+    """Solve one network of pieces, retried at smaller tolerances while a moved face
+    misses its own: its :class:`NetworkFairing`, or ``None``."""
+    position = {piece: k for k, piece in enumerate(pieces)}
+    linked = [k for k, j in enumerate(layout.joins) if j.a in position]
+    core_joins = [replace(j, a=position[j.a], b=position[j.b])
+                  for j in (layout.joins[k] for k in linked)]
+    owner = [layout.faces[p] for p in pieces]
+    kept = [k for k, p in enumerate(pieces) if p in layout.held]
+    tols = [tolerances[f] for f in owner]
+    network = PatchNetwork([layout.pieces[p] for p in pieces], core_joins, continuity)
+    faces = sorted(set(owner))
     for _ in range(RETRIES + 1):
         result = network.fair(tols, kept=kept)
-        moved = {f for f in moving if position[f] not in result.kept}
+        moved = sorted({owner[k] for k in range(len(pieces)) if k not in result.kept})
         if not moved:
             return None
+        # a kept piece of a moved face on the refined spaces of the moved ones, so that
+        # the face's net does not depend on which of its pieces moved
+        solved = {p: network.refined[k] if k in result.kept else result.surfaces[k]
+                  for k, p in enumerate(pieces)}
+        surfaces = {f: collapsed_kept(sources[f], layout.face_surface(f, solved))
+                    for f in moved}
         # the faces nearest their tolerance by the network's own samples first
-        nearest = sorted(moved, key=lambda f: -result.deviations[position[f]] / tolerances[f])
-        surfaces = {f: collapsed_kept(sources[f], result.surfaces[position[f]])
-                    for f in nearest}
+        worst = {f: max(result.deviations[k] for k in range(len(pieces)) if owner[k] == f)
+                 for f in moved}
+        nearest = sorted(moved, key=lambda f: -worst[f] / tolerances[f])
         if all(check(f, surfaces[f]) <= tolerances[f] for f in nearest):
-            return NetworkFairing(sorted(moved), sorted(set(faces) - moved), links,
-                                  result.smoothing, dict(sorted(surfaces.items())))
+            return NetworkFairing(moved, sorted(set(faces) - set(moved)),
+                                  layout.joins_held(set(linked)), result.smoothing,
+                                  dict(sorted(surfaces.items())))
         tols = [SHRINK * t for t in tols]
     return None

@@ -99,8 +99,7 @@ def fair_joined(job, adjacency, joins):
     border = [j for j in border if not set(j.faces) & gridded]
     continuity = JOIN_CONTINUITY[joins]
     joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
-    networks = fair_networks(job, adjacency, polynomial, _between(border, polynomial),
-                             runs_reversed, continuity)
+    networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
     unchanged = {face for face, report in enumerate(job.reports)

@@ -12,7 +12,7 @@ from ..core.network_fairing import fair_networks as fair_core_networks
 __all__ = ["fair_networks"]
 
 
-def fair_networks(job, adjacency, readable, joins, reversed_, continuity):
+def fair_networks(job, adjacency, readable, reversed_, continuity):
     """Fair the unchanged faces among ``joins`` as networks
     (:func:`~cq_fairing.core.network_fairing.fair_networks`); install the moved faces.
 
@@ -23,8 +23,6 @@ def fair_networks(job, adjacency, readable, joins, reversed_, continuity):
         Every join of the model.
     readable : dict
         ``{face: source BSplineSurface}`` of the polynomial faces that may be joined.
-    joins : list of Join
-        Whole-side joins between faces of ``readable``.
     reversed_ : callable
         ``reversed_(join)``: the two faces' along-parameters run opposite ways.
     continuity : {"G0", "G1", "G2"}
@@ -40,7 +38,7 @@ def fair_networks(job, adjacency, readable, joins, reversed_, continuity):
         measured[face] = job.measured(face, surface)
         return measured[face][2]["max"]
 
-    networks = fair_core_networks(readable, unchanged, adjacency.joins, joins, job.tol,
+    networks = fair_core_networks(readable, unchanged, adjacency.joins, job.tol,
                                   check, continuity=continuity, reversed_=reversed_)
     for network in networks:
         message = (f"faired with its network of {len(network.moved) + len(network.kept)} "

@@ -370,8 +370,8 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
                                  found.joins, border, tolerances, check,
                                  continuity=continuity, excluded=set(pieces))
     left = set(unchanged) | {face for face, d in projection.kept.items() if d is None}
-    networks = fair_networks(polynomial, left, found.joins, _between(border, polynomial),
-                             tolerances, check, continuity=continuity)
+    networks = fair_networks(polynomial, left, found.joins, tolerances, check,
+                             continuity=continuity)
     moved = {face: s for network in networks for face, s in network.surfaces.items()}
     in_networks = [j for network in networks for j in network.joins
                    if set(j.faces) & set(network.surfaces)]

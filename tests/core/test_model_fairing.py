@@ -100,7 +100,7 @@ def test_faces_at_their_coarsest_are_one_network():
     example = patch_network()
     sources = dict(enumerate(example.patches))
     joins, calls = _joins(example), []
-    networks = fair_networks(sources, {0, 1, 2}, joins, joins, dict.fromkeys(sources, TOL),
+    networks = fair_networks(sources, {0, 1, 2}, joins, dict.fromkeys(sources, TOL),
                              _checker(sources, calls))
     assert len(networks) == 1 and networks[0].moved == [0, 1, 2] and networks[0].kept == []
     assert len(networks[0].joins) == 2 and networks[0].smoothing > 0
@@ -114,7 +114,7 @@ def test_a_face_with_a_join_outside_the_network_keeps_its_surface():
     example = patch_network()
     sources = dict(enumerate(example.patches))
     joins, calls = _joins(example), []
-    networks = fair_networks(sources, {0, 1}, joins, joins, dict.fromkeys(sources, TOL),
+    networks = fair_networks(sources, {0, 1}, joins, dict.fromkeys(sources, TOL),
                              _checker(sources, calls))
     assert [n.moved for n in networks] == [[1]] and networks[0].kept == [0]
     assert set(calls) == {1}

@@ -1,6 +1,7 @@
 """Faces at their coarsest faired together by energy (occ.networks): the 99 bicubic
-4 x 4 patches of shell_patches.brep, measured by OCCT, against the same shell faired
-face by face (which leaves every patch as it is); and the L of three one-span patches of
+4 x 4 patches of shell_patches.brep (some meeting their neighbours over part of a side
+only), measured by OCCT, against the same shell faired face by face (which leaves every
+patch as it is); and the L of three one-span patches of
 ``core.examples.patch_network``, against the core's network fairing of the example
 called directly (``tests/core/patch_references``, which the FreeCAD workbench's result
 is compared with too)."""
@@ -42,9 +43,11 @@ def test_face_by_face_nothing_can_be_faired(runs):
 def test_a_network_of_patches_is_faired_together(runs):
     result = runs["smooth"]
     networked = [r for r in result.faces if r.faired and "network" in r.message]
-    assert len(networked) >= 10
+    assert len(networked) >= 25
     assert result.joins.summary()["network_faces"] == len(networked)
-    assert all(r.poles_after == (5, 5) for r in networked)   # one span halved each way
+    assert all(min(r.poles_after) >= 5 for r in networked)   # one span halved each way
+    # faces cut at the ends of their partial joins (T-junctions) are faired too
+    assert any(max(r.poles_after) > 5 for r in networked)
     assert all(r.max_deviation <= TOL for r in networked)
     assert result.valid and BRepCheck_Analyzer(result.shape).IsValid()
 
