@@ -42,10 +42,13 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   keep their source points (:func:`_split_vertices`): closed onto one kept corner, a
   patch would open its join to the other.
 
-The borders move with the patches: the energy runs across the joins.  :math:`\lambda`
-is the largest (bisection on its logarithm) for which every patch stays within the
-tolerance of its source by the same-parameter distance on :data:`SAMPLES` x
-:data:`SAMPLES` points, an upper bound of the true distance.  The G0 rows and the kept
+The borders move with the patches: the energy runs across the joins.  The patches that
+share no unknown (joined only through kept patches) are independent parts of the
+system, each with its own :math:`\lambda`: the largest (bisection on its logarithm) for
+which every patch of the part stays within the tolerance of its source by the
+same-parameter distance on :data:`SAMPLES` x :data:`SAMPLES` points, an upper bound of
+the true distance, so that one patch held close by its joins does not hold back the
+energy of the others.  The G0 rows and the kept
 patches' poles are identities, eliminated exactly (one unknown per class of tied poles);
 the G1 rows remain in one regularised KKT system, the same for x, y and z and factorized
 once per :math:`\lambda`; the tangent-plane rows, the only ones that couple the
@@ -91,8 +94,9 @@ class NetworkResult:
         The faired patches, each on its source's spaces with a one-span direction's
         span halved (kept ones: the source).
     smoothing : float
-        The :math:`\\lambda` used (0 when even the constrained projection alone is over
-        the tolerance somewhere: then ``surfaces`` are the sources).
+        The smallest :math:`\\lambda` used by the network's independent parts (0 when
+        even the constrained projection alone is over the tolerance somewhere: then
+        ``surfaces`` are the sources).
     deviations : numpy.ndarray
         Each patch's largest same-parameter distance from its source on the samples.
     g1_rows : int
@@ -209,7 +213,8 @@ class PatchNetwork:
 
 
 def _smoothest(network, tols, kept):
-    """The largest energy weight within the tolerances, the patches that the joins alone
+    """The largest energy weight of each independent part of the system
+    (:meth:`_System._components`) within the tolerances, the patches that the joins alone
     hold out of their tolerance kept."""
     sources = network.sources
     kept = set(kept)
@@ -225,16 +230,25 @@ def _smoothest(network, tols, kept):
         kept |= over     # the joins hold these too far: they constrain their neighbours
     if len(kept) == count:
         return NetworkResult(list(sources), 0.0, np.zeros(count), system.g1_rows, kept)
-    lo, hi, lam = np.log(LAMBDA_RANGE[0]), np.log(LAMBDA_RANGE[1]), 0.0
+    part = system.patch_components
+    members = [np.flatnonzero(part == c) for c in range(part.max() + 1)]
+    lo = np.full(len(members), np.log(LAMBDA_RANGE[0]))
+    hi = np.full(len(members), np.log(LAMBDA_RANGE[1]))
+    lam = np.zeros(len(members))
+    surfaces, deviations = list(best[0]), best[1].copy()
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
-        trial = solve(float(np.exp(mid)))
-        if np.all(trial[1] <= tols):
-            best, lam, lo = trial, float(np.exp(mid)), mid
-        else:
-            hi = mid
-    surfaces = [sources[f] if f in kept else s for f, s in enumerate(best[0])]
-    return NetworkResult(surfaces, lam, best[1], system.g1_rows, kept)
+        trial = solve(np.exp(mid))
+        for c, group in enumerate(members):
+            if np.all(trial[1][group] <= tols[group]):
+                lam[c], lo[c] = np.exp(mid[c]), mid[c]
+                deviations[group] = trial[1][group]
+                for f in group:
+                    surfaces[f] = trial[0][f]
+            else:
+                hi[c] = mid[c]
+    surfaces = [sources[f] if f in kept else s for f, s in enumerate(surfaces)]
+    return NetworkResult(surfaces, float(lam.min()), deviations, system.g1_rows, kept)
 
 
 def _refined(patch):
@@ -353,6 +367,27 @@ class _System:
         self.kkt, self.rhs = self._kkt(mirrored)
         self.coupling = self._coupling(planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
+        self.components, self.patch_components = self._components()
+
+    def _components(self):
+        """The independent parts of the system: the component of each unknown in the
+        graph of the KKT matrix and the tangent-plane rows (patches joined only through
+        kept ones share no unknown), and the component of each patch (-1 for a patch
+        without unknowns)."""
+        unknowns = self.basis.shape[1]
+        graph = abs(self.kkt[0]) + abs(self.kkt[1]) + abs(self.kkt[2])
+        plane_rows = self.coupling[0]
+        if plane_rows.shape[0]:
+            tied = abs(plane_rows).T @ abs(plane_rows)
+            graph = graph + sp.block_diag([tied, sp.csc_matrix(
+                (graph.shape[0] - unknowns, graph.shape[0] - unknowns))])
+        _, label = connected_components(graph, directed=False)
+        kinds, label = np.unique(label[:unknowns], return_inverse=True)
+        per_patch = np.full(len(self.patches), -1)
+        owner = np.repeat(np.arange(len(self.patches)), np.diff(self.offsets))
+        rows, columns = self.basis.nonzero()
+        per_patch[owner[rows]] = label[columns]
+        return label, per_patch
 
     def _eliminated(self, ties):
         """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
@@ -420,9 +455,11 @@ class _System:
         .. math:: K x_d + s E\,\mathrm{diag}(n_d)\,\nu = f_d,\qquad
                   s \sum_d \mathrm{diag}(n_d) E^T x_d - \varepsilon s\,\nu = s p,
 
-        :math:`K = K_M + \lambda K_H + s K_A`, the same for x, y and z, and :math:`f_d`
-        column :math:`d` of :math:`[b_M + \lambda b_H;\; s b_A]` (:meth:`_kkt`);
-        :math:`s` the mean diagonal of :math:`M + \lambda H`, which scales the
+        :math:`K = K_M + \Lambda K_H + s K_A`, the same for x, y and z, and :math:`f_d`
+        column :math:`d` of :math:`[b_M + \Lambda b_H;\; s b_A]` (:meth:`_kkt`);
+        :math:`\Lambda` the diagonal of each unknown's energy weight, ``lam`` of its
+        independent part (:meth:`_components`; one weight for all or one per part);
+        :math:`s` the mean diagonal of :math:`M + \max\lambda\, H`, which scales the
         constraint rows like the rest; :math:`E, n_d, p` the tangent-plane rows
         (:meth:`_coupling`).  Only :math:`K` is factorized; the plane rows, which couple
         the coordinates, come in exactly by their Schur complement, :math:`W = K^{-1}E`:
@@ -433,10 +470,14 @@ class _System:
         unknowns = self.basis.shape[1]
         if unknowns == 0:
             return self.held
-        scale = float(np.mean(self.diagonals[0] + lam * self.diagonals[1]))
-        lu = spla.splu(self.kkt[0] + lam * self.kkt[1] + scale * self.kkt[2])
+        lam = np.broadcast_to(np.asarray(lam, dtype=float), (self.patch_components.max() + 1,))
+        per_unknown = lam[self.components]
+        scale = float(np.mean(self.diagonals[0] + lam.max() * self.diagonals[1]))
+        weights = sp.diags(np.concatenate([per_unknown,
+                                           np.zeros(self.kkt[1].shape[0] - unknowns)]))
+        lu = spla.splu((self.kkt[0] + weights @ self.kkt[1] + scale * self.kkt[2]).tocsc())
         plane_rows, plane_columns, normals, plane_rhs = self.coupling
-        rhs = np.vstack([self.rhs[0] + lam * self.rhs[1], scale * self.rhs[2]])
+        rhs = np.vstack([self.rhs[0] + per_unknown[:, None] * self.rhs[1], scale * self.rhs[2]])
         solved = lu.solve(np.hstack([rhs, plane_columns]))
         x, w = solved[:, :3], solved[:, 3:]
         if plane_rhs.size:

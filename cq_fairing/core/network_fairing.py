@@ -52,7 +52,8 @@ class NetworkFairing:
     joins : list of Join
         The joins held closed (G0, and G1 where smooth).
     smoothing : float
-        The energy weight :math:`\lambda` reached.
+        The smallest energy weight :math:`\lambda` reached by the network's independent
+        parts (:func:`~cq_fairing.core.network.fair_network`).
     surfaces : dict
         ``{face: BSplineSurface}`` of the moved faces, as checked.
     """

@@ -5,7 +5,7 @@ deviation on a dense grid, against the sources and the joint projection."""
 import numpy as np
 import pytest
 
-from cq_fairing.core.examples import patch_grid
+from cq_fairing.core.examples import patch_grid, patch_network
 from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.joins import BorderJoin
 from cq_fairing.core.network import (
@@ -305,3 +305,38 @@ def test_the_schur_complement_solves_the_coupled_kkt_system_of_a_fan(kept):
         assert np.abs(poles - _coupled_kkt_poles(network, system, mirrored, planes, lam)).max() \
             <= 1e-11 * size
         assert np.abs(np.einsum("rd,rd->r", normals, difference @ poles)).max() <= 1e-9 * size
+
+
+def test_parts_joined_only_through_kept_patches_each_get_their_own_energy_weight():
+    """The L of patch_network with its corner patch 0 kept: patches 1 and 2 meet only it,
+    so they are independent parts, each with the largest weight within its own tolerance
+    (a tight one on patch 1 does not hold back patch 2): each is the network solved with
+    the other one kept too."""
+    example = patch_network()
+    tols = [0.01, 0.003, 0.01]
+    both = fair_network(example.patches, example.joins, tols, kept=[0])
+    assert both.kept == {0}
+    alone = {part: fair_network(example.patches, example.joins, tols, kept=[0, other])
+             for part, other in ((1, 2), (2, 1))}
+    for part, result in alone.items():
+        assert np.abs(both.surfaces[part].poles - result.surfaces[part].poles).max() \
+            <= 1e-9 * 2.0
+    assert alone[2].smoothing > 5 * alone[1].smoothing > 0
+    assert both.smoothing == pytest.approx(alone[1].smoothing)
+
+
+def test_forms_of_a_patch_on_any_domain_are_its_own():
+    """The Gram matrices scaled from the unit interval against dense quadrature on the
+    patch's own domain [0.5, 2] x [-1, 0.3]."""
+    rng = np.random.default_rng(5)
+    u_knots = np.r_[[0.5] * 4, 0.9, 1.4, [2.0] * 4]
+    v_knots = np.r_[[-1.0] * 4, -0.2, [0.3] * 4]
+    patch = BSplineSurface(rng.normal(size=(6, 5, 3)), u_knots, v_knots, 3, 3)
+    forms = _Forms([patch])
+    g = [[dense_gram(t, 3, t, 3, nu) for nu in (0, 1, 2)] for t in (u_knots, v_knots)]
+    mass = np.kron(g[0][0], g[1][0])
+    energy = np.kron(g[0][2], g[1][0]) + 2 * np.kron(g[0][1], g[1][1]) + np.kron(g[0][0], g[1][2])
+    scaled = np.trace(mass) / np.trace(energy) * energy
+    assert np.allclose(forms.mass.toarray(), mass, rtol=1e-9, atol=1e-12 * np.abs(mass).max())
+    assert np.allclose(forms.energy.toarray(), scaled, rtol=1e-9,
+                       atol=1e-12 * np.abs(scaled).max())
