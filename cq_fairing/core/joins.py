@@ -390,18 +390,27 @@ class JoinTurns:
                        for k, join in enumerate(self.joins) if join.smooth}
 
     def turned(self, surfaces, moved):
-        """The patches of ``moved`` on a smooth join whose normals turn, somewhere along
-        it, more than :data:`ANGLE_SLACK` degrees beyond the sources' angle at the same
-        place (the faired patches share their border's parametrization, so their angle
-        is measured at equal parameters; the sources' at each point of side ``a`` and the
-        nearest point of side ``b``: :func:`_nearest_along`)."""
-        out, moved = set(), set(moved)
-        for k, angles in self.source.items():
-            join = self.joins[k]
-            mine = {join.a, join.b} & moved
-            if mine and np.max(join_angles(surfaces, join, self.samples) - angles) > ANGLE_SLACK:
-                out |= mine
-        return out
+        """The patches of ``moved`` on a smooth join that turns (:meth:`turned_joins`)."""
+        return {patch for k in self.turned_joins(surfaces, moved)
+                for patch in (self.joins[k].a, self.joins[k].b)} & set(moved)
+
+    def turned_joins(self, surfaces, moved):
+        """The indices of the smooth joins with a patch of ``moved`` whose normals turn,
+        somewhere along them, more than :data:`ANGLE_SLACK` degrees beyond the sources'
+        angle at the same place (the faired patches share their border's
+        parametrization, so their angle is measured at equal parameters; the sources' at
+        each point of side ``a`` and the nearest point of side ``b``:
+        :func:`_nearest_along`)."""
+        moved = set(moved)
+        return {k for k, angles in self.source.items()
+                if {self.joins[k].a, self.joins[k].b} & moved
+                and np.max(join_angles(surfaces, self.joins[k], self.samples) - angles)
+                > ANGLE_SLACK}
+
+    def tangent(self):
+        """True when every smooth join is tangent in the sources within
+        :data:`ANGLE_SLACK` degrees."""
+        return all(angles.max() <= ANGLE_SLACK for angles in self.source.values())
 
 
 def turned_patches(surfaces, sources, joins, moved):

@@ -23,7 +23,12 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   :math:`w_{a,i} + \mu w_{b,i} = 0`, :math:`w = c_{inner} - c_{border}`, with one
   :math:`\mu` per join (the geometric mean of the source's length ratios), which makes
   the tangent planes agree along the whole join
-  (:mod:`cq_fairing.core.joins`, step 5).
+  (:mod:`cq_fairing.core.joins`, step 5).  Where every smooth join of the network is
+  tangent in the sources already (within :data:`~cq_fairing.core.joins.ANGLE_SLACK`),
+  one ratio per join would only bend patches that meet well: the joins are held closed
+  first, and the mirrored rows come in on those that then turn more than the slack
+  beyond the source (:meth:`PatchNetwork.fair`).
+* **C2 across cuts** of one surface into pieces (:func:`_curvature_rows`).
 * **Vertices.**  Around a vertex the rows next to it tie the patches' twist poles in a
   cycle, singular where the ratios' product is 1 (the vertex enclosure condition); a
   row that would close a cycle of rows is left out.  At a *crossing* (four moving
@@ -202,17 +207,26 @@ class PatchNetwork:
         sources = self.sources
         tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(sources),))
         kept = set(kept)
-        for _ in range(len(sources)):
-            result = _smoothest(self, tols, kept)
+        # tangent sources: closed joins first, mirrored rows where they then turn
+        held = set() if self.turns is not None and self.turns.tangent() else None
+        for _ in range(len(sources) + len(self.joins)):
+            result = _smoothest(self, tols, kept, held)
+            if self.turns is None:
+                return result
             moved = set(range(len(sources))) - result.kept
-            turned = self.turns.turned(result.surfaces, moved) if self.turns else set()
+            turned = self.turns.turned_joins(result.surfaces, moved)
+            if held is not None and turned - held:
+                held |= turned
+                continue
             if not turned:
                 return result
-            kept |= turned   # their joins would turn more than the source's: keep them
+            # their joins would turn more than the source's even held: keep them
+            kept |= {patch for k in turned
+                     for patch in (self.joins[k].a, self.joins[k].b)} & moved
         return result
 
 
-def _smoothest(network, tols, kept):
+def _smoothest(network, tols, kept, held=None):
     """The largest energy weight of each independent part of the system
     (:meth:`_System._components`) within the tolerances, the patches that the joins alone
     hold out of their tolerance kept."""
@@ -221,7 +235,7 @@ def _smoothest(network, tols, kept):
     count = len(sources)
     for _ in range(count):
         system = _System(network.forms, kept, network.sides, network.continuity,
-                         network.spread, network.vertices)
+                         network.spread, network.vertices, held)
         solve = _solver(system, network.probes, kept)
         best = solve(0.0)
         over = {f for f in range(count) if best[1][f] > tols[f]} - kept
@@ -351,7 +365,7 @@ class _System:
     coordinate, and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
     over the three coordinates together (:func:`_constraints`, :func:`_plane_rows`)."""
 
-    def __init__(self, forms, kept, sides, continuity, spread, vertices):
+    def __init__(self, forms, kept, sides, continuity, spread, vertices, held=None):
         self.patches = forms.patches
         self.offsets, self.mass, self.energy = forms.offsets, forms.mass, forms.energy
         self.source = forms.source
@@ -362,7 +376,7 @@ class _System:
         fixed[split] = True
         self.fixed = fixed
         ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split,
-                                                            vertices)
+                                                            vertices, held)
         self.basis, self.held = self._eliminated(ties)
         self.kkt, self.rhs = self._kkt(mirrored)
         self.coupling = self._coupling(planes)
@@ -611,7 +625,7 @@ def _split_vertices(source, fixed, spread, groups):
     return np.array(out, dtype=int)
 
 
-def _constraints(system, sides, continuity, split, vertices):
+def _constraints(system, sides, continuity, split, vertices, held=None):
     """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows and
     the C2 rows across cuts of one surface (per coordinate; across a cut with any
     ``continuity``: :func:`_curvature_rows`), the vertices' tangent-plane rows (over the
@@ -632,12 +646,16 @@ def _constraints(system, sides, continuity, split, vertices):
             for a, b in zip(border_a.tolist(), border_b.tolist())
             if a not in apart and b not in apart and g0.tie(a, b) is None]
     rows, fans, ratios = [], {}, [side[-1] for side in sides]
-    if continuity == "G1":
-        fans = vertices.fans_among(system.fixed)
+    mirrored = {k for k, side in enumerate(sides) if side[0].smooth and continuity == "G1"
+                and (held is None or k in held)}
+    if mirrored:
+        ends = {vertices.along[k][e] for k in mirrored for e in (0, -1)}
+        fans = {root: corners for root, corners in vertices.fans_among(system.fixed).items()
+                if root in ends}
         ratios = _straightened(sides, vertices.crossings_among(system.fixed, fans))
     cycles = UnionFind()
     for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
-        if not (join.cut or (join.smooth and continuity == "G1")):
+        if not (join.cut or k in mirrored):
             continue
         mu = ratios[k]
         for root, ia, na, ib, nb in zip(vertices.along[k], *(

@@ -7,7 +7,7 @@ import pytest
 
 from cq_fairing.core.examples import patch_grid, patch_network
 from cq_fairing.core.geometry import BSplineSurface
-from cq_fairing.core.joins import BorderJoin
+from cq_fairing.core.joins import BorderJoin, JoinTurns
 from cq_fairing.core.network import (
     KKT_EPS,
     SAMPLES,
@@ -340,3 +340,30 @@ def test_forms_of_a_patch_on_any_domain_are_its_own():
     assert np.allclose(forms.mass.toarray(), mass, rtol=1e-9, atol=1e-12 * np.abs(mass).max())
     assert np.allclose(forms.energy.toarray(), scaled, rtol=1e-9,
                        atol=1e-12 * np.abs(scaled).max())
+
+
+def _tangent_l(bump=0.02):
+    """The L of patch_network without noise (its joins tangent: one C2 surface cut), with
+    one pole bumped inside each patch, away from the rows next to its joins."""
+    example = patch_network(noise=0.0)
+    patches = []
+    for patch, (i, j) in zip(example.patches, ((1, 1), (2, 1), (1, 2))):
+        poles = patch.poles.copy()
+        poles[i, j, 2] += bump
+        patches.append(BSplineSurface(poles, patch.u_knots, patch.v_knots, 3, 3))
+    return patches, example.joins
+
+
+def test_a_network_tangent_in_the_source_gets_its_rows_where_closed_joins_turn():
+    """Joins tangent in the source are first held closed only; closed alone, the L's
+    joins turn more than the slack under the energy, so they get their mirrored rows and
+    the patches move with no join turning more than the slack (without the rows they
+    would be kept)."""
+    patches, joins = _tangent_l()
+    assert JoinTurns(patches, joins).tangent()
+    assert not JoinTurns(patch_network().patches, joins).tangent()   # the noisy L
+    result = fair_network(patches, joins, 0.01)
+    assert not result.kept and result.smoothing > 0 and result.g1_rows > 0
+    gap, angle = _joins_measured(result.surfaces, joins)
+    assert gap <= 1e-9 * 2.0 and angle <= 0.05
+    assert _dense_deviation(result.surfaces, patches).max() <= 0.01 * 1.02
