@@ -37,6 +37,7 @@ from cq_fairing.occ.convert import face_to_surface, indexed_faces
 from cq_fairing.occ.shapes import fair_shape
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
+FLAT = 1e-9   # second differences below this x the model's largest are round-off
 CASES = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01), ("shell_patches.brep", 0.083),
          ("linkrods.step", 0.01), ("impeller.igs", 0.2))
 
@@ -59,12 +60,23 @@ def run(name, tol, joins):
 
 def crossing_sign_changes(shape, joins, samples=41):
     """Normal-curvature sign changes along curves that cross the smooth joins between two
-    B-spline faces, both faces' whole sides: at a quarter, half and three quarters along
-    each join, the iso-line of each face across it, from its far side to the join and on
-    into the other face; second differences of the points projected on the surfaces'
-    normals, below 1e-3 of the largest on the curve ignored."""
+    B-spline faces (:func:`crossing_curves`): second differences below 1e-3 of the
+    largest on their curve ignored, and below :data:`FLAT` times the largest over all
+    the curves (a flat curve's round-off)."""
+    curves = crossing_curves(shape, joins, samples)
+    if not curves:
+        return 0
+    floor = FLAT * max(np.abs(d2).max() for d2 in curves)
+    return sum(sign_changes_along(d2, floor) for d2 in curves)
+
+
+def crossing_curves(shape, joins, samples=41):
+    """Per smooth join between two B-spline faces' whole sides, at a quarter, half and
+    three quarters along it: the iso-line of each face across it, from its far side to
+    the join and on into the other face; the second differences of its points projected
+    on the surfaces' normals."""
     faces = indexed_faces(shape)
-    count = 0
+    curves = []
     for join in joins:
         if join.kind != "smooth" or any(s.side is None or not s.full for s in join.sides):
             continue
@@ -74,10 +86,14 @@ def crossing_sign_changes(shape, joins, samples=41):
             second = _across(face_to_surface(faces[b.face])[0], b, t, samples)
             points = np.concatenate([first[0], second[0][::-1][1:]])
             normals = np.concatenate([first[1], second[1][::-1][1:]])
-            d2 = np.einsum("ij,ij->i", np.diff(points, 2, axis=0), normals[1:-1])
-            signs = np.sign(d2[np.abs(d2) > 1e-3 * np.abs(d2).max()])
-            count += int(np.count_nonzero(signs[1:] != signs[:-1]))
-    return count
+            curves.append(np.einsum("ij,ij->i", np.diff(points, 2, axis=0), normals[1:-1]))
+    return curves
+
+
+def sign_changes_along(d2, floor):
+    """Sign changes of ``d2`` where it is above 1e-3 of its largest and above ``floor``."""
+    signs = np.sign(d2[np.abs(d2) > max(1e-3 * np.nanmax(np.abs(d2)), floor)])
+    return int(np.count_nonzero(signs[1:] != signs[:-1]))
 
 
 def _across(surface, side, t, samples):
@@ -95,7 +111,8 @@ def _across(surface, side, t, samples):
     point, du, dv = (surface.evaluate_grid(*grid[0], nu, nv).reshape(samples, 3)
                      for nu, nv in ((0, 0), (1, 0), (0, 1)))
     normal = np.cross(du, dv)
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    with np.errstate(invalid="ignore"):   # a collapsed border has no normal: NaN, skipped
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
     return point, normal * np.sign(normal @ normal[0])[:, None]
 
 
