@@ -20,8 +20,8 @@ measure (``check``); if one is over its tolerance the network is solved again wi
 :data:`SHRINK` times the tolerances, :data:`RETRIES` times at most (its forms and
 samples prepared once, :class:`~cq_fairing.core.network.PatchNetwork`), and otherwise
 left as it was.  The faces nearest their tolerance by the network's own samples are
-checked first, and the first one over ends the check: testtoler's first network (22
-faces at tol 0.01) is then refused after one measure instead of 22.
+checked first, and the first one over ends the check, so that a solve with a face over
+its tolerance costs a few measures, not one per face.
 
 This module imports numpy only (and the core).
 """
