@@ -19,6 +19,7 @@ from fairing_wb import make
 
 import fixtures
 from tests.core.patch_references import grid_pieces, matching, network_surfaces
+from tests.core.test_network_pieces import bricks
 
 TOL = 0.01
 GRID_ANGLE = 20.0     # the noisy grid's joins turn by up to 16 deg: smooth ones here
@@ -132,6 +133,26 @@ def test_faces_at_their_coarsest_are_faired_together_by_energy(doc):
     for gap, before, after in fixtures.joins_along(obj.Shape, [r.shape for r in results]):
         assert gap <= 1e-9 * 2.0
         assert before.max() > 0.5 and after.max() <= 1e-4, (before.max(), after.max())
+
+
+def test_faces_meeting_at_a_t_junction_are_faired_as_pieces(doc):
+    """The sewn bricks of ``tests/core/test_network_pieces`` (one wide one-span patch
+    under two narrow ones: Part's sewing splits its top edge at the T-junction): the wide
+    face is cut at the T and faired with its neighbours by energy, the three faces stay
+    closed and turn no more than the source + 0.05 deg, within the tolerance, and the
+    wide face comes back with its cut as a knot of the degree's multiplicity."""
+    obj = _sewn(doc, bricks(), "Bricks")
+    assert sorted(len(face.Edges) for face in obj.Shape.Faces) == [4, 4, 5]
+    results = _fair(obj, "smooth", NETWORK_ANGLE)
+    summary = results.joins.summary()
+    assert summary["network_faces"] == 3 and summary["joins"] == summary["held"] == 3
+    _assert_within_tolerance(obj, results)
+    wide = [r for r, face in zip(results, obj.Shape.Faces) if len(face.Edges) == 5][0]
+    _, u_knots, _ = _net(wide.shape)
+    assert np.count_nonzero(np.isclose(u_knots, 0.5, atol=1e-12)) == 3
+    for gap, before, after in fixtures.joins_along(obj.Shape, [r.shape for r in results]):
+        assert gap <= 1e-9 * 2.0
+        assert after.max() <= before.max() + 0.05, (before.max(), after.max())
 
 
 def test_the_feature_reports_grids_networks_and_why_faces_stay(doc):
