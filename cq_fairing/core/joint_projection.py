@@ -245,13 +245,20 @@ def border_joins(joins, sources, tolerances):
 
 def _parametric_gap(join, sources, samples=33):
     """Largest distance between the two faces' borders at equal normalised parameters
-    (reversed where they run opposite ways)."""
+    (reversed where they run opposite ways: :func:`border_gap`)."""
+    a, b = join.sides
+    return border_gap(sources[a.face], a.side, sources[b.face], b.side, runs_reversed(join),
+                      samples)
+
+
+def border_gap(first, side_first, second, side_second, reversed_, samples=33):
+    """Largest distance between ``side_first`` of the surface ``first`` and
+    ``side_second`` of ``second`` at ``samples`` equal normalised parameters along them
+    (``reversed_``: the second's run the other way)."""
     t = np.linspace(0.0, 1.0, samples)
-    points = []
-    for side, ts in zip(join.sides, (t, 1.0 - t if runs_reversed(join) else t)):
-        surface = sources[side.face]
-        points.append(surface.evaluate_grid(*side_parameters(surface, side.side, ts))
-                      .reshape(samples, -1))
+    points = [surface.evaluate_grid(*side_parameters(surface, side, ts)).reshape(samples, -1)
+              for surface, side, ts in ((first, side_first, t),
+                                        (second, side_second, 1.0 - t if reversed_ else t))]
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())
 
 

@@ -314,7 +314,7 @@ class _Forms:
     """Every patch's poles numbered together, with the block-diagonal L2 form and scaled
     thin-plate energy (:math:`M_f` and :math:`s_f H_f`); the same whichever patches are
     kept, so built once per network, from Gram matrices computed once per distinct
-    normalised knot vector (:func:`_unit_grams`)."""
+    normalised knot vector (:func:`_scaled_grams`)."""
 
     def __init__(self, patches):
         self.patches = patches
@@ -396,7 +396,7 @@ class _System:
             graph = graph + sp.block_diag([tied, sp.csc_matrix(
                 (graph.shape[0] - unknowns, graph.shape[0] - unknowns))])
         _, label = connected_components(graph, directed=False)
-        kinds, label = np.unique(label[:unknowns], return_inverse=True)
+        _, label = np.unique(label[:unknowns], return_inverse=True)
         per_patch = np.full(len(self.patches), -1)
         owner = np.repeat(np.arange(len(self.patches)), np.diff(self.offsets))
         rows, columns = self.basis.nonzero()

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .joins import BorderJoin
-from .joint_projection import SOURCE_GAP, join_tolerance
+from .joins import BorderJoin, _along, side_parameters
+from .joint_projection import SOURCE_GAP, border_gap, join_tolerance
 from .network import network_joinable
 from .patch_grid import cut_surface, join_pieces
 
@@ -131,7 +131,7 @@ def lay_out_pieces(sources, faces, joins, tolerances, reversed_):
         if id(join) not in laid:
             for side in join.sides:
                 if side.face in faces:
-                    held.update(_along(layout, side))
+                    held.update(_pieces_along(layout, side))
     return layout
 
 
@@ -148,7 +148,7 @@ def _cuts(sources, faces, joins):
     work = []
 
     def add(face, side, x):
-        axis = _along_axis(side)
+        axis = _along(side)
         lo, hi = sources[face].domain[axis]
         snap = SNAP * (hi - lo)
         have = cuts[face][axis]
@@ -178,22 +178,16 @@ def _cuts(sources, faces, joins):
     return {face: tuple(sorted(c) for c in pair) for face, pair in cuts.items()}, crowded
 
 
-def _along_axis(side):
-    """The parameter axis a side runs along: 1 (v) for ``"u0"``/``"u1"``, 0 (u) else."""
-    return 1 if side[0] == "u" else 0
-
-
 def _side_point(surface, side, x):
     """The point of ``side`` of ``surface`` at its along-parameter ``x``."""
     return _side_points(surface, side, np.array([x]))[0]
 
 
 def _side_points(surface, side, x):
-    """Points of ``side`` at the along-parameters ``x``."""
-    (u0, u1), (v0, v1) = surface.domain
-    if side[0] == "u":
-        return surface.evaluate_grid([u0 if side[1] == "0" else u1], x)[0]
-    return surface.evaluate_grid(x, [v0 if side[1] == "0" else v1])[:, 0]
+    """Points of ``side`` at its along-parameters ``x``."""
+    lo, hi = surface.domain[_along(side)]
+    t = (np.asarray(x, dtype=float) - lo) / (hi - lo)
+    return surface.evaluate_grid(*side_parameters(surface, side, t)).reshape(len(t), -1)
 
 
 def _nearest_on_side(surface, side, point, along):
@@ -222,7 +216,7 @@ def _join_across_cuts(layout):
                     layout.origins.append(None)
 
 
-def _along(layout, side):
+def _pieces_along(layout, side):
     """The pieces along a join side, in the order of its along-parameter, that lie
     within its range (all of them when the side is not a border)."""
     grid = layout.grids[side.face]
@@ -230,7 +224,7 @@ def _along(layout, side):
         return [k for row in grid for k in row]
     line = ([row[0 if side.side[1] == "0" else -1] for row in grid] if side.side[0] == "v"
             else grid[0 if side.side[1] == "0" else -1])
-    axis = _along_axis(side.side)
+    axis = _along(side.side)
     lo, hi = sorted(side.along)
     snap = SNAP * (hi - lo)
     return [k for k in line if layout.pieces[k].domain[axis][0] >= lo - snap
@@ -241,7 +235,7 @@ def _pair(layout, join, reversed_, tolerances):
     """Add the joins of the pieces along ``join``, paired in order; hold the pieces of a
     join that cannot be paired or whose pieces do not match."""
     a, b = join.sides
-    first, second = _along(layout, a), _along(layout, b)
+    first, second = _pieces_along(layout, a), _pieces_along(layout, b)
     if reversed_:
         second = second[::-1]
     if len(first) != len(second) or not _covers(layout, a, first) \
@@ -262,22 +256,15 @@ def _covers(layout, side, pieces):
     """The ``pieces`` along ``side`` span its whole range."""
     if not pieces:
         return False
-    axis = _along_axis(side.side)
+    axis = _along(side.side)
     lo, hi = sorted(side.along)
     ends = sorted(layout.pieces[k].domain[axis][e] for k in pieces for e in (0, 1))
     return abs(ends[0] - lo) <= SNAP * (hi - lo) and abs(ends[-1] - hi) <= SNAP * (hi - lo)
 
 
-def _matches(pieces, join, allowed, samples=33):
+def _matches(pieces, join, allowed):
     """The two sides share degree and knots (:func:`network_joinable`) and lie within
-    ``allowed`` of each other at equal normalised parameters."""
+    ``allowed`` of each other at equal normalised parameters (:func:`border_gap`)."""
     a, b = pieces[join.a], pieces[join.b]
-    if not network_joinable(a, join.side_a, b, join.side_b, join.reversed):
-        return False
-    t = np.linspace(0.0, 1.0, samples)
-    points = []
-    for surface, side, ts in ((a, join.side_a, t), (b, join.side_b,
-                                                    1.0 - t if join.reversed else t)):
-        lo, hi = surface.domain[_along_axis(side)]
-        points.append(_side_points(surface, side, lo + (hi - lo) * ts))
-    return float(np.linalg.norm(points[0] - points[1], axis=1).max()) <= allowed
+    return (network_joinable(a, join.side_a, b, join.side_b, join.reversed)
+            and border_gap(a, join.side_a, b, join.side_b, join.reversed) <= allowed)

@@ -26,7 +26,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InvalidInputError, InvalidToleranceError, UnsupportedGeometryError
-from .geometry import BSplineSurface, extent, make_surface
+from .geometry import BSplineSurface, extent
 from .gram import gram_matrix
 from .spaces import SplineSpace
 
@@ -332,8 +332,10 @@ def merge_grid(patches, *, tol=None, breaks="chord"):
     tol = _border_tolerance(grid, tol)
     gap = _border_gap(grid, tol)
     u_breaks, v_breaks = _breaks(grid, breaks)
-    surface = make_surface(_merged_net(grid), _merged_knots(u_rows, u_breaks, p),
-                           _merged_knots(v_cols, v_breaks, q), (p, q))
+    mapped = [[BSplineSurface(s.poles, _affine(u_rows[i], (0.0, 1.0), u_breaks[i:i + 2]),
+                              _affine(v_cols[j], (0.0, 1.0), v_breaks[j:j + 2]), p, q)
+               for j, s in enumerate(row)] for i, row in enumerate(grid)]
+    surface = join_pieces(mapped)
     domains = np.array([[s.domain for s in row] for row in grid])
     return MergedGrid(surface, u_breaks, v_breaks, domains, gap)
 
@@ -483,33 +485,6 @@ def _scaled(lengths, line, direction):
     out = lengths.size * np.concatenate([[0.0], np.cumsum(lengths)]) / lengths.sum()
     out[0], out[-1] = 0.0, float(lengths.size)
     return out
-
-
-def _merged_net(grid):
-    """The patches' poles in one net; coinciding border rows (and corners) averaged."""
-    ku = np.array([row[0].shape[0] for row in grid])
-    kv = np.array([s.shape[1] for s in grid[0]])
-    ou = np.concatenate([[0], np.cumsum(ku - 1)])
-    ov = np.concatenate([[0], np.cumsum(kv - 1)])
-    total = np.zeros((ou[-1] + 1, ov[-1] + 1, grid[0][0].poles.shape[2]))
-    count = np.zeros(total.shape[:2] + (1,))
-    for i, row in enumerate(grid):
-        for j, s in enumerate(row):
-            block = (slice(ou[i], ou[i] + ku[i]), slice(ov[j], ov[j] + kv[j]))
-            total[block] += s.poles
-            count[block] += 1.0
-    return total / count
-
-
-def _merged_knots(normalised, breaks, degree):
-    """Knots of the merged direction: each normalised vector mapped onto its interval,
-    the breaks between them of multiplicity ``degree``."""
-    parts = [np.full(degree + 1, breaks[0])]
-    for i, s in enumerate(normalised):
-        inner = _affine(s[degree + 1:-degree - 1], (0.0, 1.0), breaks[i:i + 2])
-        last = i == len(normalised) - 1
-        parts += [inner, np.full(degree + 1 if last else degree, breaks[i + 1])]
-    return np.concatenate(parts)
 
 
 # -- split ---------------------------------------------------------------------------------

@@ -13,7 +13,7 @@ __all__ = ["fair_networks"]
 
 
 def fair_networks(job, adjacency, readable, reversed_, continuity):
-    """Fair the unchanged faces among ``joins`` as networks
+    """Fair the unchanged faces of ``readable`` as networks across their joins
     (:func:`~cq_fairing.core.network_fairing.fair_networks`); install the moved faces.
 
     Parameters
