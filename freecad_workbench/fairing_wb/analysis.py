@@ -9,14 +9,14 @@ started at the nearest point of a dense source sample; then
 :math:`|d| = |p - S(u^*, v^*)|` with the sign of :math:`(p - S)\cdot n_S`.  The tests
 compare it with FreeCAD's ``Part.Face.distToShape``.
 
-Curvatures follow from the fundamental forms: with :math:`E, F, G` and :math:`L, M, N`,
-:math:`K = (LN - M^2)/(EG - F^2)` and :math:`H = (EN - 2FM + GL) / (2(EG - F^2))`.
+Curvatures are the core's (:func:`cq_fairing.core.fairness.grid_curvatures`).
 """
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from cq_fairing.core.closest_points import closest_points_surface
+from cq_fairing.core.fairness import grid_curvatures
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "curvature", "points_and_normals", "foot_points"]
@@ -138,23 +138,14 @@ def two_sided_deviation(source, faired, uv_range, count=40):
 def curvature(surface, uv_range, count=40, kind="mean"):
     """Mean or Gaussian curvature on a ``count x count`` grid.
 
+    The core's formula (:func:`cq_fairing.core.fairness.grid_curvatures`), so the map
+    shows the values the fairness measures use.
+
     Returns
     -------
     points : ndarray, shape (count, count, 3)
     values : ndarray, shape (count, count)
+        NaN where the surface is singular (a collapsed border).
     """
-    u, v = sample_parameters(uv_range, count)
-    su, sv = surface.evaluate_grid(u, v, 1, 0), surface.evaluate_grid(u, v, 0, 1)
-    suu = surface.evaluate_grid(u, v, 2, 0)
-    suv = surface.evaluate_grid(u, v, 1, 1)
-    svv = surface.evaluate_grid(u, v, 0, 2)
-    n = np.cross(su, sv)
-    n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-300)
-    e, f, g = (su * su).sum(2), (su * sv).sum(2), (sv * sv).sum(2)
-    l, m, nn = (suu * n).sum(2), (suv * n).sum(2), (svv * n).sum(2)
-    det = np.maximum(e * g - f * f, 1e-300)
-    if kind == "gaussian":
-        values = (l * nn - m * m) / det
-    else:
-        values = (e * nn - 2 * f * m + g * l) / (2 * det)
-    return surface.evaluate_grid(u, v), values
+    c = grid_curvatures(surface, *sample_parameters(uv_range, count))
+    return c["points"], c["gaussian" if kind == "gaussian" else "mean"]

@@ -76,7 +76,8 @@ def _grid_mesh(points, values, inside=None):
 
 def _face_samples(obj, source_face, faired_face, count):
     """(points, values, inside) of one face pair for the map's Kind/Which; ``inside``
-    marks the samples on the source face's trim (same parameters on both faces)."""
+    marks the samples on the source face's trim (same parameters on both faces) where
+    the value is defined (curvature is not at a singular point)."""
     source = conversion.surface_from_face(source_face)
     faired = conversion.surface_from_face(faired_face)
     uv_range = conversion.uv_range(source_face, source)
@@ -85,7 +86,9 @@ def _face_samples(obj, source_face, faired_face, count):
         return (*analysis.two_sided_deviation(source, faired, uv_range, count), inside)
     surface = faired if obj.Which == "Faired" else source
     kind = "gaussian" if obj.Kind == "GaussianCurvature" else "mean"
-    return (*analysis.curvature(surface, uv_range, count, kind), inside)
+    points, values = analysis.curvature(surface, uv_range, count, kind)
+    defined = np.isfinite(values)
+    return points, np.where(defined, values, 0.0), inside & defined
 
 
 def _pairs(source_faces, faired_faces):

@@ -125,6 +125,30 @@ def test_curvature_of_a_cylinder_face_closed_form():
     assert np.abs(gauss).max() < 1e-8
 
 
+def test_curvature_is_undefined_only_where_a_border_collapses(doc):
+    """A sphere's NURBS face collapses its first and last pole rows to the poles: there
+    the normal, and with it the curvature, is undefined (NaN); everywhere else the mean
+    curvature is 1/r.  The map leaves the undefined samples out instead of colouring
+    them with whatever a division by zero gives."""
+    radius = 5.0
+    face = Part.makeSphere(radius).Faces[0].toNurbs().Faces[0]
+    core = conversion.surface_from_face(face)
+    _, mean = analysis.curvature(core, face.ParameterRange, 9, "mean")
+    undefined = np.isnan(mean)
+    assert undefined.sum() == 18
+    assert np.abs(np.abs(mean[~undefined]) - 1 / radius).max() < 1e-9
+    source = fixtures.add_shape(doc, face, "Sphere")
+    obj = make.make_fairing((source, ["Face1"]), target=(5, 5))
+    doc.recompute()
+    assert obj.isValid(), obj.Status
+    cmap = deviation_map.make_map(obj, "MeanCurvature", "Source")
+    cmap.Samples = 9
+    doc.recompute()
+    assert cmap.isValid()
+    assert cmap.Mesh.CountPoints == len(cmap.Values) == 81 - 18
+    assert np.abs(np.abs(cmap.Values) - 1 / radius).max() < 1e-9
+
+
 def test_curvature_matches_occt_on_the_blade():
     face = fixtures.blade_shape().Faces[1]
     core = conversion.surface_from_face(face)
