@@ -66,6 +66,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
@@ -497,7 +498,7 @@ class _System:
         if plane_rhs.size:
             schur = (KKT_EPS * np.identity(plane_rhs.size)
                      + scale * (plane_rows @ w[:unknowns]) * (normals @ normals.T))
-            nu = np.linalg.solve(schur, np.einsum("rd,rd->r", normals,
+            nu = sla.solve(schur, np.einsum("rd,rd->r", normals,
                                                   plane_rows @ x[:unknowns]) - plane_rhs)
             x = x - scale * w @ (normals * nu[:, None])
         return self.basis @ x[:unknowns] + self.held
