@@ -33,10 +33,13 @@ from .joint_projection import runs_reversed
 from .network import PatchNetwork
 from .network_pieces import lay_out_pieces
 
-__all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK"]
+__all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK", "UNMOVED"]
 
 RETRIES = 2
 SHRINK = 0.7
+# why no network moves a face: what the backends' reports say
+UNMOVED = ("its joins would hold it over its tolerance or turn more than the source's, "
+           "or no network can fair across them")
 
 
 @dataclass(frozen=True)
@@ -65,16 +68,17 @@ class NetworkFairing:
     surfaces: dict
 
 
-def fair_networks(sources, unchanged, joins, tolerances, check, *, continuity="G1",
+def fair_networks(sources, movable, joins, tolerances, check, *, continuity="G1",
                   reversed_=runs_reversed):
-    """Fair the ``unchanged`` faces as networks across their joins.
+    """Fair the ``movable`` faces as networks across their joins.
 
     Parameters
     ----------
     sources : dict
         ``{face: source BSplineSurface}`` of the polynomial faces that may be joined.
-    unchanged : collection of int
-        The faces left as their sources, that may be faired here.
+    movable : collection of int
+        The faces that may be faired here, from their sources (those left as their
+        sources by fairing alone, or faired alone by energy, which keeps the nets).
     joins : sequence of Join
         Every join of the model: those between two of the faces along their borders are
         faired across (:func:`~cq_fairing.core.network_pieces.lay_out_pieces`, which cuts
@@ -98,7 +102,7 @@ def fair_networks(sources, unchanged, joins, tolerances, check, *, continuity="G
     list of NetworkFairing
         The networks whose every moved face is within its tolerance.
     """
-    faces = {f for f in sources if f in unchanged and tolerances.get(f) is not None}
+    faces = {f for f in sources if f in movable and tolerances.get(f) is not None}
     layout = lay_out_pieces(sources, faces, joins, tolerances, reversed_)
     out = []
     for component in _components(layout.joins):

@@ -8,7 +8,10 @@ form whole parts of the model are merged and faired as one surface
 (:func:`~cq_fairing.core.joint_projection.project_jointly`: border joins faired once and
 shared pole for pole, G1 across the smooth ones, every other side of a face on a join
 pinned to its source), and the faces already at their coarsest are faired together by
-energy (:mod:`cq_fairing.occ.networks`).  This module supplies the OCCT side: the faces
+energy (:mod:`cq_fairing.occ.networks`).  With the energy method the networks take the faces
+faired alone too, faired again together by energy from their sources, and a face with
+joins that no network moved is kept.
+This module supplies the OCCT side: the faces
 read as B-spline patches, each face's target, and OCCT's two-sided deviation of each
 solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`); it installs the
 results and names, in each kept face's report, the joins that bind it.
@@ -23,6 +26,7 @@ from ..core.joins import ANGLE_SLACK
 from ..core.joint_projection import (
     REFINEMENTS,
     SOURCE_GAP,
+    JointProjection,
     border_joins,
     held_joins,
     joint_targets,
@@ -30,6 +34,7 @@ from ..core.joint_projection import (
     runs_reversed,
     unholdable,
 )
+from ..core.network_fairing import UNMOVED
 from ..core.options import JOIN_CONTINUITY
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
@@ -98,14 +103,40 @@ def fair_joined(job, adjacency, joins):
     in_grids = _between(border, gridded)
     border = [j for j in border if not set(j.faces) & gridded]
     continuity = JOIN_CONTINUITY[joins]
-    joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
-    networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity)
+    if job.options["method"] == "energy":
+        networks = _energy_networks(job, adjacency, polynomial, continuity, gridded)
+        joint = JointProjection({}, {}, [], {})
+    else:
+        joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
+        networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
     unchanged = {face for face, report in enumerate(job.reports)
                  if not report.faired and face not in moved}
     return JointOutcome(in_grids + held_joins(joint, unchanged) + in_networks, grids,
                         networks, [j for j in joint.curved if set(j.faces) <= set(joint.surfaces)])
+
+
+def _energy_networks(job, adjacency, polynomial, continuity, gridded):
+    """The faces the energy method faired alone are faired again together by energy,
+    from their sources, as networks (energy keeps each face's net: a joint projection
+    onto it would replace energy fairing by a projection); a face with joins that no
+    network moved is kept as it was (its joins stay as the source has them), with the
+    reason."""
+    alone = {face for face in polynomial if job.reports[face].faired} - gridded
+    networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity,
+                             refaired=alone)
+    moved = {face for network in networks for face in network.moved}
+    for face in sorted(alone - moved):
+        joins = adjacency.joins_of(face)
+        if joins:
+            neighbours = sorted({f + 1 for join in joins for f in join.faces if f != face})
+            job.reports[face] = job.kept(face, "unchanged", (
+                f"with its joins (with faces {neighbours}) held, no network of faces moved "
+                f"it ({UNMOVED}), and energy fairs a face alone only with its borders "
+                "free: kept as it was, and its neighbours close onto it (joins='free' "
+                "fairs it alone)"))
+    return networks
 
 
 def _between(joins, faces):

@@ -12,9 +12,10 @@ from ..core.network_fairing import fair_networks as fair_core_networks
 __all__ = ["fair_networks"]
 
 
-def fair_networks(job, adjacency, readable, reversed_, continuity):
-    """Fair the unchanged faces of ``readable`` as networks across their joins
-    (:func:`~cq_fairing.core.network_fairing.fair_networks`); install the moved faces.
+def fair_networks(job, adjacency, readable, reversed_, continuity, refaired=frozenset()):
+    """Fair the unchanged faces of ``readable``, and those of ``refaired``, as networks
+    across their joins (:func:`~cq_fairing.core.network_fairing.fair_networks`); install
+    the moved faces.
 
     Parameters
     ----------
@@ -26,24 +27,27 @@ def fair_networks(job, adjacency, readable, reversed_, continuity):
     reversed_ : callable
         ``reversed_(join)``: the two faces' along-parameters run opposite ways.
     continuity : {"G0", "G1", "G2"}
+    refaired : set of int
+        Faces faired alone that the networks may fair again, from their sources (the
+        energy method's faces: their nets are their sources').
 
     Returns
     -------
     list of NetworkFairing
     """
-    unchanged = {f for f in readable if job.reports[f].status == "unchanged"}
+    movable = {f for f in readable if job.reports[f].status == "unchanged"} | set(refaired)
     measured = {}
 
     def check(face, surface):
         measured[face] = job.measured(face, surface)
         return measured[face][2]["max"]
 
-    networks = fair_core_networks(readable, unchanged, adjacency.joins, job.tol,
+    networks = fair_core_networks(readable, movable, adjacency.joins, job.tol,
                                   check, continuity=continuity, reversed_=reversed_)
     for network in networks:
         message = (f"faired with its network of {len(network.moved) + len(network.kept)} "
-                   "faces by thin-plate energy across their joins (its net was already at "
-                   "its coarsest)")
+                   "faces by thin-plate energy across their joins")
         for face in network.moved:
-            job.faired(face, measured[face], message, readable[face].shape)
+            why = "" if face in refaired else " (its net was already at its coarsest)"
+            job.faired(face, measured[face], message + why, readable[face].shape)
     return networks

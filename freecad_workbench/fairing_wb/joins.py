@@ -53,24 +53,28 @@ from cq_fairing.core.joint_projection import (
     REFINEMENTS,
     Join,
     JoinSide,
+    JointProjection,
     border_joins,
     held_joins,
     joint_targets,
     locate_side,
     project_jointly,
 )
-from cq_fairing.core.network_fairing import fair_networks
+from cq_fairing.core.network_fairing import UNMOVED, fair_networks
 from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
 
 from . import analysis, conversion
 
-__all__ = ["JOINS", "SAMPLES", "TURNED", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
+__all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
            "measure_joins", "hold_joins", "check_joins"]
 
 SAMPLES = 24              # points measured along each join
 TURNED = (f"with its joins held its smooth joins would turn more than the source's angle "
           f"+ {ANGLE_SLACK:g} deg after {REFINEMENTS} refinements; its neighbours close "
           "onto it")
+UNMOVED_BY_NETWORKS = (f"with its joins held, no network of faces moved it ({UNMOVED}), and "
+                       "energy fairs a face alone only with its borders free; its "
+                       "neighbours close onto it")
 
 
 @dataclass(frozen=True)
@@ -305,7 +309,8 @@ class HeldJoins:
         ``{face: deviation}``: the faces the joint projection kept as they were (the
         deviation they stayed at with their joins closed, over their tolerance; ``None``
         where their pinned sides left nothing to fair; :data:`TURNED` where a smooth
-        join still turned after the refinements) and no network moved.
+        join still turned after the refinements) and no network moved; with the energy
+        method the faces no network moved (:data:`UNMOVED_BY_NETWORKS`).
     held : list of Join
         The joins held closed.
     grids : list of GridFairing
@@ -326,7 +331,7 @@ def _between(joins, faces):
     return [j for j in joins if set(j.faces) <= set(faces)]
 
 
-def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
+def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", method="wavelet"):
     """Fair the faces of ``found`` together so that their joins stay closed (and, with
     ``joins="smooth"``, smooth), as the OCP layer does: the patch grids that form whole
     parts of the shape as one surface each (:func:`~cq_fairing.core.grid_fairing.fair_grids`),
@@ -353,6 +358,12 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
         ``"smooth"``: G1 across the smooth joins; ``"closed"``: G0 only;
         ``"curvature"``: also G2 where the source is curvature-continuous
         (:data:`~cq_fairing.core.options.JOIN_CONTINUITY`).
+    method : {"wavelet", "adaptive", "energy"}
+        The method the faces were faired alone with.  ``"energy"`` keeps each face's
+        net: the faces faired alone are faired again together by energy from their
+        sources, as networks, and a face with joins that no network moved is kept
+        (:data:`UNMOVED_BY_NETWORKS`): a joint projection would replace its energy
+        fairing by a projection.
 
     Returns
     -------
@@ -366,22 +377,38 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth"):
     pieces = {face: s for grid in grids for face, s in grid.surfaces.items()}
     in_grids = _between(border, pieces)
     border = [j for j in border if not set(j.faces) & set(pieces)]
-    projection = project_jointly(found.readable, joint_targets(found.readable, faired),
-                                 found.joins, border, tolerances, check,
-                                 continuity=continuity, excluded=set(pieces))
-    left = set(unchanged) | {face for face, d in projection.kept.items() if d is None}
-    networks = fair_networks(polynomial, left, found.joins, tolerances, check,
-                             continuity=continuity)
+    if method == "energy":
+        networks = fair_networks(polynomial, set(unchanged) | (set(faired) - set(pieces)),
+                                 found.joins, tolerances, check, continuity=continuity)
+        projection = JointProjection({}, {}, [], {})
+        outside = _outside_networks(found, set(faired) - set(pieces), networks)
+    else:
+        projection = project_jointly(found.readable, joint_targets(found.readable, faired),
+                                     found.joins, border, tolerances, check,
+                                     continuity=continuity, excluded=set(pieces))
+        unmoved = set(unchanged) | {face for face, d in projection.kept.items() if d is None}
+        networks = fair_networks(polynomial, unmoved, found.joins, tolerances, check,
+                                 continuity=continuity)
+        outside = {}
     moved = {face: s for network in networks for face, s in network.surfaces.items()}
     in_networks = [j for network in networks for j in network.joins
                    if set(j.faces) & set(network.surfaces)]
     surfaces = {**pieces, **projection.surfaces, **moved}
     kept = {face: d for face, d in projection.kept.items() if face not in moved}
+    kept.update(outside)
     kept.update({face: TURNED for face in projection.turned if face not in moved})
     still = {face for face in found.boxes
              if face not in surfaces and (face not in faired or face in kept)}
     return HeldJoins(surfaces, kept, in_grids + held_joins(projection, still) + in_networks,
                      grids, networks)
+
+
+def _outside_networks(found, alone, networks):
+    """``{face: reason}``: the faces faired ``alone`` by energy, with joins, that no
+    network moved; they are kept as they were (:data:`UNMOVED_BY_NETWORKS`)."""
+    moved = {face for network in networks for face in network.surfaces}
+    joined = {face for join in found.joins for face in join.faces}
+    return dict.fromkeys(sorted((alone & joined) - moved), UNMOVED_BY_NETWORKS)
 
 
 @dataclass(eq=False)

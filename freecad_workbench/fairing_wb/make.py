@@ -616,7 +616,7 @@ def _hold(found, elements, alone, tolerance, joins, method):
     outcome = hold_joins(found, {i: r.surface for i, r in enumerate(faired)
                                  if r.surface is not None and i not in coarsest},
                          coarsest | set(stuck), dict.fromkeys(range(len(alone)), tolerance),
-                         check, joins)
+                         check, joins, method)
     for i, surface in outcome.surfaces.items():
         shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
         faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),

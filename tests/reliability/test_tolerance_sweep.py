@@ -16,7 +16,7 @@ from .sweep import FACTORS, METHODS, counts, monotonicity_failures, sweep
 
 # (model, methods): every tolerance of FACTORS each; the CI share of the full table
 CI_CELLS = (("ring_nurbs", METHODS), ("fuselage", METHODS),
-            ("shell_patches", ("wavelet", "adaptive")))
+            ("shell_patches", METHODS))
 LIMIT = 120.0   # seconds per run; the slowest CI run takes about 10 s alone
 
 

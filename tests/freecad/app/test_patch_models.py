@@ -73,9 +73,10 @@ def _order(obj, patches):
     return matching([_net(face)[0] for face in obj.Shape.Faces], patches)
 
 
-def _fair(obj, joins, angle):
+def _fair(obj, joins, angle, method="wavelet"):
     subs = [f"Face{i + 1}" for i in range(len(obj.Shape.Faces))]
-    return make.fair_elements(obj, subs, SETTINGS, FACE_SETTINGS, joins=joins,
+    settings = dict(SETTINGS, method=method)
+    return make.fair_elements(obj, subs, settings, FACE_SETTINGS, joins=joins,
                               angle_tolerance=angle)
 
 
@@ -133,6 +134,19 @@ def test_faces_at_their_coarsest_are_faired_together_by_energy(doc):
     for gap, before, after in fixtures.joins_along(obj.Shape, [r.shape for r in results]):
         assert gap <= 1e-9 * 2.0
         assert before.max() > 0.5 and after.max() <= 1e-4, (before.max(), after.max())
+
+
+def test_with_the_energy_method_the_faces_are_the_same_network(doc):
+    """Energy fairs each face of the L alone first (moving its poles on its own net);
+    with the joins held the faces are faired again together from their sources, so the
+    result is the same network as the core's (and the command line's)."""
+    example = patch_network()
+    obj = _sewn(doc, example.patches, "L")
+    alone = _fair(obj, "free", NETWORK_ANGLE, "energy")
+    assert all(r.poles_after == (4, 4) and r.max_deviation > 1e-6 for r in alone)
+    results = _fair(obj, "smooth", NETWORK_ANGLE, "energy")
+    assert results.joins.summary()["network_faces"] == 3
+    _assert_equal_to(results, _order(obj, example.patches), network_surfaces(TOL))
 
 
 def test_faces_meeting_at_a_t_junction_are_faired_as_pieces(doc):
