@@ -30,6 +30,7 @@ from OCP.TopAbs import (
     TopAbs_FORWARD,
     TopAbs_SHELL,
     TopAbs_SOLID,
+    TopAbs_VERTEX,
     TopAbs_WIRE,
 )
 from OCP.TopExp import TopExp, TopExp_Explorer
@@ -456,26 +457,56 @@ TEXT_MARGIN = 1e-9
 COORDINATE_MARGIN = 1e-12
 
 
-def settle_tolerances(shape, edges):
-    r"""Make the tolerances of ``shape`` consistent after ``edges`` changed, with a margin.
+class Tolerances:
+    """The tolerance every edge and vertex of a shape has now, looked up by sub-shape
+    (:meth:`of`; 0 for one the shape did not have): what :func:`settle_tolerances`
+    keeps where the changed geometry needs no more."""
+
+    def __init__(self, shape):
+        self._map = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, TopAbs_EDGE, self._map)
+        TopExp.MapShapes_s(shape, TopAbs_VERTEX, self._map)
+        self._values = [_tolerance(self._map.FindKey(i)) for i in range(1, self._map.Extent() + 1)]
+
+    def of(self, shape):
+        index = self._map.FindIndex(shape)
+        return self._values[index - 1] if index else 0.0
+
+
+def _tolerance(shape):
+    if shape.ShapeType() == TopAbs_VERTEX:
+        return BRep_Tool.Tolerance_s(TopoDS.Vertex_s(shape))
+    return BRep_Tool.Tolerance_s(TopoDS.Edge_s(shape))
+
+
+def settle_tolerances(shape, edges, before):
+    r"""Make the tolerances of ``shape`` consistent after ``edges`` changed, with a margin
+    where they grew.
 
     ``BRepLib::UpdateTolerances`` raises every vertex tolerance to exactly the distance
     to the curve ends it must cover.  A BREP file stores tolerances and coordinates with
     15 significant digits, so an exact tolerance can read back a hair below that distance
     (testtoler face 55: 1.8685231246390617 written as 1.86852312463906) and the read
-    shape fails ``BRepCheck``.  Each touched edge and its vertices therefore get
-    :math:`t \leftarrow t (1 + 10^{-9}) + 10^{-12} M`, with :math:`M` the largest
+    shape fails ``BRepCheck``.  Each touched edge and vertex whose tolerance rose above
+    the one it had (``before``, a :class:`Tolerances` taken before the change) therefore
+    gets :math:`t \leftarrow t (1 + 10^{-9}) + 10^{-12} M`, with :math:`M` the largest
     coordinate magnitude of the edge's vertices: more than the rounding of 15 digits,
-    far below any modelling tolerance.
+    far below any modelling tolerance.  One still within its former tolerance keeps it
+    unchanged: the faired shape's tolerances are not raised where the geometry does not
+    need it.
     """
     BRepLib.UpdateTolerances_s(shape, False)
     builder = BRep_Builder()
     for edge in edges:
         vertices = (TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge))
         size = max(np.abs(_xyz(BRep_Tool.Pnt_s(v))).max() for v in vertices)
-        builder.UpdateEdge(edge, _padded(BRep_Tool.Tolerance_s(edge), size))
+        tolerance = BRep_Tool.Tolerance_s(edge)
+        if tolerance > before.of(edge):
+            builder.UpdateEdge(edge, _padded(tolerance, size))
         for vertex in vertices:
-            builder.UpdateVertex(vertex, _padded(BRep_Tool.Tolerance_s(vertex), size))
+            tolerance = BRep_Tool.Tolerance_s(vertex)
+            if tolerance > before.of(vertex):
+                builder.UpdateVertex(vertex, _padded(tolerance, size))
 
 
 def _padded(tolerance, size):
@@ -511,9 +542,10 @@ def surface_to_face(surface, original_face):
     original_face = as_face(original_face, "original_face")
     _check_domain(surface, original_face)
     copy = TopoDS.Face_s(BRepBuilderAPI_Copy(original_face, True, False).Shape())
+    before = Tolerances(copy)
     edges = replace_surface(copy, to_geom_surface(surface))
     finish_edges(edges, rebuild_3d=True)
-    settle_tolerances(copy, edges)
+    settle_tolerances(copy, edges, before)
     return copy
 
 

@@ -48,6 +48,7 @@ from ..errors import InvalidInputError
 from .adjacency import find_joins, measure_joins
 from .congruence import compose, congruence_classes, inverse
 from .convert import (
+    Tolerances,
     as_shape,
     finish_edges,
     indexed_faces,
@@ -488,6 +489,7 @@ class _Job:
             The edges of the faired faces.
         """
         targets = indexed_faces(shape)
+        before = Tolerances(shape)
         emap = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
 
@@ -507,7 +509,7 @@ class _Job:
         # of faces faired together, lies on its new surfaces: its 3-D curve is rebuilt
         finish_edges([e for e in touched if not loose(e)], rebuild_3d=True)
         finish_edges([e for e in touched if loose(e)])
-        settle_tolerances(shape, touched)
+        settle_tolerances(shape, touched, before)
         return targets, touched
 
     def install_in_source(self):

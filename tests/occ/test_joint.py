@@ -31,6 +31,28 @@ def test_fuselage_joins_stay_closed_creases_stay_creases(fuselage_runs):
     assert all(r.max_deviation <= 2.5 for r in result.faces if r.faired)
 
 
+def _edge_tolerances(shape):
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    edges = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
+    return np.array([BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i)))
+                     for i in range(1, edges.Extent() + 1)])
+
+
+def test_fuselage_edge_tolerances_are_not_raised(fuselage, fuselage_runs):
+    """The faired fuselage's faces meet where the source's do: no edge needs, or gets,
+    a larger tolerance than the source's (the copy indexes its edges as the source)."""
+    source = _edge_tolerances(fuselage)
+    faired = _edge_tolerances(fuselage_runs["smooth"].shape)
+    assert fuselage_runs["smooth"].n_faired >= 4 and faired.shape == source.shape
+    assert np.all(faired <= source)
+
+
 def test_fuselage_smooth_joins_turn_less_than_faired_alone(fuselage_runs):
     joint = fuselage_runs["smooth"].joins.summary()
     alone = fuselage_runs["free"].joins.summary()
