@@ -20,17 +20,31 @@ constraints that make the joins hold:
    corners (a kept patch's corner where there is one).  Where no crease meets a vertex,
    the end tangents of its edges are held in the plane of its mean source normal, so
    the patches around it share a tangent plane there.
-3. **Edges**, faired once.  A join's border curve is the L2 projection onto the class
-   space of the first patch's source border (normalised parameter) with its ends held
-   at the vertices, :math:`G_{II} x_I = (E c)_I - G_{IE} x_E`,
-   :math:`E = \langle\Phi|\Phi_{S}\rangle`; next to a kept patch it is that patch's
-   border itself (the projection of an element of the space is the element).  One
-   side's border, not a mean of both: two faces may run along one curve with different
-   parametrizations, and a mean at equal parameters would cut across it.
-4. **Patches.**  The border rows of joined sides are the edges' poles; the other poles
-   are the L2 projection of the source with those rows held,
-   :math:`(G_u\otimes G_v)_{FF}\, x_F = r_F - (G_u\otimes G_v)_{FH}\, x_H`.
-   Two patches then share each joined border pole for pole: G0 to round-off.
+3. **Edge ends.**  A join's border curve is the L2 projection onto the class space of
+   the first patch's source border (normalised parameter) with its ends held at the
+   vertices, :math:`G_{II} x_I = (E c)_I - G_{IE} x_E`,
+   :math:`E = \langle\Phi|\Phi_{S}\rangle`, its end tangents in the vertices' planes
+   (step 2) and, at a crossing, through it (step 6); next to a kept patch it is that
+   patch's border itself (the projection of an element of the space is the element).
+   Next to a kept patch the whole curve is held; between two solved patches only its
+   ends and the poles next to them (the end tangents), the rest of the border being
+   unknowns of step 4.
+4. **Patches, projected jointly.**  Every pole of the solved patches is a slot; the held
+   slots carry step 3's poles :math:`h`, and each other border pole of a join between
+   two solved patches is one unknown shared by both patches, pole for pole: slots
+   :math:`= P x + h`, :math:`P` 0/1 (one column per class of tied slots).  The poles
+   are the L2 projection of all sources at once,
+
+   .. math:: P^T A P\, x = P^T (b - A h),\qquad
+             A = \mathrm{diag}_k(G_{u,k}\otimes G_{v,k}),\quad
+             b_k = \mathrm{vec}(E_{u,k} C_k E_{v,k}^T),
+
+   so a shared border is the least-squares compromise of both patches' sources, and
+   the two patches have one border curve: G0 to round-off.  Both sources are taken at
+   equal normalised parameters along the join: where two faces run along one curve
+   with different parametrizations the compromise would cut across it, so such sides
+   are pinned (:func:`pinning_patch`), not joined (the caller's rule:
+   :func:`~cq_fairing.core.joint_projection.border_joins`).
 5. **G1 at smooth joins.**  The cross-boundary rows of the two patches mirror each other
    across the shared border, :math:`w_{a,i} + \mu w_{b,i} = 0` with
    :math:`w = c_{inner} - c_{border}` per pole along the join and :math:`\mu > 0` one
@@ -39,8 +53,10 @@ constraints that make the joins hold:
    cross derivatives are parallel along the whole join, not only at the poles: the
    tangent planes agree exactly (a ratio that varies from pole to pole would leave them
    apart between the poles: 0.10-0.19 deg on the 2 x 2 example grid).
-   The rows are linear and act on each coordinate alike: one joint, regularised KKT
-   system over all patches, one factorization for x, y and z.
+   The rows :math:`C x = d` act on step 4's unknowns (the shared border and the
+   patches' inner rows) and on each coordinate alike: one regularised KKT system,
+   :math:`\begin{bmatrix}P^T A P & sC^T\\ sC & -\varepsilon I\end{bmatrix}`, one
+   factorization for x, y and z.
    Normal-plane conditions :math:`n_k\cdot\partial_\perp S(t_k) = 0` at Greville
    points, the obvious alternative, leave the tangent planes free between the points
    (several degrees on a curved 2 x 2 grid), and more points collapse the cross rows.
@@ -76,9 +92,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
 
 from ..errors import InvalidInputError
-from .banded import BandedSPD, kron_solve
 from .evaluation import surface_derivatives
 from .geometry import BSplineSurface
 from .gram import gram_matrix
@@ -86,7 +102,7 @@ from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
            "pinning_patch", "side_parameters", "turned_patches", "JoinTurns", "mirror_ratio", "UnionFind",
-           "mean_normal",
+           "mean_normal", "shared_basis",
            "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
            "holds_curvature", "CURVATURE_SLACK"]
 
@@ -218,9 +234,9 @@ def fair_patches(patches, joins, *, continuity="G1"):
     lifted = any(p.source.is_rational for p in patches)
     vertices = _vertices(patches, joins, lifted)
     edges = _edges(patches, joins, spaces, chords, vertices, lifted)
-    work = _Patchwork(patches, spaces, _held_rows(patches, edges, _solved_edges(edges)),
+    work = _Patchwork(patches, spaces, joins, _held_rows(patches, edges, _solved_edges(edges)),
                       lifted)
-    surfaces, rows, curved = work.surfaces(_separate(work)), 0, {}
+    surfaces, rows, curved = work.surfaces(work.solve()), 0, {}
     if continuity != "G0" and any(j.smooth for j in joins):
         ratios = _mirror_ratios(work, joins, chords, surfaces)
         crossings = _crossings(patches, joins, edges)
@@ -228,10 +244,10 @@ def fair_patches(patches, joins, *, continuity="G1"):
         if crossings:
             ratios = _straightened(ratios, crossings)
             lines = _line_rows(work, joins, crossings, ratios, curved)
-            work = _Patchwork(patches, spaces,
+            work = _Patchwork(patches, spaces, joins,
                               _held_rows(patches, edges, _solved_edges(edges, lines)), lifted)
         c, d = _condition_rows(work, joins, chords, ratios, curved)
-        surfaces, rows = work.surfaces(_joint(work, c, d)), c.shape[0]
+        surfaces, rows = work.surfaces(work.solve(c, d)), c.shape[0]
     return JointResult(surfaces, joins, dropped, rows, [joins[k] for k in sorted(curved)])
 
 
@@ -727,11 +743,17 @@ def _edges(patches, joins, spaces, chords, vertices, lifted):
 
 
 def _held_rows(patches, edges, poles):
-    """``{patch: {side: border poles in the patch's own along order}}`` of every join,
-    from the edges' ``poles`` (root order)."""
+    """``{patch: {side: held border poles in the patch's own along order}}`` of every
+    join, from the edges' ``poles`` (root order), NaN where not held: next to a kept
+    patch the whole border; between two solved patches the ends (at the vertices) and
+    the poles next to them (the end tangents), the other border poles being unknowns
+    the two patches share (:class:`_Patchwork`)."""
     held = {}
     for edge, x in zip(edges, poles):
         join = edge.join
+        if not (patches[join.a].kept or patches[join.b].kept):
+            x = x.copy()
+            x[2:-2] = np.nan
         for index, side in _join_sides(join):
             if not patches[index].kept:
                 held.setdefault(index, {})[side] = x[::-1] if edge.flips[index, side] else x
@@ -843,90 +865,117 @@ def _row_matrix(rows, count):
 
 # -- patch solves --------------------------------------------------------------------------
 class _Patchwork:
-    """The free poles of every solved patch, numbered together, and each patch's
-    held-row net: what the per-patch (G0) and joint (G1) solves share."""
+    r"""The joint projection's unknowns: every pole of the solved patches is a *slot*;
+    the held slots (:func:`_held_rows`) carry their values :math:`h`, and the other slots
+    of each class tied by the joins (a shared border pole and its twin in the other patch)
+    are one unknown: slots :math:`= P x + h` with :math:`P` 0/1.  The projection's
+    normal equations over the unknowns are :math:`P^T A P\, x = P^T (b - A h)`,
+    :math:`A = \mathrm{diag}_k(G_{u,k}\otimes G_{v,k})`,
+    :math:`b_k = \mathrm{vec}(E_{u,k} C_k E_{v,k}^T)`: what the G0 and the joint (G1, G2)
+    solves share."""
 
-    def __init__(self, patches, spaces, held, lifted):
+    def __init__(self, patches, spaces, joins, held, lifted):
         self.patches, self.spaces, self.lifted = patches, spaces, lifted
         self.dimension = 4 if lifted else 3
-        self.nets, self.position, self.blocks, self.rhs = {}, {}, [], []
-        offset = 0
+        self.slots = {}        # patch: slot number of its pole (0, 0); nets row-major
+        size = 0
         for index, patch in enumerate(patches):
-            if patch.kept:
+            if not patch.kept:
+                self.slots[index] = size
+                size += spaces[index][0].dimension * spaces[index][1].dimension
+        values = np.full((size, self.dimension), np.nan)
+        for index, sides in held.items():
+            for side, row in sides.items():
+                known = ~np.isnan(row[:, 0])
+                values[self._side_slots(index, side)[known]] = row[known]
+        self.basis, self.held = shared_basis(self._ties(joins), values)
+        self.count = self.basis.shape[1]
+        self.column = np.full(size, -1)
+        rows, columns = self.basis.nonzero()
+        self.column[rows] = columns
+        gram, moments = self._projection()
+        self.normal = (self.basis.T @ gram @ self.basis).tocsc()
+        self.rhs = self.basis.T @ (moments - gram @ self.held)
+
+    def _side_slots(self, index, side):
+        """Slots of a side's poles in the patch's own along order."""
+        ku, kv = (s.dimension for s in self.spaces[index])
+        grid = self.slots[index] + np.arange(ku * kv).reshape(ku, kv)
+        return grid[_end(side)] if side[0] == "u" else grid[:, _end(side)]
+
+    def _ties(self, joins):
+        """Pairs of slots one pole apart across each join between two solved patches: a
+        side's k-th pole and its twin (the chords give both one space along the join)."""
+        pairs = []
+        for join in joins:
+            if self.patches[join.a].kept or self.patches[join.b].kept:
                 continue
-            net, mask = _held_net(tuple(s.dimension for s in spaces[index]),
-                                  held.get(index, {}), self.dimension)
-            block, rhs, rows, cols = _free_system(_net(patch.source, lifted), patch.source,
-                                                  spaces[index], net, mask)
-            position = -np.ones(mask.shape, dtype=int)
-            position[np.ix_(rows, cols)] = offset + np.arange(len(rows) * len(cols)).reshape(
-                len(rows), len(cols))
-            offset += len(rows) * len(cols)
-            self.nets[index], self.position[index] = net, position
-            self.blocks.append(block)
-            self.rhs.append(rhs.reshape(-1, self.dimension))
-        self.count = offset
+            a, b = (self._side_slots(i, s) for i, s in _join_sides(join))
+            pairs += zip(a, b[::-1] if join.reversed else b)
+        return pairs
+
+    def _projection(self):
+        """:math:`A` over the slots and :math:`b` (one column per coordinate)."""
+        blocks, moments = [], []
+        for index in self.slots:
+            source, (tu, tv) = self.patches[index].source, self.spaces[index]
+            blocks.append(sp.kron(gram_matrix(tu), gram_matrix(tv)))
+            moments.append(np.einsum("ia,abd,jb->ijd", gram_matrix(tu, source.u_space).toarray(),
+                                     _net(source, self.lifted),
+                                     gram_matrix(tv, source.v_space).toarray())
+                           .reshape(-1, self.dimension))
+        return sp.block_diag(blocks, format="csr"), np.concatenate(moments)
+
+    def solve(self, c=None, d=None):
+        r"""The unknowns of the projection (:math:`C x = d` rows: :func:`_kkt_solve`)."""
+        if c is None or not c.shape[0]:
+            return spla.splu(self.normal).solve(self.rhs) if self.count else self.rhs
+        return _kkt_solve(self.normal, c, self.rhs, d)
 
     def surfaces(self, free):
-        """Every patch's surface with the free poles ``free`` (count, dimension) filled
-        in; rational where the system is homogeneous."""
+        """Every patch's surface with the unknowns ``free`` (count, dimension); rational
+        where the system is homogeneous."""
+        slots = self.basis @ free + self.held
         out = []
         for index, patch in enumerate(self.patches):
             if patch.kept:
                 out.append(patch.source)
                 continue
-            net, position = self.nets[index].copy(), self.position[index]
-            inside = position >= 0
-            net[inside] = free[position[inside]]
-            out.append(_from_net(net, self.spaces[index], self.lifted))
+            ku, kv = (s.dimension for s in self.spaces[index])
+            start = self.slots[index]
+            out.append(_from_net(slots[start:start + ku * kv].reshape(ku, kv, -1),
+                                 self.spaces[index], self.lifted))
         return out
 
     def pole(self, index, i, j):
-        """``(position, value)`` of pole (i, j) of a solved patch: a free pole's number
+        """``(position, value)`` of pole (i, j) of a solved patch: its unknown's number
         and ``None``, or ``-1`` and a held pole's value."""
-        k = self.position[index][i, j]
-        return (int(k), None) if k >= 0 else (-1, self.nets[index][i, j])
+        kv = self.spaces[index][1].dimension
+        slot = self.slots[index] + (i % self.spaces[index][0].dimension) * kv + j % kv
+        k = int(self.column[slot])
+        return (k, None) if k >= 0 else (-1, self.held[slot])
 
 
-def _held_net(shape, held, dimension):
-    """Net with the held rows set (NaN elsewhere) and the mask of held poles."""
-    ku, kv = shape
-    net = np.full((ku, kv, dimension), np.nan)
-    for side, row in held.items():
-        if side[0] == "u":
-            net[_end(side)] = row
-        else:
-            net[:, _end(side)] = row
-    return net, ~np.isnan(net[..., 0])
-
-
-def _free_system(source_net, source, spaces, net, mask):
-    r"""The L2 projection's system on the free poles, with the held ones moved right:
-    :math:`(G_u\otimes G_v)_{FF}` as factors ``(A_u, A_v)`` of the free rows and columns,
-    and :math:`r_F = (E_u C_S E_v^T - G_u X_H G_v^T)_F`."""
-    tu, tv = spaces
-    gu, gv = gram_matrix(tu).toarray(), gram_matrix(tv).toarray()
-    moments = np.einsum("ia,abd,jb->ijd", gram_matrix(tu, source.u_space).toarray(),
-                        source_net, gram_matrix(tv, source.v_space).toarray())
-    rows = np.flatnonzero(~mask.all(axis=1))
-    cols = np.flatnonzero(~mask.all(axis=0))
-    known = np.where(mask[..., None], net, 0.0)
-    rhs = (moments - np.einsum("ia,abd,jb->ijd", gu, known, gv))[np.ix_(rows, cols)]
-    return (gu[np.ix_(rows, rows)], gv[np.ix_(cols, cols)]), rhs, rows, cols
-
-
-def _separate(work):
-    """Free poles of every patch solved on its own (G0): banded solves per direction."""
-    free = np.empty((work.count, work.dimension))
-    start = 0
-    for (a_u, a_v), rhs in zip(work.blocks, work.rhs):
-        size = rhs.shape[0]
-        if size:
-            factors = (BandedSPD(sp.csr_matrix(a)) for a in (a_u, a_v))
-            net = rhs.reshape(a_u.shape[0], a_v.shape[0], work.dimension)
-            free[start:start + size] = kron_solve(*factors, net).reshape(-1, work.dimension)
-        start += size
-    return free
+def shared_basis(ties, values):
+    """``(P, h)``: the classes of slots tied by ``ties`` (pairs of slot indices), each
+    one unknown (a column of ``P``, 0/1) unless it holds a held slot (``values`` not NaN
+    there, one per class at most): then its slots take that value in ``h``, and the
+    slots are :math:`P x + h`."""
+    size = values.shape[0]
+    pairs = np.array(ties, dtype=int).reshape(-1, 2)
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(size, size))
+    count, label = connected_components(graph, directed=False)
+    anchor = np.full(count, -1)
+    fixed = np.flatnonzero(~np.isnan(values[:, 0]))
+    anchor[label[fixed]] = fixed
+    held = np.zeros_like(values)
+    on_held = anchor[label] >= 0
+    held[on_held] = values[anchor[label[on_held]]]
+    free = np.flatnonzero(~on_held)
+    _, column = np.unique(label[free], return_inverse=True)
+    basis = sp.csr_matrix((np.ones(free.size), (free, column)),
+                          shape=(size, int(column.max()) + 1 if free.size else 0))
+    return basis, held
 
 
 # -- G1 and G2: conditions on the rows next to a join ----------------------------------
@@ -1048,11 +1097,12 @@ def _condition_rows(work, joins, chords, ratios, curved):
     differences match (G2), at the two poles next to an end only where that end is a
     crossing held in G2 all round.  A G1 row that would
     close a cycle of rows around a vertex other than a crossing (module notes, step 6)
-    is left out: each row ties its one or two free inner poles, a row with one to the
-    held poles.  Returns the sparse matrix over the free poles and the right-hand sides
-    ``(rows, dimension)`` from held poles."""
+    is left out: each row ties its one or two unknown inner poles, a row with one to
+    the held poles (a row whose inner poles are all held enters: it fixes only its
+    border poles).  Returns the sparse matrix over the unknowns (:class:`_Patchwork`)
+    and the right-hand sides ``(rows, dimension)`` from held poles."""
     rows = []
-    linked = UnionFind()   # free inner poles (and -1, the held ones) tied by a G1 row
+    linked = UnionFind()   # unknown inner poles (and -1, the held ones) tied by a G1 row
     for k, join in enumerate(joins):
         if not join.smooth:
             continue
@@ -1063,38 +1113,32 @@ def _condition_rows(work, joins, chords, ratios, curved):
             for i in range(along):                  # poles along the join
                 if order and not ((i >= 2 or curved[k][0]) and (i < along - 2 or curved[k][1])):
                     continue
-                entries, known = _condition_row(work, sides, weights, i)
-                if entries and (order or linked.tie(*([e[0] for e in entries] + [-1])[:2])
-                                is None):
+                entries, inner, known = _condition_row(work, sides, weights, i)
+                if entries and (order or not inner
+                                or linked.tie(*(inner + [-1])[:2]) is None):
                     rows.append((entries, known))
     return (_row_matrix(rows, work.count),
             np.array([value for _, value in rows]).reshape(-1, work.dimension))
 
 
 def _condition_row(work, sides, weights, i):
-    """Free-pole entries and the known right-hand side of one condition at pole ``i``
+    """Entries over the unknowns, the unknowns among the inner poles (rows from the
+    border's next on) and the known right-hand side of one condition at pole ``i``
     along a join."""
-    entries, known = [], np.zeros(work.dimension)
+    entries, inner, known = [], [], np.zeros(work.dimension)
     for (index, rows), coefficients in zip(sides, weights):
         if isinstance(rows, np.ndarray):       # a kept patch: its rows are known
             known -= np.asarray(coefficients) @ rows[:len(coefficients), i]
             continue
-        for pole, c in zip(rows[i], coefficients):
+        for k, (pole, c) in enumerate(zip(rows[i], coefficients)):
             position, value = work.pole(index, *pole)
-            if position >= 0:
-                entries.append((position, c))
-            else:
+            if position < 0:
                 known -= c * value
-    return entries, known
-
-
-def _joint(work, c, d):
-    r"""Free poles of the joint projection under :math:`C x = d`, :math:`A`
-    block-diagonal over the patches, one factorization for the three coordinates
-    (:func:`_kkt_solve`)."""
-    a = sp.block_diag([sp.kron(sp.csr_matrix(a_u), sp.csr_matrix(a_v))
-                       for a_u, a_v in work.blocks], format="csc")
-    return _kkt_solve(a, c, np.concatenate(work.rhs), d)
+                continue
+            entries.append((position, c))
+            if k:
+                inner.append(position)
+    return entries, inner, known
 
 
 def _kkt_solve(a, c, b, d):

@@ -10,8 +10,8 @@ with :func:`~cq_fairing.core.joins.fair_patches`:
 * a **border join** (:func:`border_joins`: both faces B-spline patches, rational ones
   solved in homogeneous coordinates, meeting along whole sides of their parameter
   rectangles, whose borders agree at equal normalised parameters within
-  :data:`SOURCE_GAP` times the tolerance) is faired once and both faces take its border
-  pole for pole: closed to round-off, and G1 across a smooth join (with
+  :data:`SOURCE_GAP` times the tolerance) is projected with both faces, which share its
+  border pole for pole: closed to round-off, and G1 across a smooth join (with
   ``continuity="G2"`` also G2 where the sources are curvature-continuous across it,
   :func:`~cq_fairing.core.joins.holds_curvature`);
 * every other side of a face on a join (a neighbour parametrized differently along it,

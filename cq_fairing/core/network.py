@@ -74,7 +74,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
-from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio
+from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio, shared_basis
 from .patch_grid import insert_knot
 from .spaces import SplineSpace
 
@@ -406,23 +406,9 @@ class _System:
 
     def _eliminated(self, ties):
         """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
-        indices, a forest: each joins two classes, at most one kept pole per class)."""
-        size = int(self.offsets[-1])
-        pairs = np.array(ties, dtype=int).reshape(-1, 2)
-        graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
-                              shape=(size, size))
-        count, label = connected_components(graph, directed=False)
-        anchor = np.full(count, -1)
-        kept = np.flatnonzero(self.fixed)
-        anchor[label[kept]] = kept
-        held = np.zeros((size, 3))
-        on_kept = anchor[label] >= 0
-        held[on_kept] = self.source[anchor[label[on_kept]]]
-        free = np.flatnonzero(~on_kept)
-        classes, column = np.unique(label[free], return_inverse=True)
-        basis = sp.csr_matrix((np.ones(free.size), (free, column)),
-                              shape=(size, classes.size))
-        return basis, held
+        indices, a forest: each joins two classes, at most one kept pole per class):
+        :func:`~cq_fairing.core.joins.shared_basis`."""
+        return shared_basis(ties, np.where(self.fixed[:, None], self.source, np.nan))
 
     def _kkt(self, mirrored):
         r"""The per-coordinate KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and

@@ -5,8 +5,8 @@ joins of the source (a shell's shared edges, a compound's coincident boundaries:
 :func:`~cq_fairing.occ.adjacency.find_joins`) are held by the core: patch grids that
 form whole parts of the model are merged and faired as one surface
 (:mod:`cq_fairing.occ.grids`), the faces faired alone are projected again together
-(:func:`~cq_fairing.core.joint_projection.project_jointly`: border joins faired once and
-shared pole for pole, G1 across the smooth ones, every other side of a face on a join
+(:func:`~cq_fairing.core.joint_projection.project_jointly`: border joins shared pole for
+pole by both faces' projection, G1 across the smooth ones, every other side of a face on a join
 pinned to its source), and the faces already at their coarsest are faired together by
 energy (:mod:`cq_fairing.occ.networks`).  With the energy method the networks take the faces
 faired alone too, faired again together by energy from their sources, and a face with

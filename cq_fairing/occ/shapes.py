@@ -185,7 +185,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         How faces that meet stay together (default ``"smooth"``).  ``"smooth"``,
         ``"curvature"`` and ``"closed"`` fair the faces that meet along whole borders of
         their parameter rectangles together (:mod:`cq_fairing.occ.joint`): each shared
-        border is faired once and both faces take it exactly (closed to round-off), and
+        border is one curve, the projection of both faces (closed to round-off), and
         with ``"smooth"`` the faces keep one tangent plane across the joins that were
         smooth in the source (normal angle below ``angle_tol``); a crease stays a
         crease.  ``"curvature"`` also holds the normal curvature (G2) across the smooth

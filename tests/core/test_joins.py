@@ -23,7 +23,7 @@ from cq_fairing.core.joins import (
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
-from .naive import basis_matrix
+from .naive import basis_matrix, dense_gram
 
 SAMPLES = np.linspace(0.0, 1.0, 101)
 
@@ -390,3 +390,30 @@ def test_a_source_is_curvature_continuous_where_both_sides_agree_at_the_same_pla
     ka, kb = cross_curvatures([a, b], join, t)
     assert np.abs(ka - kb).max() > 0.1 * np.abs(ka).max()
     assert holds_curvature([a, b], join)
+
+
+def _projection_residual(surface, source):
+    r"""The gradient of :math:`\|S - S_{source}\|_{L^2}^2 / 2` over the poles of
+    ``surface``, :math:`G_u X G_v^T - G_{uS} C G_{vS}^T` (dense Gauss grams, naive)."""
+    def grams(axis):
+        knots = [(s.u_knots, s.u_degree) if axis == 0 else (s.v_knots, s.v_degree)
+                 for s in (surface, source)]
+        return dense_gram(*knots[0], *knots[0]), dense_gram(*knots[0], *knots[1])
+
+    (gu, eu), (gv, ev) = grams(0), grams(1)
+    return (np.einsum("ia,abd,jb->ijd", gu, surface.poles, gv)
+            - np.einsum("ia,abd,jb->ijd", eu, source.poles, ev))
+
+
+def test_a_shared_border_is_the_least_squares_compromise_of_both_patches():
+    """Moving a shared border pole (not one next to a vertex) moves both patches: the
+    closed (G0) projection's error gradients over it from the two patches cancel, while
+    each alone is far from zero (each source pulls its own way)."""
+    patches, joins = _grid()
+    result = fair_patches(_targets(patches), joins, continuity="G0")
+    join = joins[0]                      # patch 0 side u1 is patch 1 side u1, same way
+    first, second = (_projection_residual(result.surfaces[i], patches[i])[-1, 2:-2]
+                     for i in (join.a, join.b))
+    assert np.linalg.norm(first + second, axis=1).max() \
+        <= 1e-8 * np.linalg.norm(first, axis=1).min()
+    assert np.linalg.norm(first, axis=1).min() > 1e-7
