@@ -915,7 +915,10 @@ class _Patchwork:
         return pairs
 
     def _projection(self):
-        """:math:`A` over the slots and :math:`b` (one column per coordinate)."""
+        """:math:`A` over the slots and :math:`b` (one column per coordinate); empty
+        where every patch is kept."""
+        if not self.slots:
+            return sp.csr_matrix((0, 0)), np.zeros((0, self.dimension))
         blocks, moments = [], []
         for index in self.slots:
             source, (tu, tv) = self.patches[index].source, self.spaces[index]

@@ -251,6 +251,14 @@ def test_a_kept_patch_constrains_its_neighbours_exactly(kept):
         assert np.degrees(np.arccos(cos[far])).max() < 1e-5
 
 
+@pytest.mark.parametrize("continuity", ["G0", "G1"])
+def test_patches_all_kept_come_back_as_they_are(continuity):
+    """With every patch kept there is nothing to solve: the sources come back."""
+    patches, joins = _grid()
+    result = fair_patches([JointPatch(p) for p in patches], joins, continuity=continuity)
+    assert all(s is p for s, p in zip(result.surfaces, patches))
+
+
 @given(st.sampled_from(["u0", "u1", "v0", "v1"]), st.integers(1, 4))
 def test_a_pinned_side_keeps_the_source_border_and_tangent_plane(side, n):
     """A side joined to its pinning patch keeps the source's border curve and normals
