@@ -47,7 +47,7 @@ PROPERTIES = (
      "A join whose source normals differ by less than this all along it is smooth, "
      "else a crease", False),
     ("App::PropertyEnumeration", "Search", "Fairing",
-     "Tolerance search: linear (fast, seed's iteration), guaranteed (fewest poles), polyfit",
+     "Tolerance search: linear (fast, the linear-hypothesis iteration of ARWFA), guaranteed (fewest poles), polyfit",
      False),
     ("App::PropertyEnumeration", "Measure", "Fairing",
      "Deviation used by the search: parametric (upper bound, fast) or geometric", False),

@@ -257,7 +257,7 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
                      measure="parametric", objective="compact", borders="auto", window=None):
     """Fair a core surface by tolerance or by target control points (core call only).
 
-    ``search`` is the accuracy-control strategy of the core (``linear``: the seed's
+    ``search`` is the accuracy-control strategy of the core (``linear``: ARWFA's
     hypothesis iteration, a few evaluations; ``guaranteed``: the fewest poles in total,
     slower; ``polyfit``) and ``measure`` its deviation (``parametric`` is an upper bound of
     the ``geometric`` one, so the tolerance holds either way, and is about 3x faster);

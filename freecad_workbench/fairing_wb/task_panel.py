@@ -163,7 +163,7 @@ class FairSurfacePanel:
         self.boundary.setEnabled(self.kind == "Face")
         self.search = _row(layout, "Search:", QtWidgets.QComboBox(), "fairing_search")
         self.search.addItems(list(make.SEARCHES))
-        self.search.setToolTip("linear: fast hypothesis iteration (seed); guaranteed: fewest "
+        self.search.setToolTip("linear: fast linear-hypothesis iteration (ARWFA); guaranteed: fewest "
                                "control points, slower")
         self.measure = _row(layout, "Measure:", QtWidgets.QComboBox(), "fairing_measure")
         self.measure.addItems(list(make.MEASURES))
