@@ -149,6 +149,21 @@ def test_with_the_energy_method_the_faces_are_the_same_network(doc):
     _assert_equal_to(results, _order(obj, example.patches), network_surfaces(TOL))
 
 
+def test_with_the_energy_method_faces_no_network_moves_are_kept_with_the_reason(doc):
+    """At 0.001 mm energy still moves each face of the L alone, but with the joins held
+    no network fits that tolerance: the faces are kept as they were, and say why."""
+    obj = _sewn(doc, patch_network().patches, "L")
+    alone, held = (make.fair_elements(obj, [f"Face{i + 1}" for i in range(3)],
+                                      dict(SETTINGS, method="energy", tolerance=0.001),
+                                      FACE_SETTINGS, joins=joins,
+                                      angle_tolerance=NETWORK_ANGLE)
+                   for joins in ("free", "smooth"))
+    assert all(0 < r.max_deviation <= 0.001 for r in alone)
+    assert all(r.poles_after == (4, 4) and r.max_deviation == 0.0 for r in held)
+    assert all("no network of faces moved it" in r.note for r in held)
+    assert held.joins.summary()["network_faces"] == 0
+
+
 def test_faces_meeting_at_a_t_junction_are_faired_as_pieces(doc):
     """The sewn bricks of ``tests/core/test_network_pieces`` (one wide one-span patch
     under two narrow ones: Part's sewing splits its top edge at the T-junction): the wide
