@@ -505,8 +505,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     document access, so it may run in a worker thread.
 
     With several faces in target mode, each face is clamped to its own control-point
-    counts; with several faces in tolerance mode, a face with no coarser net within the
-    tolerance is kept as it is (:func:`_kept`) instead of failing the others.  ``settings``
+    counts.  In tolerance mode a face with no coarser net within the tolerance is kept as
+    it is (:func:`_kept`), with the reason, as ``cq-fairing fair`` keeps it: one face or
+    several, the others are faired.  ``settings``
     and ``face_settings`` as in :func:`fair_elements`.
 
     Several faces of one shape are faired alone first; in tolerance mode and with
@@ -553,8 +554,6 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                 results.append(fair_face(element, **face_settings,
                                          **{**settings, "target": own}))
             except cf.ToleranceNotMetError as error:
-                if len(named) == 1:
-                    raise
                 results.append(_kept(element, sub, error))
         else:
             own = None if target is None else target[0]
