@@ -37,9 +37,10 @@ __all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK", "UNMOVED"]
 
 RETRIES = 2
 SHRINK = 0.7
-# why no network moves a face: what the backends' reports say
-UNMOVED = ("its joins would hold it over its tolerance or turn more than the source's, "
-           "or no network can fair across them")
+# why the energy method keeps a face with joins: what the backends' reports say
+UNMOVED = ("no network of faces moved it (its joins would hold it over its tolerance or "
+           "turn more than the source's, or no network can fair across them), and energy "
+           "fairs a face alone only with its borders free")
 
 
 @dataclass(frozen=True)

@@ -6,15 +6,14 @@ joins of the source (a shell's shared edges, a compound's coincident boundaries:
 form whole parts of the model are merged and faired as one surface
 (:mod:`cq_fairing.occ.grids`), the faces faired alone are projected again together
 (:func:`~cq_fairing.core.joint_projection.project_jointly`: border joins shared pole for
-pole by both faces' projection, G1 across the smooth ones, every other side of a face on a join
-pinned to its source), and the faces already at their coarsest are faired together by
-energy (:mod:`cq_fairing.occ.networks`).  With the energy method the networks take the faces
-faired alone too, faired again together by energy from their sources, and a face with
-joins that no network moved is kept.
-This module supplies the OCCT side: the faces
-read as B-spline patches, each face's target, and OCCT's two-sided deviation of each
-solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`); it installs the
-results and names, in each kept face's report, the joins that bind it.
+pole by both faces' projection, G1 across the smooth ones, every other side of a face on
+a join pinned to its source), and the faces already at their coarsest are faired
+together by energy (:mod:`cq_fairing.occ.networks`).  With the energy method the
+networks take the faces faired alone too, faired again together by energy from their
+sources, and a face with joins that no network moved is kept.  This module supplies the
+OCCT side: the faces read as B-spline patches, each face's target, and OCCT's two-sided
+deviation of each solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`);
+it installs the results and names, in each kept face's report, the joins that bind it.
 """
 
 from dataclasses import dataclass, field
@@ -132,10 +131,8 @@ def _energy_networks(job, adjacency, polynomial, continuity, gridded):
         if joins:
             neighbours = sorted({f + 1 for join in joins for f in join.faces if f != face})
             job.reports[face] = job.kept(face, "unchanged", (
-                f"with its joins (with faces {neighbours}) held, no network of faces moved "
-                f"it ({UNMOVED}), and energy fairs a face alone only with its borders "
-                "free: kept as it was, and its neighbours close onto it (joins='free' "
-                "fairs it alone)"))
+                f"with its joins (with faces {neighbours}) held, {UNMOVED}: kept as it "
+                "was, and its neighbours close onto it (joins='free' fairs it alone)"))
     return networks
 
 

@@ -65,16 +65,14 @@ from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
 
 from . import analysis, conversion
 
-__all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins", "JoinReport", "find_joins",
-           "measure_joins", "hold_joins", "check_joins"]
+__all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins",
+           "JoinReport", "find_joins", "measure_joins", "hold_joins", "check_joins"]
 
 SAMPLES = 24              # points measured along each join
 TURNED = (f"with its joins held its smooth joins would turn more than the source's angle "
           f"+ {ANGLE_SLACK:g} deg after {REFINEMENTS} refinements; its neighbours close "
           "onto it")
-UNMOVED_BY_NETWORKS = (f"with its joins held, no network of faces moved it ({UNMOVED}), and "
-                       "energy fairs a face alone only with its borders free; its "
-                       "neighbours close onto it")
+UNMOVED_BY_NETWORKS = f"with its joins held, {UNMOVED}; its neighbours close onto it"
 
 
 @dataclass(frozen=True)
