@@ -17,9 +17,13 @@ along eight lines across the joins, against 24 face by face and 82 in the source
 
 Each piece is then checked against its own face by the backend's two-sided measure
 (``check``: OCCT's in the OCP layer, the workbench's through FreeCAD's Part module).
-When a piece is over its face's tolerance the block is faired again at :data:`SHRINK`
-times the tolerance, :data:`RETRIES` times at most; a block that still misses is left to
-the face-by-face and joint passes.  The merged surface's border rows are averages of the
+When a piece is over its face's tolerance (the search's measure bounds the distance on
+its samples only, the check measures densely and both ways), the merged target gets
+more spans in each direction it may coarsen (:func:`grown_scales`: by the miss, at
+least one), :data:`RETRIES` times at most; a block that still misses is left to the
+face-by-face and joint passes.  Growing the accepted target keeps the fairing across
+the patches when a check misses by little, where a new search at a smaller tolerance
+can end on a much larger target (the search is not monotone).  The merged surface's border rows are averages of the
 patches' border rows, which lie within ``merge_gap(tol)`` of each other.
 
 Patches whose parametrizations do not match across their joins (the speed of u jumps
@@ -30,6 +34,7 @@ keep such a block's pieces on their faces, or leave the block to the other passe
 This module imports numpy only (and the core).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,13 +45,14 @@ from .joins import BorderJoin
 from .joint_projection import SOURCE_GAP, runs_reversed
 from .patch_grid import merge_grid, split_grid
 from .patch_layout import find_grids
-from .scale_search import SurfaceSampler, search_scales, target_degrees
+from .plans import target_space
+from .scale_search import SurfaceSampler, max_scales, search_scales, target_degrees
 
-__all__ = ["fair_grids", "fair_merged", "source_merge_gap", "GridFairing", "RETRIES",
-           "SHRINK", "SAMPLES"]
+__all__ = ["fair_grids", "fair_merged", "grown_scales", "source_merge_gap", "GridFairing",
+           "RETRIES", "GROWTH", "SAMPLES"]
 
 RETRIES = 2
-SHRINK = 0.5
+GROWTH = 2.0   # a retry at most multiplies a direction's spans by this
 SAMPLES = 17   # same-parameter samples per patch and direction in the merged search
 
 
@@ -64,8 +70,9 @@ class GridFairing:
         The source patches merged.
     faired : BSplineSurface
         The merged surface faired, before it was cut.
-    tolerance : float
-        The tolerance the merged surface was faired to.
+    scales : (int or None, int or None)
+        The faired surface's spans per direction (``None``: the merged surface's own
+        space kept in that direction).
     surfaces : dict
         ``{face: BSplineSurface}``: each face's piece, on its source's parameter domain
         and in its directions, as checked.
@@ -75,7 +82,7 @@ class GridFairing:
     shape: tuple
     merged: object
     faired: object
-    tolerance: float
+    scales: tuple
     surfaces: dict
 
 
@@ -163,14 +170,11 @@ def _fair_block(block, cell_faces, sources, tolerances, check, target_degree, me
             for column, faces in zip(block.cells, cell_faces)]
     try:
         merged = merge_grid(grid, tol=merge_gap(tol))
-    except FairingError:
+        fit = _MergedFit(merged, target_degree)
+        scales, faired = fit.search(tol)
+    except (FairingError, ToleranceNotMetError):
         return None
-    goal = tol
     for _ in range(RETRIES + 1):
-        try:
-            faired = fair_merged(merged, goal, target_degree)
-        except ToleranceNotMetError:
-            return None
         pieces = split_grid(merged, faired)
         surfaces = {f: collapsed_kept(sources[f], cell.from_grid(pieces[i][j]))
                     for i, (column, faces) in enumerate(zip(block.cells, cell_faces))
@@ -178,9 +182,51 @@ def _fair_block(block, cell_faces, sources, tolerances, check, target_degree, me
         deviations = {f: check(f, surface) for f, surface in surfaces.items()}
         if all(deviations[f] <= tolerances[f] for f in surfaces):
             return GridFairing([f for column in cell_faces for f in column], block.shape,
-                               merged.surface, faired, goal, surfaces)
-        goal *= SHRINK
+                               merged.surface, faired, scales, surfaces)
+        miss = max(deviations[f] / tolerances[f] for f in surfaces)
+        grown = _within(fit, grown_scales(scales, miss, fit.top, fit.degrees), tol)
+        if grown is None:
+            return None
+        scales, faired = grown
     return None
+
+
+def _within(fit, candidates, tol):
+    """The first of ``candidates`` (scales) whose pinned projection is within ``tol`` by
+    the search's own measure: ``(scales, faired)``, or ``None``."""
+    for scales in candidates:
+        faired = fit.project(scales)
+        if fit.distance(faired) <= tol:
+            return scales, faired
+    return None
+
+
+def grown_scales(scales, miss, top, degrees):
+    r"""The targets to try after a target's pieces missed their check by the ratio
+    ``miss`` (deviation over tolerance, > 1), fewest poles first: each direction that
+    can grow alone, then all together.  A direction grows to :math:`\min(n_{max},
+    \max(n + 1, \lceil n \min(g, \text{miss}^{1/(p+1)}) \rceil))` spans, :math:`g` =
+    :data:`GROWTH` (the distance of a degree-:math:`p` projection falls about as
+    :math:`h^{p+1}` with the span :math:`h`); one kept (``None``) or at its largest
+    ``top`` stays.  Near the noise of a source the distance is not monotone in the
+    spans, hence the several targets."""
+    grown = []
+    for n, largest, degree in zip(scales, top, degrees):
+        if n is None or largest is None or n >= largest:
+            grown.append(n)
+            continue
+        factor = min(GROWTH, miss ** (1.0 / (degree + 1)))
+        grown.append(min(largest, max(n + 1, math.ceil(n * factor))))
+    alone = [tuple(g if k == axis else n for k, (n, g) in enumerate(zip(scales, grown)))
+             for axis in range(len(scales))]
+    candidates = {c for c in alone + [tuple(grown)] if c != tuple(scales)}
+    return sorted(candidates, key=lambda c: _poles(c, top, degrees))
+
+
+def _poles(scales, top, degrees):
+    """Poles of a target (a kept direction counted at its largest scale)."""
+    return math.prod((top_n if n is None else n) + degree
+                     for n, top_n, degree in zip(scales, top, degrees) if top_n is not None)
 
 
 def fair_merged(merged, tol, target_degree=None):
@@ -217,27 +263,54 @@ def fair_merged(merged, tol, target_degree=None):
     ToleranceNotMetError
         No target is within ``tol``.
     """
-    surface = merged.surface
-    u, v = (_samples(breaks) for breaks in (merged.u_breaks, merged.v_breaks))
-    sampler = SurfaceSampler((u, v, np.ones((u.size, v.size), dtype=bool)), surface)
-    lines = [(merged.u_breaks, v), (u, merged.v_breaks)]
-    on_lines = [surface.evaluate_grid(a, b) for a, b in lines]
+    return _MergedFit(merged, target_degree).search(tol)[1]
 
-    def distance(faired):
-        if faired.folds_against(surface, u, v).any():
+
+class _MergedFit:
+    """The targets of a merged grid (:func:`fair_merged`): the pinned projection onto
+    ``n`` spans per direction (:meth:`project`), its measure (:meth:`distance`) and the
+    search for the fewest poles within a tolerance (:meth:`search`)."""
+
+    def __init__(self, merged, target_degree):
+        surface = merged.surface
+        self.merged = merged
+        self.degrees = target_degrees(surface, target_degree)
+        self.top = max_scales(surface, self.degrees)
+        u, v = (_samples(breaks) for breaks in (merged.u_breaks, merged.v_breaks))
+        self.samples = (u, v)
+        self.sampler = SurfaceSampler((u, v, np.ones((u.size, v.size), dtype=bool)), surface)
+        self.lines = [(merged.u_breaks, v), (u, merged.v_breaks)]
+        self.on_lines = [surface.evaluate_grid(a, b) for a, b in self.lines]
+
+    def distance(self, faired):
+        """The larger of the same-parameter distance on the patch borders and the
+        distance to the tangent planes inside; infinite where ``faired`` folds."""
+        if faired.folds_against(self.merged.surface, *self.samples).any():
             return np.inf
         slide = max(float(np.linalg.norm(faired.evaluate_grid(a, b) - exact, axis=-1).max())
-                    for (a, b), exact in zip(lines, on_lines))
-        return max(slide, sampler.normal(faired))
+                    for (a, b), exact in zip(self.lines, self.on_lines))
+        return max(slide, self.sampler.normal(faired))
 
-    def projection(target_u, target_v):
-        return merged.pinned_projection(target_u or surface.u_space,
-                                        target_v or surface.v_space)
+    def project(self, scales):
+        """The pinned projection onto ``scales`` spans (``None`` keeps a direction)."""
+        spaces = [None if n is None else target_space(space, int(n), degree)
+                  for n, space, degree in zip(scales, (self.merged.surface.u_space,
+                                                       self.merged.surface.v_space),
+                                              self.degrees)]
+        return self._projection(*spaces)
 
-    keep = tuple(count == 1 for count in merged.shape)
-    _, faired, _, _ = search_scales(surface, tol, target_degrees(surface, target_degree),
-                                    distance, keep=keep, projection=projection)
-    return faired
+    def _projection(self, target_u, target_v):
+        surface = self.merged.surface
+        return self.merged.pinned_projection(target_u or surface.u_space,
+                                             target_v or surface.v_space)
+
+    def search(self, tol):
+        """``(scales, faired)`` of the fewest poles within ``tol`` by :meth:`distance`."""
+        keep = tuple(count == 1 for count in self.merged.shape)
+        scales, faired, _, _ = search_scales(self.merged.surface, tol, self.degrees,
+                                             self.distance, keep=keep,
+                                             projection=self._projection)
+        return scales, faired
 
 
 def _samples(breaks):

@@ -7,7 +7,7 @@ import numpy as np
 
 from cq_fairing.core.deviations import deviation
 from cq_fairing.core.examples import patch_grid, patch_network
-from cq_fairing.core.grid_fairing import RETRIES, SHRINK, fair_grids
+from cq_fairing.core.grid_fairing import RETRIES, fair_grids, grown_scales
 from cq_fairing.core.joint_projection import Join, JoinSide
 from cq_fairing.core.network_fairing import fair_networks
 from tests.core.patch_references import grid_pieces, network_surfaces
@@ -45,7 +45,7 @@ def test_a_grid_that_stands_alone_is_one_surface_cut_back():
     grids = fair_grids(sources, joins, joins, dict.fromkeys(sources, TOL),
                        _checker(sources, calls))
     assert len(grids) == 1 and sorted(grids[0].faces) == [0, 1, 2, 3]
-    assert sorted(grids[0].shape) == [2, 2] and grids[0].tolerance == TOL
+    assert sorted(grids[0].shape) == [2, 2]
     assert sorted(calls) == [0, 1, 2, 3]   # each piece checked once: within at once
     _assert_same(grids[0].surfaces, grid_pieces(TOL))
 
@@ -64,12 +64,15 @@ def test_a_grid_with_a_join_leading_out_is_left_to_the_other_steps():
     assert calls == []
 
 
-def test_a_grid_whose_pieces_miss_the_check_is_faired_again_tighter():
-    """A first round over the check: the block is faired again at SHRINK times the
-    tolerance, and kept when that round passes."""
+def test_a_grid_whose_pieces_miss_the_check_gets_a_finer_target():
+    """A first round over the check: the block's target grows (the miss is unbounded:
+    each direction's spans at most double, fewest poles first), and the block is kept
+    when that round passes."""
     example = patch_grid()
     sources = dict(enumerate(example.patches))
     joins, calls = _joins(example), []
+    (first,) = fair_grids(sources, joins, joins, dict.fromkeys(sources, TOL),
+                          _checker(sources, []))
     measure = _checker(sources, calls)
 
     def first_over(face, surface):
@@ -77,9 +80,21 @@ def test_a_grid_whose_pieces_miss_the_check_is_faired_again_tighter():
         return np.inf if calls.count(face) == 1 else value
 
     (grid,) = fair_grids(sources, joins, joins, dict.fromkeys(sources, TOL), first_over)
-    assert grid.tolerance == TOL * SHRINK
+    top = (first.merged.u_space.dimension - 3, first.merged.v_space.dimension - 3)
+    assert grid.scales in grown_scales(first.scales, np.inf, top, (3, 3))
+    assert np.prod(grid.faired.shape) > np.prod(first.faired.shape)
     assert sorted(calls) == [0, 0, 1, 1, 2, 2, 3, 3]
     assert all(deviation(sources[f], s).max <= TOL for f, s in grid.surfaces.items())
+
+
+def test_a_missed_target_grows_by_the_miss_fewest_poles_first():
+    """1 % over: one span more in each direction (1.01 ** (1 / 4) rounds up to the
+    next span), alone first; 16 times over: the spans double (16 ** (1 / 4) = 2, the
+    cap), capped by the largest scale; a kept direction stays."""
+    assert grown_scales((3, 4), 1.01, (20, 20), (3, 3)) == [(3, 5), (4, 4), (4, 5)]
+    assert grown_scales((3, 4), 16.0, (20, 6), (3, 3)) == [(3, 6), (6, 4), (6, 6)]
+    assert grown_scales((3, None), np.inf, (20, None), (3, 3)) == [(6, None)]
+    assert grown_scales((20, 6), 2.0, (20, 6), (3, 3)) == []
 
 
 def test_a_grid_always_over_the_check_is_left_after_its_retries():
