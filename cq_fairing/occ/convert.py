@@ -493,20 +493,25 @@ def settle_tolerances(shape, edges, before):
     coordinate magnitude of the edge's vertices: more than the rounding of 15 digits,
     far below any modelling tolerance.  One still within its former tolerance keeps it
     unchanged: the faired shape's tolerances are not raised where the geometry does not
-    need it.
+    need it.  Each edge and vertex is padded once, however many touched edges share it.
     """
     BRepLib.UpdateTolerances_s(shape, False)
     builder = BRep_Builder()
+    padded = TopTools_IndexedMapOfShape()   # each edge and vertex once, however often touched
     for edge in edges:
         vertices = (TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge))
         size = max(np.abs(_xyz(BRep_Tool.Pnt_s(v))).max() for v in vertices)
-        tolerance = BRep_Tool.Tolerance_s(edge)
-        if tolerance > before.of(edge):
-            builder.UpdateEdge(edge, _padded(tolerance, size))
-        for vertex in vertices:
-            tolerance = BRep_Tool.Tolerance_s(vertex)
-            if tolerance > before.of(vertex):
-                builder.UpdateVertex(vertex, _padded(tolerance, size))
+        for item in (edge, *vertices):
+            if padded.Contains(item):
+                continue
+            padded.Add(item)
+            tolerance = _tolerance(item)
+            if tolerance <= before.of(item):
+                continue
+            if item.ShapeType() == TopAbs_VERTEX:
+                builder.UpdateVertex(TopoDS.Vertex_s(item), _padded(tolerance, size))
+            else:
+                builder.UpdateEdge(TopoDS.Edge_s(item), _padded(tolerance, size))
 
 
 def _padded(tolerance, size):

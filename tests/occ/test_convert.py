@@ -4,11 +4,29 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from OCP.BRep import BRep_Tool
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepLib import BRepLib
 from OCP.BRepTools import BRepTools
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
+from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.errors import InvalidInputError, UnsupportedGeometryError
 from cq_fairing.occ import face_to_surface, list_faces, surface_to_face
+from cq_fairing.occ.convert import (
+    COORDINATE_MARGIN,
+    TEXT_MARGIN,
+    Tolerances,
+    finish_edges,
+    indexed_faces,
+    replace_surface,
+    settle_tolerances,
+    to_geom_surface,
+)
 from tests.occ.helpers import area, edges_of, faces_of, occ_points, uv_box_grid
 
 MODELS = ["terrain.brep", "IEA_15MW_CFD.stp", "impeller.igs", "testtoler.brep",
@@ -146,3 +164,40 @@ def test_located_face_round_trip():
     np.testing.assert_allclose(surface.evaluate_grid(u, v), occ_points(face, u, v), atol=1e-9)
     rebuilt = surface_to_face(surface, face)
     np.testing.assert_allclose(occ_points(rebuilt, u, v), occ_points(face, u, v), atol=1e-9)
+
+
+def test_settled_tolerances_pad_each_edge_and_vertex_once(real):
+    """A fuselage face moved 1e-5 off its edges' 3-D curves: the edges and their
+    vertices need larger tolerances.  Settled with every edge listed twice (a vertex is
+    shared by two edges of the face anyway), each tolerance is OCCT's own
+    (``BRepLib::UpdateTolerances`` on an identical copy) plus one margin at most."""
+    source = real("fuselage.brep")
+    surface, _ = face_to_surface(indexed_faces(source)[0])
+    moved = BSplineSurface(surface.poles + 1e-5, surface.u_knots, surface.v_knots,
+                           surface.u_degree, surface.v_degree)
+
+    def moved_copy():
+        copy = BRepBuilderAPI_Copy(source, True, False).Shape()
+        before = Tolerances(copy)
+        edges = replace_surface(indexed_faces(copy)[0], to_geom_surface(moved))
+        finish_edges(edges)
+        return copy, edges, before
+
+    def tolerances(shape):
+        items = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, TopAbs_EDGE, items)
+        TopExp.MapShapes_s(shape, TopAbs_VERTEX, items)
+        shapes = (items.FindKey(i) for i in range(1, items.Extent() + 1))
+        return np.array([BRep_Tool.Tolerance_s(TopoDS.Vertex_s(s))
+                         if s.ShapeType() == TopAbs_VERTEX
+                         else BRep_Tool.Tolerance_s(TopoDS.Edge_s(s)) for s in shapes])
+
+    exact, _, _ = moved_copy()
+    BRepLib.UpdateTolerances_s(exact, False)
+    settled, edges, before = moved_copy()
+    settle_tolerances(settled, edges + edges, before)
+    raw, padded = tolerances(exact), tolerances(settled)
+    size = np.abs(surface.poles).max() * 1.01
+    assert (padded > tolerances(source)).sum() >= 4   # the face's edges and corners rose
+    assert np.all(padded >= raw)
+    assert np.all(padded - raw <= TEXT_MARGIN * raw + COORDINATE_MARGIN * size)
