@@ -25,10 +25,14 @@ their angle is folded to :math:`\min(\alpha, 180^\circ - \alpha)`.
 A join is *smooth* when its largest source angle is below ``angle_tol`` degrees, else a
 *crease*.  :func:`measure_joins` measures the same joins on another shape with the same
 faces and edges (a faired copy), sample for sample, so that the faired angles and gaps
-can be compared with :attr:`Join.source_angles` point by point.
+can be compared with :attr:`Join.source_angles` point by point; :meth:`Adjacency.measure`
+measures a copy at the source's scale and keeps the source measure of each join between
+faces the copy left as they were.  All joins are measured at once: the points of each
+face are evaluated together and every projection is one row of one Gauss-Newton run.
 """
 
 from dataclasses import dataclass, field
+from itertools import compress
 
 import numpy as np
 from OCP.Bnd import Bnd_Box
@@ -104,6 +108,13 @@ class Adjacency:
         The smooth/crease threshold used, degrees.
     coincidence : float
         The distance within which loose boundaries were matched.
+    measures : list of JoinMeasure
+        Each join measured in the source, with its gap per sample.
+    samples : int
+        Points measured per join.
+    size : float
+        The source's bounding-box diagonal, the scale of the measure: a projection stops
+        at a step of :data:`NEWTON_STOP` times it.
     """
 
     joins: list
@@ -112,6 +123,9 @@ class Adjacency:
     free_edges: int = 0
     angle_tol: float = 1.0
     coincidence: float = 0.0
+    measures: list = field(default_factory=list)
+    samples: int = 24
+    size: float = 1.0
 
     def joins_of(self, face):
         """The joins with ``face`` (0-based index) on either side.
@@ -125,6 +139,43 @@ class Adjacency:
             raise InvalidInputError(
                 f"face must be a 0-based face index (int), got {face!r}; e.g. joins_of(3).")
         return [join for join in self.joins if face in join.faces]
+
+    def measure(self, shape, unchanged=()):
+        """The joins measured on ``shape``, a copy of the source, at the source's scale
+        (:attr:`size`), ``samples`` points each (:func:`measure_joins`).
+
+        Parameters
+        ----------
+        shape : TopoDS_Shape or cadquery.Shape
+            The source or a copy of it with the same faces and edges in the same order (a
+            faired copy made by :func:`~cq_fairing.occ.fair_shape`).
+        unchanged : iterable of int, optional
+            Faces of ``shape`` that are the source's own: the same surfaces, and where
+            they meet one another the same edges, p-curves and ranges (faces left as
+            they were in a ``BRepBuilderAPI_Copy``, which copies the geometry exactly).
+            A join between two of them keeps its source measure (:attr:`measures`):
+            measuring it again would repeat the same computation on the same numbers.
+
+        Returns
+        -------
+        list of JoinMeasure
+            One per join, in order.
+
+        Raises
+        ------
+        InvalidInputError
+            ``unchanged`` holds something else than face indices, or a join does not fit
+            ``shape`` (not the same faces and edges).
+        """
+        shape = as_shape(shape)
+        unchanged = _face_indices(unchanged)
+        model = _Model(shape, self.size)
+        for join in self.joins:
+            _check_fits(model, join)
+        again = [not set(join.faces) <= unchanged for join in self.joins]
+        fresh = iter(_measures(model, list(compress(self.joins, again)), self.samples))
+        return [next(fresh) if measured else self.measures[k]
+                for k, measured in enumerate(again)]
 
     def summary(self):
         """Counts and extremes as a dict: ``joins``, ``smooth``, ``crease``,
@@ -158,6 +209,15 @@ def _check_options(angle_tol, coincidence, samples):
     _check_samples(samples)
 
 
+def _face_indices(faces):
+    """``faces`` as a set of face indices."""
+    faces = list(faces)
+    if not all(isinstance(f, (int, np.integer)) and not isinstance(f, bool) for f in faces):
+        raise InvalidInputError(
+            f"unchanged must hold 0-based face indices (int), got {faces!r}; e.g. {{0, 3}}.")
+    return {int(f) for f in faces}
+
+
 def _check_samples(samples):
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
         raise InvalidInputError(
@@ -173,18 +233,19 @@ def _edge_map(shape):
 
 
 class _Model:
-    """Faces, edges and per-face geometry of one shape, indexed as the results are.
+    """Faces, edges and per-face geometry of one shape, indexed as the results are, and
+    its size (by default its bounding-box diagonal).
 
     The faces using each edge are collected by exploring each face's edges (one entry per
     use, so a seam lists its face twice, as ``MapShapesAndAncestors`` does): reading the
     ancestor lists back from OCCT costs far more per list in Python.
     """
 
-    def __init__(self, shape):
+    def __init__(self, shape, size=None):
         self.shape = shape
         self.faces = indexed_faces(shape)
         self.emap = _edge_map(shape)
-        self.size = _diagonal(shape)
+        self.size = _diagonal(shape) if size is None else size
         self._surfaces = {}
         self._uses = {}
         self.vertices = TopTools_IndexedMapOfShape()
@@ -217,6 +278,16 @@ class _Model:
             self._surfaces[face_index] = (BRep_Tool.Surface_s(face),
                                           BRepTools.UVBounds_s(face), sign)
         return self._surfaces[face_index]
+
+    def evaluate(self, faces, uv):
+        """Points, :math:`S_u`, :math:`S_v` of the faces ``faces`` (n,) at ``uv`` (n, 2)
+        (:func:`_evaluate`, face by face): an array (n, 3, 3), ``[:, 0]`` the points."""
+        out = np.empty((len(uv), 3, 3))
+        order = np.argsort(faces, kind="stable")
+        for rows in np.split(order, np.flatnonzero(np.diff(faces[order])) + 1):
+            if rows.size:
+                out[rows] = _evaluate(self.surface(int(faces[rows[0]]))[0], uv[rows])
+        return out
 
 
 def _diagonal(shape):
@@ -267,18 +338,24 @@ def _join_side(model, face_index, edge_index):
 
 # -- measurement ---------------------------------------------------------------------------
 def _evaluate(surface, uv):
-    """Points, :math:`S_u`, :math:`S_v` (each (n, 3)) of ``surface`` at ``uv`` (n, 2)."""
-    out = np.empty((len(uv), 3, 3))
+    """Points, :math:`S_u`, :math:`S_v` of an OCCT ``surface`` at ``uv`` (n, 2), by its
+    ``D1`` one point at a time: an array (n, 3, 3), ``[:, 0]`` the points."""
     p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    for k, (u, v) in enumerate(uv):
-        surface.D1(float(u), float(v), p, du, dv)
-        out[k] = (p.Coord(), du.Coord(), dv.Coord())
-    return out[:, 0], out[:, 1], out[:, 2]
+    d1, point, along_u, along_v = surface.D1, p.Coord, du.Coord, dv.Coord
+    values = []
+    add = values.extend   # one flat list: converting tuples of tuples costs more
+    for u, v in uv.tolist():
+        d1(u, v, p, du, dv)
+        add(point())
+        add(along_u())
+        add(along_v())
+    return np.array(values, dtype=float).reshape(len(uv), 3, 3)
 
 
-def _normals(surface, uv, su, sv, sign):
-    r"""Unit normals :math:`\pm S_u \times S_v / |S_u \times S_v|` and a mask of the
-    singular points (a degenerated edge's pole), where the normal is undefined:
+def _normals(su, sv, sign):
+    r"""Unit normals :math:`\pm S_u \times S_v / |S_u \times S_v|` (``sign`` a number or
+    one per row, shape (n, 1)) and a mask of the singular points (a degenerated edge's
+    pole), where the normal is undefined:
     :math:`|S_u \times S_v| \le 10^{-4} \max(|S_u|, |S_v|)^2` (one derivative vanishes
     or both are parallel)."""
     n = np.cross(su, sv)
@@ -289,34 +366,35 @@ def _normals(surface, uv, su, sv, sign):
     return sign * n / length[:, None], singular
 
 
-def _edge_normals(model, edge, face_index, params, inward):
-    r"""Unit normals of a face along an edge at ``params``, moved by ``inward`` (edge
-    parameter) where the surface is singular: at a pole the normal depends on the
-    direction of approach, and along the join is the one both faces share."""
-    surface, _, sign = model.surface(face_index)
-    uv = _uv(model, edge, face_index, params)
-    _, su, sv = _evaluate(surface, uv)
-    normals, singular = _normals(surface, uv, su, sv, sign)
+def _off_poles(model, track, normals, singular):
+    r"""Fill in the ``normals`` of a ``track`` where they are ``singular``: the edge
+    parameter moved by the track's ``inward`` step (ten times further each time, up to
+    four times).  At a pole the normal depends on the direction of approach, and along
+    the join it is the one both faces share."""
+    sign = model.surface(track.face)[2]
+    params, inward = track.params, track.inward
     for _ in range(4):
         if not singular.any():
             break
         params = np.where(singular, params + inward, params)
         inward = 10.0 * inward
-        uv = _uv(model, edge, face_index, params[singular])
-        _, su, sv = _evaluate(surface, uv)
-        normals[singular], singular[singular] = _normals(surface, uv, su, sv, sign)
-    return normals
+        uv = _uv(model, track.edge, track.face, params[singular])
+        values = model.evaluate(np.full(len(uv), track.face), uv)
+        normals[singular], singular[singular] = _normals(values[:, 1], values[:, 2], sign)
 
 
-def _project(surface, box, targets, uv, points, su, sv, stop):
-    r"""Closest points of ``surface`` inside ``box`` to ``targets``, from seeds ``uv``.
+def _project(evaluate, lo, hi, targets, uv, points, su, sv, stop):
+    r"""Closest points to ``targets`` of surfaces inside parameter boxes, from seeds ``uv``.
 
-    Gauss-Newton on :math:`\min |S(u, v) - X|^2`: the step solves
-    :math:`J^T J \, \delta = J^T (X - S)` with :math:`J = [S_u \; S_v]`; a parameter
-    that would leave the box is held at the border and the other one solved alone, and
-    a step that would move away from :math:`X` is halved (up to :data:`HALVINGS` times;
-    near a singular corner the full step can jump far across the surface).
-    ``points``, ``su``, ``sv`` are the surface's values at the seeds.
+    Each row ``k`` is projected onto its own surface, ``evaluate(rows, uv)`` (the
+    values of :meth:`_Model.evaluate` of those rows' surfaces at ``uv``), inside its box
+    ``lo[k] <= (u, v) <= hi[k]``.  Gauss-Newton on :math:`\min |S(u, v) - X|^2`: the
+    step solves :math:`J^T J \, \delta = J^T (X - S)` with :math:`J = [S_u \; S_v]`; a
+    parameter that would leave the box is held at the border and the other one solved
+    alone, and a step that would move away from :math:`X` is halved (up to
+    :data:`HALVINGS` times; near a singular corner the full step can jump far across
+    the surface).  A row stops when its step moves its point by at most ``stop``.
+    ``points``, ``su``, ``sv`` are the surfaces' values at the seeds.
 
     Returns
     -------
@@ -324,7 +402,6 @@ def _project(surface, box, targets, uv, points, su, sv, stop):
         At the projections.
     """
     uv, points, su, sv = uv.copy(), points.copy(), su.copy(), sv.copy()
-    lo, hi = np.array([box[0], box[2]]), np.array([box[1], box[3]])
     uv = np.clip(uv, lo, hi)
     active = np.ones(len(uv), bool)
     for _ in range(NEWTON_STEPS):
@@ -344,7 +421,7 @@ def _project(surface, box, targets, uv, points, su, sv, stop):
         step[alone, 0] = np.where(a[alone] > 0, g1[alone] / np.maximum(a[alone], 1e-300), 0.0)
         step[alone, 1] = np.where(c[alone] > 0, g2[alone] / np.maximum(c[alone], 1e-300), 0.0)
         trial = uv[idx] + step
-        out = (trial < lo) | (trial > hi)
+        out = (trial < lo[idx]) | (trial > hi[idx])
         only_u = out[:, 1] & ~out[:, 0]   # v held: u alone
         only_v = out[:, 0] & ~out[:, 1]
         step[only_u, 0] = np.where(a[only_u] > 0, g1[only_u] / np.maximum(a[only_u], 1e-300), 0)
@@ -352,8 +429,9 @@ def _project(surface, box, targets, uv, points, su, sv, stop):
         pending, moved = np.arange(idx.size), np.zeros(idx.size)
         for _ in range(HALVINGS):   # backtrack: a step must not move away from the target
             sel = idx[pending]
-            new = np.clip(uv[sel] + step[pending], lo, hi)
-            p, du, dv = _evaluate(surface, new)
+            new = np.clip(uv[sel] + step[pending], lo[sel], hi[sel])
+            values = evaluate(sel, new)
+            p, du, dv = values[:, 0], values[:, 1], values[:, 2]
             better = (np.linalg.norm(targets[sel] - p, axis=1)
                       <= np.linalg.norm(targets[sel] - points[sel], axis=1))
             moved[pending[better]] = np.linalg.norm(p[better] - points[sel[better]], axis=1)
@@ -369,39 +447,86 @@ def _project(surface, box, targets, uv, points, su, sv, stop):
 
 
 def _angles(n0, n1, folded):
+    """Angles (degrees) between unit normals, folded to at most 90 where ``folded``
+    (a number or one per row)."""
     cos = np.clip(np.einsum("ij,ij->i", n0, n1), -1.0, 1.0)
     angles = np.degrees(np.arccos(cos))
-    return np.minimum(angles, 180.0 - angles) if folded else angles
+    return np.where(folded, np.minimum(angles, 180.0 - angles), angles)
 
 
-def _measure(model, join, samples):
-    """Per-sample gaps and angles of ``join`` on ``model`` (see the module doc)."""
-    side0, side1 = join.sides
-    e0, e1 = model.edge(side0.edge), model.edge(side1.edge)
-    _, a0, b0 = _pcurve(model, e0, side0.face)
-    _, a1, b1 = _pcurve(model, e1, side1.face)
+@dataclass(frozen=True)
+class _Track:
+    """One side of a join sampled along its edge: the face, its FORWARD edge, the edge
+    parameters of the samples and the step that moves each off a pole into the edge
+    (:func:`_off_poles`)."""
+
+    face: int
+    edge: object
+    params: np.ndarray
+    inward: np.ndarray
+
+
+def _tracks(model, join, samples):
+    """The two :class:`_Track` of ``join``: side 0 at ``samples`` parameters uniform on
+    its edge's range, side 1 at the same fractions of its own (from the other end when
+    the edges are ``opposed``)."""
     s = np.linspace(0.0, 1.0, samples)
-    t0 = a0 + s * (b0 - a0)
-    t1 = (b1 - s * (b1 - a1)) if join.opposed else (a1 + s * (b1 - a1))
-    inward0 = NUDGE * (b0 - a0) * np.where(s < 0.5, 1.0, -1.0)
-    inward1 = NUDGE * (b1 - a1) * np.where(s < 0.5, 1.0, -1.0) * (-1.0 if join.opposed else 1.0)
-    surf0, box0, sign0 = model.surface(side0.face)
-    surf1, box1, sign1 = model.surface(side1.face)
-    uv0, uv1 = _uv(model, e0, side0.face, t0), _uv(model, e1, side1.face, t1)
-    p0, su0, sv0 = _evaluate(surf0, uv0)
-    p1, su1, sv1 = _evaluate(surf1, uv1)
-    stop = NEWTON_STOP * model.size
-    quv1, q1, qu1, qv1 = _project(surf1, box1, p0, uv1, p1, su1, sv1, stop)
-    quv0, q0, qu0, qv0 = _project(surf0, box0, p1, uv0, p0, su0, sv0, stop)
-    n_p0 = _edge_normals(model, e0, side0.face, t0, inward0)
-    n_p1 = _edge_normals(model, e1, side1.face, t1, inward1)
-    n_q1, bad1 = _normals(surf1, quv1, qu1, qv1, sign1)
-    n_q0, bad0 = _normals(surf0, quv0, qu0, qv0, sign0)
-    n_q1[bad1], n_q0[bad0] = n_p1[bad1], n_p0[bad0]  # a projection onto a pole
-    folded = not join.shared
-    gaps = np.maximum(np.linalg.norm(p0 - q1, axis=1), np.linalg.norm(p1 - q0, axis=1))
-    angles = np.maximum(_angles(n_p0, n_q1, folded), _angles(n_p1, n_q0, folded))
-    return gaps, angles
+    towards_middle = np.where(s < 0.5, 1.0, -1.0)
+    tracks = []
+    for side, turned in zip(join.sides, (False, join.opposed)):
+        edge = model.edge(side.edge)
+        _, first, last = _pcurve(model, edge, side.face)
+        params = (last - s * (last - first)) if turned else (first + s * (last - first))
+        inward = NUDGE * (last - first) * towards_middle * (-1.0 if turned else 1.0)
+        tracks.append(_Track(side.face, edge, params, inward))
+    return tracks
+
+
+def _measure(model, joins, samples):
+    """Per-sample gaps and angles (each (len(joins), samples)) of ``joins`` on ``model``
+    (see the module doc).
+
+    All joins at once: the samples of side 0 of every join, then of side 1, are the rows;
+    each row's partner is the same sample on the join's other side.  Each face's points
+    are evaluated together (:meth:`_Model.evaluate`) and every row's point is projected
+    onto its partner's face, from the partner's point, in one Gauss-Newton run
+    (:func:`_project`).
+    """
+    pairs = [_tracks(model, join, samples) for join in joins]
+    tracks = [pair[0] for pair in pairs] + [pair[1] for pair in pairs]
+    if not tracks:
+        return np.empty((0, samples)), np.empty((0, samples))
+    n = len(joins) * samples
+    partner = np.roll(np.arange(2 * n), n)
+    faces = np.repeat([track.face for track in tracks], samples)
+    _, boxes, signs = zip(*(model.surface(track.face) for track in tracks))
+    boxes = np.repeat(boxes, samples, axis=0)[partner]
+    signs = np.repeat(signs, samples)[:, None]
+    uv = np.concatenate([_uv(model, track.edge, track.face, track.params) for track in tracks])
+    values = model.evaluate(faces, uv)
+    at = values[partner]
+    _, q, qu, qv = _project(lambda rows, x: model.evaluate(faces[partner[rows]], x),
+                            boxes[:, [0, 2]], boxes[:, [1, 3]], values[:, 0], uv[partner],
+                            at[:, 0], at[:, 1], at[:, 2], NEWTON_STOP * model.size)
+    own = _edge_normals(model, tracks, values, signs, samples)
+    other, on_pole = _normals(qu, qv, signs[partner])
+    other[on_pole] = own[partner][on_pole]   # a projection onto a pole
+    folded = np.tile(np.repeat([not join.shared for join in joins], samples), 2)
+    gaps = np.linalg.norm(values[:, 0] - q, axis=1)
+    angles = _angles(own, other, folded)
+    return (np.maximum(gaps[:n], gaps[n:]).reshape(-1, samples),
+            np.maximum(angles[:n], angles[n:]).reshape(-1, samples))
+
+
+def _edge_normals(model, tracks, values, signs, samples):
+    """Unit normals along ``tracks`` from their ``values`` (:meth:`_Model.evaluate` at
+    their samples) and orientation ``signs`` (one per row), moved off the poles
+    (:func:`_off_poles`)."""
+    normals, singular = _normals(values[:, 1], values[:, 2], signs)
+    for k in np.unique(np.flatnonzero(singular) // samples):
+        rows = slice(k * samples, (k + 1) * samples)
+        _off_poles(model, tracks[k], normals[rows], singular[rows])
+    return normals
 
 
 def measure_joins(shape, joins, *, samples=24):
@@ -435,11 +560,13 @@ def measure_joins(shape, joins, *, samples=24):
     joins = list(joins)
     for join in joins:
         _check_fits(model, join)
-    out = []
-    for join in joins:
-        gaps, angles = _measure(model, join, samples)
-        out.append(JoinMeasure(float(gaps.max()), float(angles.max()), angles, gaps))
-    return out
+    return _measures(model, joins, samples)
+
+
+def _measures(model, joins, samples):
+    """:class:`JoinMeasure` of each of ``joins`` on ``model`` (:func:`_measure`)."""
+    return [JoinMeasure(float(gaps.max()), float(angles.max()), angles, gaps)
+            for gaps, angles in zip(*_measure(model, joins, samples))]
 
 
 def _check_fits(model, join):
@@ -520,20 +647,21 @@ def find_joins(shape, *, angle_tol=1.0, coincidence=None, samples=24):
             free.append(index)
     matched = _match_free_edges(model, free, coincidence)
     pairs += [((fa, ea), (fb, eb), False, opposed) for (fa, ea), (fb, eb), opposed in matched]
-    joins = [_source_join(model, first, second, shared, opposed, angle_tol, samples)
-             for first, second, shared, opposed in pairs]
+    drafts = [Join((_join_side(model, *first), _join_side(model, *second)), "smooth", 0.0, 0.0,
+                   None, shared, opposed) for first, second, shared, opposed in pairs]
+    measures = _measures(model, drafts, samples)
+    joins = [_source_join(draft, measure, angle_tol) for draft, measure in zip(drafts, measures)]
     used = {edge for (_, ea), (_, eb), _ in matched for edge in (ea, eb)}
     return Adjacency(joins, non_manifold, _point_contacts(model, joins, coincidence),
-                     len(free) - len(used), float(angle_tol), float(coincidence))
+                     len(free) - len(used), float(angle_tol), float(coincidence), measures,
+                     int(samples), model.size)
 
 
-def _source_join(model, first, second, shared, opposed, angle_tol, samples):
-    sides = (_join_side(model, *first), _join_side(model, *second))
-    draft = Join(sides, "smooth", 0.0, 0.0, None, shared, opposed)
-    gaps, angles = _measure(model, draft, samples)
-    angle = float(angles.max())
-    return Join(sides, "smooth" if angle < angle_tol else "crease", float(gaps.max()), angle,
-                angles, shared, opposed)
+def _source_join(draft, measure, angle_tol):
+    """``draft`` (a :class:`Join` with its sides) with its source ``measure`` and kind."""
+    kind = "smooth" if measure.angle < angle_tol else "crease"
+    return Join(draft.sides, kind, measure.gap, measure.angle, measure.angles, draft.shared,
+                draft.opposed)
 
 
 class _FreeEdge:

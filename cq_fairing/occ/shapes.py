@@ -45,7 +45,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_Ind
 
 from ..core.options import check_face_options, check_joins
 from ..errors import InvalidInputError
-from .adjacency import find_joins, measure_joins
+from .adjacency import find_joins
 from .congruence import compose, congruence_classes, inverse
 from .convert import (
     Tolerances,
@@ -273,8 +273,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     return ShapeFairResult(
         copy, job.reports, max(gaps.values(), default=0.0), BRepCheck_Analyzer(copy).IsValid(),
         tol, free_before, free_edge_count(copy), time.perf_counter() - start, gaps,
-        JoinReport(adjacency, measure_joins(copy, adjacency.joins), job.closed_edges,
-                   job.grids, job.networks, job.curved))
+        JoinReport(adjacency, adjacency.measure(copy, unchanged=job.unchanged()),
+                   job.closed_edges, job.grids, job.networks, job.curved))
 
 
 def _checked_max_gap(max_gap, tol, n):
@@ -400,6 +400,12 @@ class _Job:
             poles_after=surface.shape, max_deviation=deviation["max"],
             tolerance=self.tol[index], deviation=deviation, original=self.originals[index],
             surface=surface, index=index, seconds=before.seconds)
+
+    def unchanged(self):
+        """The faces not faired: every build leaves their surfaces as copied from the
+        source, and the edges where they meet one another (only a faired face's edges
+        are touched)."""
+        return {index for index, report in enumerate(self.reports) if not report.faired}
 
     def kept(self, index, status, message):
         """The report of face ``index`` kept as it was, with ``status`` and ``message``."""

@@ -265,6 +265,20 @@ def test_an_edge_of_three_faces_is_non_manifold():
 
 
 # -- measuring a changed copy ----------------------------------------------------------------
+def moved_copy(shape, moved, offset):
+    """A copy of ``shape`` whose face ``moved`` is translated by ``offset`` along its
+    normal at the middle of its parameter box; the normal."""
+    copy = BRepBuilderAPI_Copy(shape, True, False).Shape()
+    face = indexed_faces(copy)[moved]
+    surface = BRep_Tool.Surface_s(face)
+    u0, u1, v0, v1 = surface.Bounds()
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    surface.D1(0.5 * (u0 + u1), 0.5 * (v0 + v1), p, du, dv)
+    normal = du.Crossed(dv).Normalized()
+    replace_surface(face, surface.Translated(normal.Multiplied(offset)))
+    return copy, normal
+
+
 def test_measure_joins_on_the_source_repeats_the_source_values(fuselage):
     shape, adjacency = fuselage
     measures = measure_joins(shape, adjacency.joins)
@@ -276,14 +290,7 @@ def test_measure_joins_on_the_source_repeats_the_source_values(fuselage):
 def test_measure_joins_sees_a_face_moved_along_its_normal(fuselage):
     shape, adjacency = fuselage
     offset, moved = 0.01, 5
-    copy = BRepBuilderAPI_Copy(shape, True, False).Shape()
-    face = indexed_faces(copy)[moved]
-    surface = BRep_Tool.Surface_s(face)
-    u0, u1, v0, v1 = surface.Bounds()
-    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    surface.D1(0.5 * (u0 + u1), 0.5 * (v0 + v1), p, du, dv)
-    normal = du.Crossed(dv).Normalized()
-    replace_surface(face, surface.Translated(normal.Multiplied(offset)))
+    copy, normal = moved_copy(shape, moved, offset)
     emap = edge_map(copy)
     measures = measure_joins(copy, adjacency.joins)
     for join, measure in zip(adjacency.joins, measures):
@@ -316,6 +323,59 @@ def test_measure_joins_sees_a_face_moved_along_its_normal(fuselage):
         assert np.median(turn) < 1e-2 and turn.max() < 0.5
 
 
+def test_each_join_measured_alone_is_measured_the_same_among_all(impeller, fuselage):
+    """All joins are measured at once (each face's points evaluated together, one
+    projection run): every figure is the one the join gets measured alone, to the bit,
+    on rational B-spline faces, surfaces of revolution and loose joins (the impeller)
+    and the fuselage's knife edge, whose tip is a pole."""
+    for shape, adjacency in ((impeller[0], impeller[2]), fuselage):
+        joins = adjacency.joins[::9] if len(adjacency.joins) > 100 else adjacency.joins
+        together = measure_joins(shape, joins)
+        for join, measure in zip(joins, together):
+            alone = measure_joins(shape, [join])[0]
+            np.testing.assert_array_equal(measure.gaps, alone.gaps)
+            np.testing.assert_array_equal(measure.angles, alone.angles)
+
+
+def test_joins_between_unchanged_faces_keep_their_source_measure(fuselage):
+    """``Adjacency.measure``: a join between two faces left as they were keeps its source
+    measure, which is what measuring it again gives, to the bit; the joins of the moved
+    face are measured again (as ``measure_joins`` measures them)."""
+    shape, adjacency = fuselage
+    moved, offset = 5, 0.01
+    copy, _ = moved_copy(shape, moved, offset)
+    others = set(range(len(indexed_faces(copy)))) - {moved}
+    kept = adjacency.measure(copy, unchanged=others)
+    again = adjacency.measure(copy)
+    fresh = measure_joins(copy, adjacency.joins)
+    assert len(kept) == len(again) == len(fresh) == len(adjacency.joins) == 14
+    for join, source, k, a, f in zip(adjacency.joins, adjacency.measures, kept, again, fresh):
+        np.testing.assert_array_equal(k.gaps, a.gaps)
+        np.testing.assert_array_equal(k.angles, a.angles)
+        np.testing.assert_allclose(k.gaps, f.gaps, rtol=1e-9, atol=1e-12 * 2500)
+        np.testing.assert_allclose(k.angles, f.angles, rtol=1e-9, atol=1e-6)
+        if moved in join.faces:
+            assert k.gap > 0.5 * offset
+        else:
+            assert k is source and k.gap == join.source_gap and k.angle == join.source_angle
+            np.testing.assert_array_equal(k.angles, join.source_angles)
+
+
+def test_fair_shape_reports_the_joins_as_measured_on_its_result(real):
+    """The joins between faces fair_shape left unchanged take their source measure: the
+    report is the whole result measured again, to the bit."""
+    from cq_fairing.occ.shapes import fair_shape
+
+    result = fair_shape(real("fuselage.brep"), tol=2.5)
+    adjacency = result.joins.adjacency
+    unchanged = {i for i, face in enumerate(result.faces) if not face.faired}
+    assert any(set(join.faces) <= unchanged for join in adjacency.joins)
+    assert any(not set(join.faces) <= unchanged for join in adjacency.joins)
+    for reported, measured in zip(result.joins.measures, adjacency.measure(result.shape)):
+        np.testing.assert_array_equal(reported.gaps, measured.gaps)
+        np.testing.assert_array_equal(reported.angles, measured.angles)
+
+
 # -- input checks ---------------------------------------------------------------------------
 @pytest.mark.parametrize("options", [
     dict(angle_tol=0), dict(angle_tol=-1.0), dict(angle_tol=180.0), dict(angle_tol=float("nan")),
@@ -341,6 +401,10 @@ def test_bad_shape_and_foreign_joins_raise_invalid_input(real, fuselage):
         measure_joins(shape, [(0, 1)])
     with pytest.raises(InvalidInputError, match="samples"):
         measure_joins(shape, adjacency.joins, samples=0)
+    with pytest.raises(InvalidInputError, match="unchanged"):
+        adjacency.measure(shape, unchanged=["0"])
+    with pytest.raises(InvalidInputError, match="same faces and edges"):
+        find_joins(real("testtoler.brep")).measure(shape)
     with pytest.raises(InvalidInputError, match="face index"):
         adjacency.joins_of("0")
     assert isinstance(adjacency.joins[0], Join)
