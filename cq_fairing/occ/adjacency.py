@@ -144,28 +144,14 @@ class Adjacency:
         """The joins measured on ``shape``, a copy of the source, at the source's scale
         (:attr:`size`), ``samples`` points each (:func:`measure_joins`).
 
-        Parameters
-        ----------
-        shape : TopoDS_Shape or cadquery.Shape
-            The source or a copy of it with the same faces and edges in the same order (a
-            faired copy made by :func:`~cq_fairing.occ.fair_shape`).
-        unchanged : iterable of int, optional
-            Faces of ``shape`` that are the source's own: the same surfaces, and where
-            they meet one another the same edges, p-curves and ranges (faces left as
-            they were in a ``BRepBuilderAPI_Copy``, which copies the geometry exactly).
-            A join between two of them keeps its source measure (:attr:`measures`):
-            measuring it again would repeat the same computation on the same numbers.
-
-        Returns
-        -------
-        list of JoinMeasure
-            One per join, in order.
-
-        Raises
-        ------
-        InvalidInputError
-            ``unchanged`` holds something else than face indices, or a join does not fit
-            ``shape`` (not the same faces and edges).
+        ``shape``, the result and the errors are those of :func:`measure_joins`;
+        ``unchanged`` (iterable of int) names faces of ``shape`` that are the source's
+        own: the same surfaces, and where they meet one another the same edges,
+        p-curves and ranges (faces left as they were in a ``BRepBuilderAPI_Copy``, which
+        copies the geometry exactly).  A join between two of them keeps its source
+        measure (:attr:`measures`): measuring it again would repeat the same computation
+        on the same numbers.  ``unchanged`` holding something else than face indices
+        raises :class:`~cq_fairing.errors.InvalidInputError`.
         """
         shape = as_shape(shape)
         unchanged = _face_indices(unchanged)
