@@ -35,17 +35,19 @@ The options
     Occ faces only: ``"fixed"`` puts the **source's** border rows back into the faired
     net after the fit, so the natural boundary curves do not move.  ``"wavelet"`` and
     ``"adaptive"`` (``"energy"`` keeps the border ring of the net anyway).
-``search`` : {"guaranteed", "linear", "polyfit"}, occ also "local"
+``search`` : {"guaranteed", "linear", "polyfit"}, faces also "local"
     How the uniform tolerance search (``"wavelet"`` with ``tol``) finds the target scale:
-    the core's step rules (:mod:`cq_fairing.core.accuracy`), or, for an occ face,
+    the core's step rules (:mod:`cq_fairing.core.accuracy`), or, for a face (occ layer,
+    command line, workbench: one search, :mod:`cq_fairing.core.face_search`),
     ``"local"``: bisection on the face's own samples inside its trim
     (:mod:`cq_fairing.core.scale_search`).  Default ``"guaranteed"`` in the core, ``"local"``
-    for occ faces.
+    for faces.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
 ``measure`` : {"geometric", "parametric"}, default "geometric"
     The distance the core's tolerance search bounds: closest-point or same-parameter.
-    ``"wavelet"`` with ``tol`` in the core.
+    ``"wavelet"`` with ``tol`` in the core; the workbench's ``Measure`` (default
+    ``"parametric"``) applies to its core step rules only and is refused with ``"local"``.
 ``schedule`` : {"auto", "direct", "hybrid"}, default "auto"
     Spaces the core's projection visits (:mod:`cq_fairing.core.schedule`).  ``"wavelet"``.
 ``joins`` : {"smooth", "closed", "free", "curvature"}, default "smooth"
@@ -95,11 +97,12 @@ shapes keep ``"wavelet"`` as their default.
 Choice of names
 ---------------
 ``search`` is the tolerance search in every layer (the workbench's property of that name
-has the same values; the core called it ``strategy``, the occ layer's ``"core"`` is the
-core's default rule ``"guaranteed"``).  ``measure`` names which distance is measured
-(the core called it ``deviation``, which names the measured value everywhere else:
-``max_deviation``, ``FaceFairReport.deviation``).  ``borders`` and ``boundary`` are two
-options, not two spellings: ``borders`` shapes the adaptive target during the fit,
+has the same values and, for faces, the same default ``"local"``; the core called it
+``strategy``, the occ layer's ``"core"`` is the core's default rule ``"guaranteed"``).
+``measure`` names which distance is measured (the core called it ``deviation``, which
+names the measured value everywhere else: ``max_deviation``,
+``FaceFairReport.deviation``).  ``borders`` and ``boundary`` are two options, not two
+spellings: ``borders`` shapes the adaptive target during the fit,
 ``boundary`` restores the source's rows after any fit.  Old spellings
 (:data:`RENAMED`, :data:`RENAMED_VALUES`) keep working for one release with a
 :class:`DeprecationWarning` naming the new one.

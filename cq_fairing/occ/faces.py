@@ -1,12 +1,15 @@
 r"""Fair one OCP face: :func:`fair_face` and its :class:`FaceFairReport`.
 
 Pipeline: classify the face; convert it to NURBS on request; take its net
-(:func:`~cq_fairing.occ.face_to_surface`); choose the target (explicit ``n`` or the
-fewest poles within ``tol``, :mod:`cq_fairing.core.scale_search`); fair with the core
-(:func:`cq_fairing.fair_surface`), or with ``method="adaptive"`` let the core choose
-non-uniform targets within ``tol`` (:mod:`cq_fairing.core.adaptive`); put the faired surface under the face's own trim
-(:func:`~cq_fairing.occ.surface_to_face`); measure the deviation with OCCT's projection
-(:func:`~cq_fairing.occ.sample_face_deviation`).
+(:func:`~cq_fairing.occ.face_to_surface`); hand it to the core's face search
+(:func:`cq_fairing.core.face_search.search_face`, the same search the FreeCAD
+workbench runs) with OCCT's pieces: the face's UV samples classified inside its trim,
+and OCCT's two-sided check of each candidate put under the face's own trim
+(:func:`~cq_fairing.occ.surface_to_face`, :func:`~cq_fairing.occ.deviation.deviation_on_grid`).
+The search chooses the target (explicit ``n`` or the fewest poles within ``tol``,
+:mod:`cq_fairing.core.scale_search`, the core's :func:`cq_fairing.fair_surface`), or
+with ``method="adaptive"`` lets the core choose non-uniform targets within ``tol``
+(:mod:`cq_fairing.core.adaptive`).
 
 Special cases handled, not refused:
 
@@ -29,8 +32,8 @@ Special cases handled, not refused:
 """
 
 import time
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Literal, NamedTuple
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from OCP.Bnd import Bnd_Box
@@ -38,20 +41,10 @@ from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 from OCP.TopoDS import TopoDS, TopoDS_Face
 
-from ..core.adaptive_surface import fair_surface_adaptive
-from ..core.fairing import fair_surface
-from ..core.geometry import BSplineSurface, closed_axes, collapse_rows, collapsed_rows
+from ..core.face_search import face_attempts, face_finisher, sample_counts, search_face, uv_window
 from ..core.options import check_face_options, renamed_value
-from ..core.plans import target_space
 from ..core.results import SurfaceFairResult
-from ..core.scale_search import SurfaceSampler, max_scales, search_scales, target_degrees
-from ..core.spaces import SplineSpace
-from ..errors import (
-    InvalidInputError,
-    NumericalError,
-    ToleranceNotMetError,
-    UnsupportedGeometryError,
-)
+from ..errors import UnsupportedGeometryError
 from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import deviation_on_grid, exceeds_on_widest, face_uv_grid, reference_samples
@@ -62,7 +55,6 @@ if TYPE_CHECKING:
 
 __all__ = ["fair_face", "FaceFairReport", "default_tolerance"]
 
-MARGIN = 0.9
 STATUSES = ("faired", "unchanged", "skipped-not-bspline", "skipped-rational",
             "skipped-not-selected", "tolerance-not-met", "failed")
 
@@ -235,9 +227,9 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         face = TopoDS.Face_s(BRepBuilderAPI_NurbsConvert(face, True).Shape())
     if tol is None and n is None:
         tol = default_tolerance(face)
-    criteria = _criteria(tol, search, method, objective, borders)
+    attempts = face_attempts(tol, search, method, objective, borders)
     try:
-        report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria)
+        report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts)
     except UnsupportedGeometryError as exc:  # energy: weights, a degree-1 direction
         if method != "energy":
             raise
@@ -260,51 +252,11 @@ def _not_for_energy(face, info, tol, refusal):
                           tolerance=tol)
 
 
-class AdaptiveTarget(NamedTuple):
-    """Criterion of an attempt that lets the core's adaptive search choose the target."""
-
-    objective: str
-    borders: str
-
-
-class CoreSearch(NamedTuple):
-    """Criterion of an attempt that runs the core's uniform tolerance search with
-    ``rule`` (one of :data:`~cq_fairing.core.options.SEARCHES`)."""
-
-    rule: str
-
-
-def _criteria(tol, search, method, objective, borders):
-    """The ``(criterion, goal)`` attempts of :func:`_fair_verified`, in order.
-
-    With explicit ``n``: one attempt.  ``method="adaptive"``: the core's adaptive search
-    (criterion: an :class:`AdaptiveTarget`) at ``tol``, then at ``MARGIN * tol``;
-    ``method="energy"`` likewise with the criterion ``"energy"``.
-    Otherwise the requested search (``"local"`` with the normal-distance estimate, then
-    the core's ``fair_surface(tol=...)``; a core step rule: the core's search with it
-    alone, a :class:`CoreSearch`), then the local
-    search with the parametric distance, an upper bound of the true distance; they aim
-    at ``MARGIN * tol`` (room for excursions between samples), the last one at ``tol``.
-    The normal distance looks from the original's samples only; where the faired face
-    reaches beyond the original (OCCT's check measures both ways), the core's two-sided
-    search still finds a coarse net, where the parametric distance of a face with
-    strongly graded knots keeps nearly all poles (an impeller fillet: 20 x 3 poles
-    against 48 x 3).
-    """
-    if tol is None:
-        return [(None, None)]
-    if method != "wavelet":
-        target = AdaptiveTarget(objective, borders) if method == "adaptive" else "energy"
-        return [(target, tol), (target, MARGIN * tol)]
-    first = ["normal", CoreSearch("guaranteed")] if search == "local" else [CoreSearch(search)]
-    return [(criterion, MARGIN * tol) for criterion in first + ["parametric"]] + \
-        [("parametric", tol)]
-
-
-def _fair_bspline(face, tol, n, boundary, target_degree, density, details, criteria):
+def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts):
+    """The core's face search (:func:`~cq_fairing.core.face_search.search_face`) with
+    OCCT's pieces: the face's samples (classified inside its trim), its finisher and
+    OCCT's two-sided check (:class:`_OcctCheck`)."""
     surface, info = face_to_surface(face)
-    density = density or tuple(int(np.clip(2 * k + 1, 20, 400)) for k in surface.shape)
-    degree = target_degrees(surface, target_degree)
     notes = []
     if info.unperiodized:
         notes.append(f"periodic in {'/'.join(info.unperiodized)}: faired the unperiodized "
@@ -312,22 +264,76 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, crite
     if boundary == "fixed" and info.trimmed:
         notes.append("boundary='fixed' keeps the surface's border rows; this trimmed face's "
                      "edges lie inside the surface, so they may still move")
-    sampler = SurfaceSampler(face_uv_grid(face, density, classify=info.trimmed), surface)
-    finish = _finisher(surface, info.unperiodized, boundary)
-    scales = max_scales(surface, degree)
-    if scales == (None, None) and n is None:
-        return _unchanged(face, info, surface, "the net is already at its coarsest "
-                          "(degree + 1 poles per direction); nothing to fair", tol)
-    if None in scales:  # the core's uniform search coarsens both directions or none
-        criteria = [c for c in criteria if not isinstance(c[0], CoreSearch)]
-    try:
-        return _fair_verified(face, info, surface, surface, tol, n, degree, sampler, finish,
-                              details, criteria, notes)
-    except NumericalError:
-        notes.append("fairing in homogeneous coordinates gave non-positive weights; "
-                     "faired a non-rational least-squares approximation instead")
-        return _fair_verified(face, info, surface, _non_rational(surface), tol, n, degree,
-                              sampler, finish, details, criteria, notes)
+    grid = face_uv_grid(face, density or sample_counts(surface), classify=info.trimmed)
+    check = _OcctCheck(face, surface, grid, info.trimmed)
+    outcome = search_face(
+        surface, tol, grid, face_finisher(surface, info.unperiodized, boundary == "fixed"),
+        check, n=n, target_degree=target_degree, attempts=attempts, exceeds=check.exceeds,
+        region=face_region(face) if info.trimmed else None,
+        window=uv_window(_uv_box(face), surface) if info.trimmed else None,
+        details=details, judge="OCCT")
+    if outcome.status == "unchanged":
+        return FaceFairReport(face, "unchanged", outcome.message, info=info,
+                              poles_before=surface.shape, poles_after=surface.shape,
+                              max_deviation=0.0, tolerance=tol)
+    new_face, deviation = check.measured(outcome.surface)
+    return FaceFairReport(
+        new_face, "faired", "; ".join(notes + list(outcome.notes)), result=outcome.result,
+        info=info, poles_before=surface.shape, poles_after=outcome.surface.shape,
+        max_deviation=deviation["max"], tolerance=tol, deviation=deviation,
+        surface=outcome.surface)
+
+
+def _uv_box(face):
+    """The face's UV box as ``(u0, u1, v0, v1)``."""
+    (u0, u1), (v0, v1) = face_uv_box(face)
+    return u0, u1, v0, v1
+
+
+class _OcctCheck:
+    """OCCT's two-sided check of the candidates of one face, the ``check`` and
+    ``exceeds`` of :func:`~cq_fairing.core.face_search.search_face`.
+
+    Each candidate is put under the face's trim (:func:`~cq_fairing.occ.surface_to_face`,
+    once) and measured by :func:`~cq_fairing.occ.deviation.deviation_on_grid` on the
+    search grid plus the centres of its cells (:func:`_check_samples`: the check sees
+    between the samples); ``exceeds`` is the cheap lower bound
+    :func:`~cq_fairing.occ.deviation.exceeds_on_widest` on the same samples.
+    """
+
+    def __init__(self, face, surface, grid, trimmed):
+        self.face, self.surface, self.grid, self.trimmed = face, surface, grid, trimmed
+        self._reference = None
+        self._faces, self._deviations = {}, {}
+
+    def _rebuilt(self, faired):
+        key = id(faired)
+        if key not in self._faces:   # the candidate is kept with its face: ids stay unique
+            self._faces[key] = (faired, surface_to_face(faired, self.face))
+        return self._faces[key][1]
+
+    def _samples(self):
+        if self._reference is None:
+            self._reference = _check_samples(self.face, self.grid, self.trimmed,
+                                             self.surface)
+        return self._reference
+
+    def exceeds(self, faired, tol):
+        """True when the check of ``faired`` is certain to exceed ``tol``."""
+        return exceeds_on_widest(self.face, self._rebuilt(faired), (self.surface, faired),
+                                 self._samples(), tol)
+
+    def __call__(self, faired):
+        """OCCT's two-sided maximum distance of ``faired`` under the face's trim."""
+        deviation = deviation_on_grid(self.face, self._rebuilt(faired), None,
+                                      reference=self._samples(),
+                                      surfaces=(self.surface, faired))
+        self._deviations[id(faired)] = deviation
+        return deviation["max"]
+
+    def measured(self, faired):
+        """``(face, deviation dict)`` of a candidate already checked."""
+        return self._rebuilt(faired), self._deviations[id(faired)]
 
 
 def _check_samples(face, grid, trimmed, surface):
@@ -336,231 +342,3 @@ def _check_samples(face, grid, trimmed, surface):
     cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
     inside = face_region(face)(cu, cv) if trimmed else np.ones((cu.size, cv.size), dtype=bool)
     return reference_samples(face, grid, (cu, cv, inside), surface=surface)
-
-
-def _fair_verified(face, info, surface, source, tol, n, degree, sampler, finish, details,
-                   criteria, notes):
-    """Fair, rebuild and check with OCCT; with ``tol`` retry with stricter searches.
-
-    ``criteria`` are the attempts of :func:`_criteria`; the first whose rebuilt face
-    passes the check wins.  The OCCT check runs on the search grid plus the centres of
-    its cells; a candidate whose samples of largest parametric distance already put a
-    lower bound of the check's maximum above ``tol``
-    (:func:`~cq_fairing.occ.deviation.exceeds_on_widest`) fails without the full check,
-    which then runs only if every attempt fails (for the error's best deviation).
-    """
-    measured, refusals, prefiltered = [], [], []
-    check = None
-    region = face_region(face) if info.trimmed else None
-    window = _uv_window(face, source) if info.trimmed else None
-    for criterion, goal in criteria:
-        try:
-            target, faired, result = _choose(source, goal, n, degree, sampler, finish,
-                                             criterion, region, window)
-        except ToleranceNotMetError as exc:
-            measured.append(exc.best_deviation)
-            refusals.append((goal, str(exc)))
-            continue
-        if target is not None and _is_identity(source, target, degree):
-            return _unchanged(face, info, surface, "the finest admissible target is the "
-                              "source space itself; nothing to fair", tol)
-        if target is not None and _keeps_every_pole(source, target, faired):
-            return _unchanged(face, info, surface, "the adaptive target needs as many poles "
-                              "as the source; nothing to reduce", tol)
-        new_face = surface_to_face(faired, face)
-        check = check or _check_samples(face, sampler.grid, info.trimmed, surface)
-        if tol is not None and exceeds_on_widest(face, new_face, (surface, faired), check, tol):
-            prefiltered.append((new_face, faired))
-            continue
-        deviation = deviation_on_grid(face, new_face, None, reference=check,
-                                      surfaces=(surface, faired))
-        if tol is None or deviation["max"] <= tol:
-            if details and result is None:
-                result = _core_fair(source, target, degree)
-            if result is not None:
-                result = result.replace(surface=faired)
-            return FaceFairReport(
-                new_face, "faired", "; ".join(notes), result=result, info=info,
-                poles_before=surface.shape, poles_after=faired.shape,
-                max_deviation=deviation["max"], tolerance=tol, deviation=deviation,
-                surface=faired)
-        measured.append(deviation["max"])
-    measured += [deviation_on_grid(face, new_face, None, reference=check,
-                                   surfaces=(surface, faired))["max"]
-                 for new_face, faired in prefiltered]
-    best = min(d for d in measured if d is not None) if any(
-        d is not None for d in measured) else float("inf")
-    where = "by OCCT's measure"
-    if len(refusals) == len(criteria):   # no candidate reached OCCT's check
-        if isinstance(criteria[0][0], AdaptiveTarget):   # the core's reason, at tol itself
-            raise ToleranceNotMetError(max(refusals, key=lambda r: r[0])[1], tolerance=tol,
-                                       best_deviation=best)
-        where = "by the search's estimate (no candidate reached OCCT's check)"
-    raise ToleranceNotMetError(
-        f"no target keeps this face within tol={tol:g} {where}, best found {best:.4g}; "
-        "raise the tolerance or leave the face as is.", tolerance=tol, best_deviation=best)
-
-
-def _keeps_every_pole(source, target, faired):
-    """True when an adaptive result (``target`` holds spaces, not scales) has at least the
-    source's pole count: it only moved knots, so the face is kept, as the uniform search
-    keeps a face whose only admissible target is the source's own space."""
-    adaptive = any(isinstance(t, SplineSpace) for t in target)
-    return adaptive and faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
-
-
-def _is_identity(source, target, degree):
-    """True when the target (scales, or the adaptive method's spaces) gives back the
-    source's own spaces."""
-    for space, n, deg in zip((source.u_space, source.v_space), target, degree):
-        if n is None:
-            continue
-        chosen = n if isinstance(n, SplineSpace) else target_space(space, int(n), deg)
-        if not chosen.same_as(space):
-            return False
-    return True
-
-
-def _unchanged(face, info, surface, message, tol):
-    return FaceFairReport(face, "unchanged", message, info=info, poles_before=surface.shape,
-                          poles_after=surface.shape, max_deviation=0.0, tolerance=tol)
-
-
-def _choose(source, tol, n, degree, sampler, finish, criterion, region=None, window=None):
-    """Target scales, the faired (finished) surface and the core result if computed.
-
-    For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
-    pair of non-uniform spaces the core chose, measured only on the face (``region``,
-    :func:`~cq_fairing.occ.trims.face_region` of a trimmed face, and its UV box
-    ``window``, whose bounds are sample lines); the core's uniform search
-    (a :class:`CoreSearch`) measures in ``window``; energy fairing (``criterion`` ``"energy"``) keeps the
-    source's spaces and has no target (``None``).
-    """
-    if criterion == "energy":
-        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
-                              v_knots=source.v_knots,
-                              degree=(source.u_degree, source.v_degree),
-                              weights=source.weights, method="energy")
-        return None, finish(result.surface), result
-    if isinstance(criterion, AdaptiveTarget):
-        result = fair_surface_adaptive(source, tol, target_degree=degree,
-                                       objective=criterion.objective,
-                                       borders=criterion.borders, region=region,
-                                       window=window)
-        spaces = (result.surface.u_space, result.surface.v_space)
-        return spaces, finish(result.surface), result
-    if isinstance(criterion, CoreSearch):
-        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
-                              v_knots=source.v_knots,
-                              degree=(source.u_degree, source.v_degree),
-                              weights=source.weights, target_degree=degree,
-                              search=criterion.rule, window=window)
-        return result.n, finish(result.surface), result
-    if n is not None:
-        pair = (n, n) if np.ndim(n) == 0 else tuple(n)
-        if len(pair) != 2:
-            raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
-        result = _core_fair(source, pair, degree)
-        return pair, finish(result.surface), result
-    measure = sampler.normal if criterion == "normal" else sampler.parametric
-    target, faired, _, _ = search_scales(source, tol, degree, measure, finish)
-    return target, faired, None
-
-
-def _uv_window(face, surface):
-    """The face's UV box inside the surface's domain as ``(u0, u1, v0, v1)``; ``None`` where
-    that is the whole domain or empty."""
-    (u0, u1), (v0, v1) = face_uv_box(face)
-    (a, b), (c, d) = surface.domain
-    box = (max(u0, a), min(u1, b), max(v0, c), min(v1, d))
-    if box[0] >= box[1] or box[2] >= box[3] or box == (a, b, c, d):
-        return None
-    return box
-
-
-def _core_fair(source, target, degree):
-    """The core's :class:`SurfaceFairResult` (with details) for the chosen target."""
-    return fair_surface(source.poles, n=target, u_knots=source.u_knots,
-                        v_knots=source.v_knots, degree=(source.u_degree, source.v_degree),
-                        weights=source.weights, target_degree=degree)
-
-
-def _finisher(surface, periodic, boundary):
-    r"""Post-processing of every candidate: keep the source's closed and collapsed borders.
-
-    * a **periodic** direction, or one whose first and last pole rows coincide in the
-      source (a closed, non-periodic seam), gets its first and last rows tied to their
-      mean (:func:`_tie_rows`), so the seam edge stays shared;
-    * a **collapsed** border row (all its poles at one point :math:`c`, the pole of a
-      sphere: a degenerated edge) is set back to :math:`c` in the faired net
-      (:func:`~cq_fairing.core.geometry.collapse_rows`), so the degenerated edge and its
-      vertex stay exact.
-
-    Rows count as coincident or collapsed within ``COINCIDENT`` (1e-9) of the net's extent
-    (:func:`~cq_fairing.core.geometry.closed_axes`).
-    ``boundary="fixed"`` first restores all the source's border rows.
-    """
-    closed = closed_axes(surface)
-    tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or closed[axis]]
-    collapsed = collapsed_rows(surface)
-
-    def finish(faired):
-        if boundary == "fixed":
-            faired = _fix_border(surface, faired)
-        for axis in tied:
-            faired = _tie_rows(faired, axis)
-        return collapse_rows(faired, collapsed)
-    return finish
-
-
-def _tie_rows(surface, axis):
-    """Make the first and last pole rows along ``axis`` equal (their mean)."""
-    hom = surface.homogeneous() if surface.is_rational else surface.poles.copy()
-    hom = np.moveaxis(hom, axis, 0).copy()
-    mean = 0.5 * (hom[0] + hom[-1])
-    hom[0] = hom[-1] = mean
-    hom = np.moveaxis(hom, 0, axis)
-    if surface.is_rational:
-        weights = hom[..., -1]
-        return replace(surface, poles=hom[..., :-1] / weights[..., None], weights=weights)
-    return replace(surface, poles=hom)
-
-
-def _fix_border(source, faired):
-    """``faired`` re-expressed in the source spaces with the source's border rows."""
-    poles = _into(faired, source)
-    src = source.homogeneous() if source.is_rational else source.poles
-    poles[0], poles[-1], poles[:, 0], poles[:, -1] = src[0], src[-1], src[:, 0], src[:, -1]
-    if source.is_rational:
-        weights = poles[..., -1]
-        if np.any(weights <= 0):
-            raise NumericalError("fixing the border gave non-positive weights.")
-        return BSplineSurface(poles[..., :-1] / weights[..., None], source.u_knots,
-                              source.v_knots, source.u_degree, source.v_degree, weights)
-    return BSplineSurface(poles, source.u_knots, source.v_knots, source.u_degree,
-                          source.v_degree)
-
-
-def _into(faired, source):
-    """L2 projection of ``faired`` into the source spaces (homogeneous if rational)."""
-    from ..core.scale_search import _operator
-
-    net = faired.homogeneous() if source.is_rational else faired.poles
-    au = _operator(faired.u_space, source.u_space)
-    av = _operator(faired.v_space, source.v_space)
-    net = np.tensordot(au, net, axes=(1, 0))
-    return np.matmul(av, net)
-
-
-def _non_rational(surface):
-    """Least-squares non-rational surface in the same spline spaces as ``surface``."""
-    u = np.linspace(*surface.u_space.domain, 3 * surface.shape[0] + 1)
-    v = np.linspace(*surface.v_space.domain, 3 * surface.shape[1] + 1)
-    points = surface.evaluate_grid(u, v)
-    mu = surface.u_space.collocation(u).toarray()
-    mv = surface.v_space.collocation(v).toarray()
-    pu, pv = np.linalg.pinv(mu), np.linalg.pinv(mv)
-    poles = np.einsum("ia,abd,jb->ijd", pu, points, pv)
-    return BSplineSurface(poles, surface.u_knots, surface.v_knots, surface.u_degree,
-                          surface.v_degree)
-

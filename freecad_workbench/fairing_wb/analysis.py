@@ -15,11 +15,14 @@ Curvatures are the core's (:func:`cq_fairing.core.fairness.grid_curvatures`).
 import numpy as np
 from scipy.spatial import cKDTree
 
-from cq_fairing.core.closest_points import closest_points_surface
+from cq_fairing.core.closest_points import closest_points_surface, closest_points_surface_restarted
 from cq_fairing.core.fairness import grid_curvatures
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
-           "two_sided_deviation", "curvature", "points_and_normals", "foot_points"]
+           "two_sided_deviation", "SampledDeviation", "curvature", "points_and_normals",
+           "foot_points"]
+
+PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured before a full check
 
 
 def sample_parameters(uv_range, count):
@@ -133,6 +136,68 @@ def two_sided_deviation(source, faired, uv_range, count=40):
     points, there = signed_deviation(source, faired, uv_range, count)
     _, back = signed_deviation(faired, source, uv_range, count)
     return points, np.where(np.abs(there) >= np.abs(back), there, -back)
+
+
+class SampledDeviation:
+    r"""Two-sided distance between a source surface :math:`S` and candidates :math:`F`
+    that share its parametrisation, at fixed samples :math:`(u_i, v_i)` of a face.
+
+    At each sample the larger of the distance from :math:`S(u_i, v_i)` to :math:`F` and
+    from :math:`F(u_i, v_i)` to :math:`S`, each by the core's batched Newton projection
+    started at :math:`(u_i, v_i)` and restarted from coarse samples of the surface
+    (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`): the
+    distance to an actual point of the surface, never below the true one.  This is the
+    batched measure :func:`cq_fairing.occ.sample_face_deviation` starts from before OCCT
+    measures its largest values again.
+
+    Parameters
+    ----------
+    source : cq_fairing.BSplineSurface
+    grids : sequence of (ndarray, ndarray, ndarray of bool)
+        ``(u, v, inside)``: grid parameters inside the surface's domain and the mask of
+        the samples taken (those on the face).
+    """
+
+    def __init__(self, source, grids):
+        self.source, self.grids = source, list(grids)
+        uv = np.concatenate([np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1)[inside]
+                             for u, v, inside in self.grids])
+        self.u, self.v = uv[:, 0], uv[:, 1]
+        self.points = self._on_grids(source)
+
+    def _on_grids(self, surface):
+        """``surface``'s points at the samples, (q, 3), evaluated grid by grid."""
+        return np.concatenate([surface.evaluate_grid(u, v)[inside]
+                               for u, v, inside in self.grids])
+
+    def distances(self, faired, index=slice(None), faired_points=None):
+        """The two-sided distance at the samples ``index`` (all by default);
+        ``faired_points``: ``faired``'s points there, if already evaluated."""
+        u, v = self.u[index], self.v[index]
+        there = closest_points_surface_restarted(faired, self.points[index], u, v)[2]
+        if faired_points is None:
+            faired_points = self._on_grids(faired)[index]
+        back = closest_points_surface_restarted(self.source, faired_points, u, v)[2]
+        return np.maximum(there, back)
+
+    def __call__(self, faired):
+        """The largest two-sided distance of ``faired`` over the samples."""
+        return float(self.distances(faired).max())
+
+    def exceeds(self, faired, tol, samples=PREFILTER_SAMPLES):
+        r"""True when :meth:`__call__` of ``faired`` exceeds ``tol`` for certain, found on
+        a few samples: only a sample whose parametric distance
+        :math:`|F(u_i, v_i) - S(u_i, v_i)|` exceeds ``tol`` can exceed it either way (both
+        distances are at most the parametric one), and the ``samples`` of them with the
+        largest parametric distance are measured as :meth:`__call__` measures them (each
+        sample on its own), so their largest value is a lower bound of the full maximum.
+        ``False`` says nothing."""
+        points = self._on_grids(faired)
+        parametric = np.linalg.norm(points - self.points, axis=1)
+        widest = np.argsort(parametric)[::-1][:samples]
+        widest = widest[parametric[widest] > tol]
+        return widest.size > 0 and bool(
+            self.distances(faired, widest, points[widest]).max() > tol)
 
 
 def curvature(surface, uv_range, count=40, kind="mean"):

@@ -16,7 +16,8 @@ import Part
 import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
-           "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask"]
+           "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask",
+           "periodic_directions"]
 
 
 def full_knots(knots, mults):
@@ -94,6 +95,14 @@ def uv_range(face, surface):
     (a, b), (c, d) = surface.domain
     u0, u1, v0, v1 = face.ParameterRange
     return (min(max(u0, a), b), min(max(u1, a), b), min(max(v0, c), d), min(max(v1, c), d))
+
+
+def periodic_directions(face):
+    """``("u",)``, ``("v",)``, ``("u", "v")`` or ``()``: the periodic directions of the
+    face's B-spline surface, which :func:`surface_from_face` unperiodizes."""
+    surface = face.Surface
+    return tuple(name for name, periodic in (("u", surface.isUPeriodic()),
+                                             ("v", surface.isVPeriodic())) if periodic)
 
 
 def inside_mask(face, u, v):

@@ -16,8 +16,8 @@ from . import conversion, make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 4  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
-# 4: the Joins and AngleTolerance properties
+VERSION = 5  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
+# 4: the Joins and AngleTolerance properties; 5: Search "local", the default
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -47,10 +47,13 @@ PROPERTIES = (
      "A join whose source normals differ by less than this all along it is smooth, "
      "else a crease", False),
     ("App::PropertyEnumeration", "Search", "Fairing",
-     "Tolerance search: linear (fast, the linear-hypothesis iteration of ARWFA), guaranteed (fewest poles), polyfit",
-     False),
+     "Tolerance search of the wavelet method: local (the command line's: bisection on the "
+     "face's own samples), or the core's search with a step rule: guaranteed (fewest "
+     "poles), linear (fast, the linear-hypothesis iteration of ARWFA), polyfit; every "
+     "candidate is checked both ways on the face", False),
     ("App::PropertyEnumeration", "Measure", "Fairing",
-     "Deviation used by the search: parametric (upper bound, fast) or geometric", False),
+     "Deviation bounded by the core's searches (guaranteed, linear, polyfit; local: "
+     "parametric only): parametric (upper bound, fast) or geometric", False),
     ("App::PropertyString", "PolesBefore", "Figures", "Control points of the source", True),
     ("App::PropertyString", "PolesAfter", "Figures", "Control points of the result", True),
     ("App::PropertyLength", "MaxDeviation", "Figures",
@@ -160,8 +163,9 @@ class Fairing:
     def _extend_enumerations(obj):
         """Give enumerations saved with fewer choices the current ones.
 
-        Version 1 saved Method without ``adaptive``; FreeCAD keeps the chosen value, which
-        is still among the choices.
+        Version 1 saved Method without ``adaptive``, versions up to 4 Search without
+        ``local``; FreeCAD keeps the chosen value (by name), which is still among the
+        choices.
         """
         for name, values in ENUMERATIONS.items():
             if obj.getEnumerationsOfProperty(name) != list(values):
@@ -194,7 +198,9 @@ class Fairing:
     def settings(obj):
         """Keyword arguments of :func:`make.fair_face` from the properties.
 
-        ``Objective`` applies to the adaptive method only and is ignored otherwise.
+        ``Objective`` applies to the adaptive method only and is ignored otherwise;
+        ``Measure`` other than ``parametric`` with ``Search`` ``local`` is refused by
+        :func:`make.fair_face` (the recompute fails, ``Status`` says why).
         """
         objective = obj.Objective if obj.Method == "adaptive" else "compact"
         common = {"method": obj.Method, "search": obj.Search, "measure": obj.Measure,

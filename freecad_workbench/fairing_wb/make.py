@@ -20,8 +20,16 @@ import numpy as np
 import Part
 
 import cq_fairing as cf
+from cq_fairing.core.face_search import (
+    face_attempts,
+    face_finisher,
+    sample_counts,
+    search_face,
+    uv_window,
+)
 from cq_fairing.core.joint_projection import unholdable
 from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
+from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: the default
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
@@ -36,7 +44,6 @@ MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
 OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "corners", "edges")
-SEARCHES = ("linear", "guaranteed", "polyfit")
 MEASURES = ("parametric", "geometric")
 DEVIATION_SAMPLES = 30
 # why a face at its coarsest that no network moved is kept (Status)
@@ -54,15 +61,20 @@ class FairedShape:
     poles_before, poles_after : tuple of int
         ``(k_u, k_v)`` for a face, ``(k,)`` for an edge.
     max_deviation : float
-        Largest closest-point distance between faired and source surface, both ways, at
-        ``DEVIATION_SAMPLES`` squared samples of each on the face (model units, mm;
-        ``analysis.two_sided_deviation``, as the deviation map).
+        Largest closest-point distance between faired and source surface, both ways
+        (model units, mm): in Tolerance mode with the wavelet method the value of the
+        check that accepted the net (:func:`searched_face`: the face's samples and the
+        centres of their cells), otherwise at ``DEVIATION_SAMPLES`` squared samples of
+        each on the face (``analysis.two_sided_deviation``, as the deviation map).
     seconds : float
         Wall time of conversion + fairing + rebuild.
     note : str
-        Why the element was kept as it is (``""`` when it was faired).
+        Why the element was kept as it is, or what its search did beyond the plain case
+        (``""`` when it was plainly faired); :func:`fair_shapes` puts the element's name
+        in front.
     surface : cq_fairing.BSplineSurface or None
-        The faired surface of a faired face (``None`` for an edge or a kept face).
+        The faired surface of a faired face, the source's of a face its search kept
+        unchanged (``None`` for an edge or a face kept for its tolerance or its joins).
     """
 
     shape: object
@@ -243,42 +255,49 @@ def _check_boundary(source, boundary):
             "'free' for it.")
 
 
-def _search_keywords(search, measure, method="wavelet"):
-    """The core's ``search`` and ``measure`` keywords, validated; none for the adaptive
-    and energy methods, which do not use them (the core refuses them there)."""
+def _check_search(search, measure):
+    """``search`` is one of :data:`SEARCHES` and ``measure`` one of :data:`MEASURES`;
+    ``measure`` is that of the core's searches and is refused, other than its default,
+    with ``"local"``, which measures on the face's own samples."""
     if search not in SEARCHES or measure not in MEASURES:
         raise cf.InvalidInputError(
             f"search must be one of {SEARCHES} and measure one of {MEASURES}, got "
             f"{search!r} and {measure!r}.")
-    return {"search": search, "measure": measure} if method == "wavelet" else {}
+    if search == "local" and measure != MEASURES[0]:
+        core = ", ".join(repr(s) for s in SEARCHES[1:])
+        raise cf.InvalidInputError(
+            f"measure {measure!r} applies to the core's searches ({core}) only, got search "
+            "'local', which bisects on the face's own samples and checks each candidate "
+            f"both ways; choose one of {core} for search, or measure {MEASURES[0]!r}.")
 
 
-def fair_surface_net(source, tolerance=None, target=None, method="wavelet", search="linear",
-                     measure="parametric", objective="compact", borders="auto", window=None):
-    """Fair a core surface by tolerance or by target control points (core call only).
+def _curve_search_keywords(search, measure, method):
+    """The core's ``search`` and ``measure`` keywords of an edge, validated
+    (:func:`_check_search`); none for the adaptive and energy methods, which do not use
+    them (the core refuses them there), nor for ``"local"``: an edge has no face
+    samples, and the core's own search (its default) fairs it."""
+    _check_search(search, measure)
+    if method != "wavelet" or search == "local":
+        return {}
+    return {"search": search, "measure": measure}
 
-    ``search`` is the accuracy-control strategy of the core (``linear``: ARWFA's
-    hypothesis iteration, a few evaluations; ``guaranteed``: the fewest poles in total,
-    slower; ``polyfit``) and ``measure`` its deviation (``parametric`` is an upper bound of
-    the ``geometric`` one, so the tolerance holds either way, and is about 3x faster);
-    ``window`` ``(u0, u1, v0, v1)``, the face's UV box, is where the wavelet method's
-    tolerance search measures (a trimmed face uses only part of its surface).
-    ``method="adaptive"`` ignores all three: it checks the true closest-point distance
-    itself.
-    """
+
+def fair_surface_net(source, tolerance=None, target=None, method="wavelet",
+                     objective="compact", borders="auto"):
+    """Fair a core surface by tolerance or by target control points (core call only):
+    target mode, and the adaptive and energy methods, which check the true
+    closest-point distance themselves (a face's wavelet tolerance search is
+    :func:`fair_face`'s, :func:`cq_fairing.core.face_search.search_face`)."""
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
     keywords = _core_keywords(method, objective, tolerance, borders)
     if tolerance is not None:
         _require_accuracy_control()
-        box = {"window": window} if method == "wavelet" and window is not None else {}
         return cf.fair_surface(source.poles, tol=_check_tolerance(tolerance),
                                u_knots=source.u_knots, v_knots=source.v_knots,
                                degree=(source.u_degree, source.v_degree),
-                               weights=source.weights,
-                               **_search_keywords(search, measure, method), **keywords,
-                               **box)
+                               weights=source.weights, **keywords)
     n = _target_spans(target, source.shape, (source.u_degree, source.v_degree), "face")
     # A target equal to the source's pole count keeps that direction as it is.
     n = tuple(None if t == k else m for t, k, m in zip(target, source.shape, n))
@@ -287,8 +306,48 @@ def fair_surface_net(source, tolerance=None, target=None, method="wavelet", sear
                            **keywords)
 
 
+def searched_face(face, source, tolerance, search="local", measure="parametric"):
+    r"""The wavelet method's tolerance search of ``face`` (whose net is ``source``): the
+    core's :func:`~cq_fairing.core.face_search.search_face`, the one ``cq-fairing`` and
+    :func:`cq_fairing.occ.fair_face` run, with the workbench's pieces.
+
+    * the samples: a grid of :func:`~cq_fairing.core.face_search.sample_counts` over the
+      face's UV box (``face.ParameterRange``, clipped to the surface's domain) with the
+      mask of those on the face (:func:`conversion.inside_mask`);
+    * the check: :class:`analysis.SampledDeviation`, two-sided, on the grid and the
+      centres of its cells that lie on the face, with its cheap lower bound as the
+      pre-filter;
+    * the finisher: :func:`~cq_fairing.core.face_search.face_finisher` (closed and
+      periodic seams tied, collapsed borders kept).
+
+    Returns
+    -------
+    (cq_fairing.core.face_search.FaceOutcome, analysis.SampledDeviation)
+        The outcome and the check that judged it.
+
+    Raises
+    ------
+    cq_fairing.ToleranceNotMetError
+        No candidate passes the check.
+    """
+    (a, b), (c, d) = source.domain
+    u0, u1, v0, v1 = face.ParameterRange
+    nu, nv = sample_counts(source)
+    u, v = np.clip(np.linspace(u0, u1, nu), a, b), np.clip(np.linspace(v0, v1, nv), c, d)
+    grid = (u, v, conversion.inside_mask(face, u, v))
+    cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
+    check = analysis.SampledDeviation(source, (grid, (cu, cv,
+                                                      conversion.inside_mask(face, cu, cv))))
+    outcome = search_face(
+        source, tolerance, grid, face_finisher(source, conversion.periodic_directions(face)),
+        check, attempts=face_attempts(tolerance, search, measure=measure),
+        exceeds=check.exceeds, window=uv_window(conversion.uv_range(face, source), source),
+        details=False, judge="the workbench")
+    return outcome, check
+
+
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
-              search="linear", measure="parametric", objective="compact", borders="auto"):
+              search="local", measure="parametric", objective="compact", borders="auto"):
     r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
     Parameters
@@ -308,10 +367,19 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         ``free``: L2-best surface, the boundary may move within the tolerance;
         ``corners``: the four corner points stay; ``edges``: boundary curves are the
         faired source boundary curves with pinned corners (polynomial faces only).
-    search : {"linear", "guaranteed", "polyfit"}
-        Accuracy-control strategy (tolerance mode), see :func:`fair_surface_net`.
+    search : {"local", "guaranteed", "linear", "polyfit"}
+        The wavelet method's tolerance search, as ``cq-fairing``'s and
+        :func:`cq_fairing.occ.fair_face`'s (:func:`searched_face`): ``local`` bisects on
+        the face's own samples (inside its trim); the others are the core's search with
+        that step rule (``linear``: ARWFA's hypothesis iteration, a few evaluations;
+        ``guaranteed``: the fewest poles in total, slower; ``polyfit``), measured in the
+        face's UV box.  Either way each candidate is checked both ways on the face's
+        samples, and if it fails the local search runs again with the parametric
+        distance, an upper bound of the true distance.
     measure : {"parametric", "geometric"}
-        Deviation measured by the search (tolerance mode).
+        The distance the core's searches bound (``parametric`` is an upper bound of the
+        ``geometric`` one and about 3x faster); refused, other than ``parametric``, with
+        ``search="local"``.
     objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only: ``compact`` is the fewest poles within ``tolerance``;
         ``faithful`` the smallest net whose residual variance is down to the source's
@@ -336,11 +404,20 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     start = time.perf_counter()
     source = conversion.surface_from_face(face)
     _check_boundary(source, boundary)
-    uv_range = conversion.uv_range(face, source)
-    result = fair_surface_net(source, tolerance, target, method, search, measure, objective,
-                              borders, uv_range)
-    faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
-    deviation = face_deviation(face, source, faired)
+    _check_search(search, measure)
+    _check_adaptive_only(method, objective, borders)
+    note = ""
+    if tolerance is not None and method == "wavelet":
+        outcome, check = searched_face(face, source, _check_tolerance(tolerance), search,
+                                       measure)
+        faired, deviation, note = outcome.surface, outcome.deviation, _outcome_note(outcome)
+        if boundary != "free":
+            faired = _closed_like(source, _fix_boundary(source, faired, boundary))
+            deviation = check(faired)
+    else:
+        result = fair_surface_net(source, tolerance, target, method, objective, borders)
+        faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
+        deviation = face_deviation(face, source, faired)
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
@@ -348,7 +425,15 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
             "larger tolerance.", tolerance=tolerance, best_deviation=deviation)
     shape = conversion.face_on_surface(conversion.part_surface(faired), face)
     return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
-                       time.perf_counter() - start, surface=faired)
+                       time.perf_counter() - start, note, faired)
+
+
+def _outcome_note(outcome):
+    """The note of a face's search outcome (:func:`searched_face`): why it is kept, or
+    what the search did beyond the plain case; ``""`` for a plainly faired face."""
+    if outcome.status == "unchanged":
+        return f"kept unchanged: {outcome.message}"
+    return f"faired: {'; '.join(outcome.notes)}" if outcome.notes else ""
 
 
 def face_deviation(face, source, faired):
@@ -363,12 +448,14 @@ def face_deviation(face, source, faired):
     return float((both[inside] if inside.any() else both).max())
 
 
-def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linear",
+def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="local",
               measure="parametric", objective="compact"):
     """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``).
 
     The arguments are those of :func:`fair_face` with one target count; the adaptive
-    method also fairs rational curves.
+    method also fairs rational curves.  An edge has no face samples: with ``search``
+    ``"local"`` (the default) the core's own tolerance search fairs it, with its
+    defaults.
     """
     start = time.perf_counter()
     source = conversion.curve_from_edge(edge)
@@ -381,7 +468,7 @@ def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="linea
     if tolerance is not None:
         _require_accuracy_control()
         result = cf.fair_curve(source.poles, tol=_check_tolerance(tolerance), **common,
-                               **_search_keywords(search, measure, method))
+                               **_curve_search_keywords(search, measure, method))
     else:
         target = (target,) if np.ndim(target) == 0 else tuple(target)[:1]
         (n,) = _target_spans(target, (source.n_poles,), (source.degree,), "curve")
@@ -551,8 +638,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             own = target if target is None or len(named) == 1 else _clamped_target(target,
                                                                                    element)
             try:
-                results.append(fair_face(element, **face_settings,
-                                         **{**settings, "target": own}))
+                result = fair_face(element, **face_settings, **{**settings, "target": own})
+                results.append(replace(result, note=f"{sub} {result.note}")
+                               if result.note else result)
             except cf.ToleranceNotMetError as error:
                 results.append(_kept(element, sub, error))
         else:
@@ -706,7 +794,7 @@ def _source_link(source):
 
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
-                 search="linear", measure="parametric", objective="compact", name="Fairing",
+                 search="local", measure="parametric", objective="compact", name="Fairing",
                  doc=None, borders="auto", joins="smooth", angle_tolerance=1.0):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
 
@@ -745,6 +833,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
     _check_adaptive_only(method, objective, borders)
+    _check_search(search, measure)
     check_joins(joins, angle_tolerance)
     obj_source, subs = _source_link(source)
     doc = doc or obj_source.Document

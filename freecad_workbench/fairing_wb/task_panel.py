@@ -163,8 +163,9 @@ class FairSurfacePanel:
         self.boundary.setEnabled(self.kind == "Face")
         self.search = _row(layout, "Search:", QtWidgets.QComboBox(), "fairing_search")
         self.search.addItems(list(make.SEARCHES))
-        self.search.setToolTip("linear: fast linear-hypothesis iteration (ARWFA); guaranteed: fewest "
-                               "control points, slower")
+        self.search.setToolTip("local: the command line's search, on the face's own samples; "
+                               "guaranteed: the core's, fewest control points; linear: fast "
+                               "linear-hypothesis iteration (ARWFA); polyfit")
         self.measure = _row(layout, "Measure:", QtWidgets.QComboBox(), "fairing_measure")
         self.measure.addItems(list(make.MEASURES))
         self.joins = _row(layout, "Joins:", QtWidgets.QComboBox(), "fairing_joins")
@@ -192,6 +193,7 @@ class FairSurfacePanel:
         self.error.setWordWrap(True)
         self.mode.currentIndexChanged.connect(self._mode_changed)
         self.method.currentIndexChanged.connect(self._mode_changed)
+        self.search.currentIndexChanged.connect(self._mode_changed)
         return form
 
     def _load(self):
@@ -228,16 +230,22 @@ class FairSurfacePanel:
         self.objective.setEnabled(adaptive)
         self.borders.setEnabled(adaptive and self.kind == "Face")
         self.search.setEnabled(by_tolerance and not adaptive)
-        self.measure.setEnabled(by_tolerance and not adaptive)
+        self.measure.setEnabled(by_tolerance and not adaptive and not self._local())
         self.target_u.setEnabled(not by_tolerance)
         self.target_v.setEnabled(not by_tolerance)
 
+    def _local(self):
+        """True when the local search is chosen: ``Measure`` belongs to the core's."""
+        return self.search.currentText() == "local"
+
     # -- values ----------------------------------------------------------------------------
     def settings(self):
-        """Keyword arguments of :func:`make.fair_face` (without ``boundary``)."""
+        """Keyword arguments of :func:`make.fair_face` (without ``boundary``); ``measure``
+        is the default with the local search, which does not use it."""
         method = self.method.currentText()
+        measure = make.MEASURES[0] if self._local() else self.measure.currentText()
         common = {"method": method, "search": self.search.currentText(),
-                  "measure": self.measure.currentText(),
+                  "measure": measure,
                   "objective": self.objective.currentText() if method == "adaptive"
                   else "compact"}
         if self.mode.currentIndex() == 0:

@@ -10,6 +10,7 @@ import numpy as np
 
 import FreeCAD
 import Part
+from face_references import noisy_blade_net
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
@@ -31,21 +32,14 @@ def reopened(doc, path):
 
 
 def noisy_blade_surface(n_u=50, n_v=80, noise=0.02, seed=3):
-    """A bicubic blade-like net (``n_u x n_v`` poles, mm) with seeded noise, and the truth.
+    """A bicubic blade-like net (``n_u x n_v`` poles, mm) with seeded noise, and the truth
+    (:func:`face_references.noisy_blade_net`).
 
     Returns
     -------
     (Part.BSplineSurface noisy, Part.BSplineSurface truth)
     """
-    u = np.linspace(0.0, 1.0, n_u)[:, None]
-    v = np.linspace(0.0, 1.0, n_v)[None, :]
-    x = 100.0 * u + 0 * v
-    y = 300.0 * v + 0 * u
-    z = 20.0 * np.sin(np.pi * u) * (1.0 - 0.5 * v) + 5.0 * np.cos(2 * np.pi * v) * u
-    truth = np.stack([x, y, z], axis=2)
-    rng = np.random.default_rng(seed)
-    noisy = truth.copy()
-    noisy[..., 2] += noise * rng.standard_normal(truth.shape[:2])
+    noisy, truth, _, _ = noisy_blade_net(n_u, n_v, noise, seed)
     return _part_surface(noisy), _part_surface(truth)
 
 

@@ -72,13 +72,14 @@ def test_two_sided_deviation_sees_a_face_that_stops_short():
 
 
 def test_deviation_at_the_border_matches_occt_on_the_iea_blade(doc):
-    """IEA blade Face2 at 0.5 mm (geometric measure): the largest deviation sits at a
+    """IEA blade Face2 at 0.5 mm (the linear search, geometric measure): the largest deviation sits at a
     corner sample whose closest source point lies on the face's border.  Foot points
     that slide along the border give FreeCAD's distance there (they once stopped at
     0.6076 where ``distToShape`` gives 0.4962, above the tolerance)."""
     shape = Part.read(str(fixtures.BLADE))
     blade = fixtures.add_shape(doc, shape, "Blade")
-    obj = make.make_fairing((blade, ["Face2"]), tolerance=0.5, measure="geometric")
+    obj = make.make_fairing((blade, ["Face2"]), tolerance=0.5, search="linear",
+                            measure="geometric")
     doc.recompute()
     assert obj.isValid(), obj.Status
     source_face = shape.Faces[1]

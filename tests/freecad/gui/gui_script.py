@@ -400,15 +400,23 @@ def run():
     pump()
     error = find("fairing_error").text()
     check("error shown in the panel", "out of range" in error, error)
-    # Timed Preview on the 50 x 80 face: target mode, then tolerance mode (linear search).
+    # Timed Preview on the 50 x 80 face: target mode, then tolerance mode (the default
+    # search, the command line's: its 38 x 65 net, tests/data/face_references.npz).
     find("fairing_target_u").setValue(18)
     find("fairing_target_v").setValue(26)
     check("target preview on 50x80 under 1 s", timed_preview() < 1.0, f"{timed_preview():.3f} s")
     find("fairing_mode").setCurrentIndex(0)
     find("fairing_tolerance").setProperty("rawValue", 0.05)
+    check("default search local, measure disabled with it",
+          find("fairing_search").currentText() == "local"
+          and not find("fairing_measure").isEnabled())
+    find("fairing_search").setCurrentText("linear")
+    check("measure enabled with a core search", find("fairing_measure").isEnabled())
+    find("fairing_search").setCurrentText("local")
     best = timed_preview()
     figures = find("fairing_figures").text()
-    check("preview figures shown", "50 x 80 ->" in figures and "max deviation" in figures, figures)
+    check("preview figures shown", "50 x 80 -> 38 x 65" in figures and "max deviation" in figures,
+          figures)
     check("tolerance preview on 50x80 under 1 s", best < 1.0, f"{best:.3f} s; {figures}")
     grab_window(os.path.join(ARTIFACTS, "fair_surface_panel.png"))
     undo_before = doc.UndoCount

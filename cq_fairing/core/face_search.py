@@ -1,0 +1,436 @@
+r"""The tolerance search of one face, for every backend: the fewest poles whose faired
+net the backend's own two-sided check keeps within ``tol``.
+
+A face is a B-spline surface :math:`S` seen through its trim.  A backend (the OCP layer's
+:func:`cq_fairing.occ.fair_face`, the FreeCAD workbench) hands :func:`search_face` its
+pieces, and the search is the same whichever it is:
+
+* ``grid`` ``(u, v, inside)``: sample parameters over the face's UV box and the mask of
+  those on the face, :func:`sample_counts` per direction by default; the candidates are
+  measured there (:class:`~cq_fairing.core.scale_search.SurfaceSampler`);
+* ``finish``: applied to every candidate before it is measured (:func:`face_finisher`:
+  closed seams tied, collapsed borders kept, optionally the source's border rows);
+* ``check(faired) -> float``: the backend's two-sided distance between the face and the
+  finished candidate put under the face's trim, the judge of every candidate; and
+  optionally ``exceeds(faired, tol) -> bool``, a cheap test that is true only where the
+  check's value is certain to exceed ``tol`` (a lower bound above it);
+* for the core's searches, ``window``, the face's UV box inside the surface's domain
+  (:func:`uv_window`), and for the adaptive method ``region(u, v)``, the mask of grid
+  samples on the face.
+
+The attempts (:func:`face_attempts`) run in order and the first whose candidate passes
+``check`` wins.  With the wavelet method and ``search="local"`` (the default of every
+face) they are: the bisection of :func:`~cq_fairing.core.scale_search.search_scales` on
+the face's samples with the distance to the faired tangent planes (a first-order
+estimate of the true distance), the core's two-sided uniform search
+(:func:`~cq_fairing.core.fairing.fair_surface` with ``search="guaranteed"``), then the
+bisection with the parametric distance :math:`|S_f(u, v) - S(u, v)|`, an upper bound of
+the true distance.  They aim at ``MARGIN * tol`` (room for excursions between samples);
+the last one aims at ``tol`` itself.  A core step rule (``"linear"``, ``"guaranteed"``,
+``"polyfit"``) replaces the first two by the core's search with that rule (and its
+``measure``).  The adaptive method lets the core choose non-uniform targets at ``tol``,
+then at ``MARGIN * tol``; the energy method likewise keeps the net and moves its poles.
+
+A face is kept ``'unchanged'`` when its net is already at its coarsest (degree + 1 poles
+per direction), when the chosen target is the source's own spaces, or when an adaptive
+target needs as many poles as the source.  A rational face whose homogeneous projection
+gets a non-positive weight is searched again on its non-rational least-squares
+approximation in the same spaces (:func:`non_rational`), and the outcome's notes say so.
+This module imports numpy and scipy only (and the core).
+"""
+
+from dataclasses import replace
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import InvalidInputError, NumericalError, ToleranceNotMetError
+from .adaptive_surface import fair_surface_adaptive
+from .fairing import fair_surface
+from .geometry import BSplineSurface, closed_axes, collapse_rows, collapsed_rows
+from .options import DEFAULTS
+from .plans import target_space
+from .results import SurfaceFairResult
+from .scale_search import SurfaceSampler, _operator, max_scales, search_scales, target_degrees
+from .spaces import SplineSpace
+
+__all__ = ["search_face", "FaceOutcome", "face_attempts", "face_finisher", "sample_counts",
+           "uv_window", "non_rational", "AdaptiveTarget", "CoreSearch", "MARGIN"]
+
+#: Share of ``tol`` the searches aim at (room for excursions between samples).
+MARGIN = 0.9
+#: Samples per direction for ``k`` poles: ``clip(2 k + 1, *SAMPLE_RANGE)``.
+SAMPLE_RANGE = (20, 400)
+
+
+class AdaptiveTarget(NamedTuple):
+    """Attempt that lets the core's adaptive search choose the target."""
+
+    objective: str
+    borders: str
+
+
+class CoreSearch(NamedTuple):
+    """Attempt that runs the core's uniform tolerance search with ``rule`` (one of
+    :data:`~cq_fairing.core.options.SEARCHES`) bounding the distance ``measure`` (one of
+    :data:`~cq_fairing.core.options.MEASURES`)."""
+
+    rule: str
+    measure: str = DEFAULTS["measure"]
+
+
+class FaceOutcome(NamedTuple):
+    """What :func:`search_face` made of a face.
+
+    Attributes
+    ----------
+    status : str
+        ``'faired'`` or ``'unchanged'``.
+    message : str
+        Why the face is unchanged (``""`` when faired).
+    surface : BSplineSurface
+        The faired, finished surface (the one ``check`` passed); the source when
+        unchanged.
+    result : SurfaceFairResult or None
+        The core result of the winning attempt, its surface the finished one (``None``
+        when unchanged, or with ``details=False`` after the local search).
+    deviation : float or None
+        ``check``'s value of ``surface`` (``0.0`` when unchanged).
+    notes : tuple of str
+        What the search did beyond the plain case (a non-rational approximation).
+    """
+
+    status: str
+    message: str
+    surface: BSplineSurface
+    result: SurfaceFairResult = None
+    deviation: float = None
+    notes: tuple = ()
+
+
+def sample_counts(surface):
+    """Default samples per direction of a face's grid: ``clip(2 k + 1, 20, 400)`` for
+    ``k`` poles in that direction."""
+    return tuple(int(np.clip(2 * k + 1, *SAMPLE_RANGE)) for k in surface.shape)
+
+
+def uv_window(box, surface):
+    """The face's UV box ``(u0, u1, v0, v1)`` inside ``surface``'s domain, as the core's
+    ``window``; ``None`` where that is the whole domain or empty."""
+    u0, u1, v0, v1 = box
+    (a, b), (c, d) = surface.domain
+    clipped = (max(u0, a), min(u1, b), max(v0, c), min(v1, d))
+    if clipped[0] >= clipped[1] or clipped[2] >= clipped[3] or clipped == (a, b, c, d):
+        return None
+    return clipped
+
+
+def face_attempts(tol, search="local", method="wavelet", objective="compact",
+                  borders="auto", measure=DEFAULTS["measure"]):
+    """The ``(criterion, goal)`` attempts of :func:`search_face`, in order.
+
+    With ``tol=None`` (an explicit target scale): one attempt.  ``method="adaptive"``:
+    an :class:`AdaptiveTarget` at ``tol``, then at ``MARGIN * tol``;
+    ``method="energy"`` likewise with the criterion ``"energy"``.  Otherwise the
+    requested search (``"local"``: the bisection with the normal-distance estimate
+    ``"normal"``, then the core's ``CoreSearch("guaranteed")`` with its default
+    measure; a core step rule: the core's search with it and ``measure`` alone, the one
+    search ``measure`` applies to), then the bisection with the parametric
+    distance ``"parametric"``, an upper bound of the true distance; they aim at
+    ``MARGIN * tol``, the last one at ``tol``.  The normal distance looks from the
+    original's samples only; where the faired face reaches beyond the original (the
+    checks measure both ways), the core's two-sided search still finds a coarse net,
+    where the parametric distance of a face with strongly graded knots keeps nearly all
+    poles (an impeller fillet: 20 x 3 poles against 48 x 3).
+    """
+    if tol is None:
+        return [(None, None)]
+    if method != "wavelet":
+        target = AdaptiveTarget(objective, borders) if method == "adaptive" else "energy"
+        return [(target, tol), (target, MARGIN * tol)]
+    first = (["normal", CoreSearch("guaranteed")] if search == "local"
+             else [CoreSearch(search, measure)])
+    return [(criterion, MARGIN * tol) for criterion in first + ["parametric"]] + \
+        [("parametric", tol)]
+
+
+def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None,
+                attempts=None, exceeds=None, region=None, window=None, details=True,
+                judge="the backend"):
+    """Fair a face's ``surface`` within ``tol`` (or onto ``n``), each candidate judged by
+    the backend's ``check`` (module notes).
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The face's net (periodic directions unperiodized).
+    tol : float or None
+        Largest two-sided distance ``check`` may report; ``None`` with ``n``.
+    grid : (ndarray, ndarray, ndarray of bool)
+        ``(u, v, inside)`` of the face's samples.
+    finish : callable
+        ``finish(faired) -> BSplineSurface`` for every candidate (:func:`face_finisher`).
+    check : callable
+        ``check(faired) -> float``: the two-sided distance of the finished candidate.
+    n : (int or None, int or None) or int, optional
+        Explicit target scales; then the only attempt, accepted whatever ``check`` says.
+    target_degree : int or (int, int), optional
+        Default ``min(3, source degree)`` per direction.
+    attempts : list, optional
+        :func:`face_attempts` (default: those of the local search at ``tol``).
+    exceeds : callable, optional
+        ``exceeds(faired, tol) -> bool``, true only where ``check(faired) > tol`` for
+        certain; such a candidate fails without ``check``, which measures it only if
+        every attempt fails (for the error's best deviation).
+    region : callable, optional
+        ``region(u, v)``: mask of grid samples on the face, for the adaptive method
+        (``None``: all of them).
+    window : (float, float, float, float), optional
+        The face's UV box for the core's searches (:func:`uv_window`).
+    details : bool
+        Compute the wavelet details of a local search's winner with the core.
+    judge : str
+        Who owns ``check``, for the error message: ``"OCCT"`` says "by OCCT's measure".
+
+    Returns
+    -------
+    FaceOutcome
+
+    Raises
+    ------
+    ToleranceNotMetError
+        No attempt keeps the face within ``tol``.
+    InvalidInputError
+        ``n`` is not an int or a pair.
+    """
+    attempts = attempts or face_attempts(tol)
+    degree = target_degrees(surface, target_degree)
+    scales = max_scales(surface, degree)
+    if scales == (None, None) and n is None:
+        return _unchanged(surface, "the net is already at its coarsest (degree + 1 poles "
+                          "per direction); nothing to fair")
+    if None in scales:  # the core's uniform search coarsens both directions or none
+        attempts = [a for a in attempts if not isinstance(a[0], CoreSearch)]
+    sampler = SurfaceSampler(grid, surface)
+    pieces = _Pieces(tol, n, degree, sampler, finish, check, exceeds, region, window,
+                     details, judge)
+    try:
+        return _verified(surface, pieces, attempts)
+    except NumericalError:
+        note = ("fairing in homogeneous coordinates gave non-positive weights; faired a "
+                "non-rational least-squares approximation instead")
+        return _verified(non_rational(surface), pieces, attempts)._replace(notes=(note,))
+
+
+class _Pieces(NamedTuple):
+    """What every attempt of :func:`search_face` shares."""
+
+    tol: float
+    n: object
+    degree: tuple
+    sampler: SurfaceSampler
+    finish: object
+    check: object
+    exceeds: object
+    region: object
+    window: tuple
+    details: bool
+    judge: str
+
+
+def _verified(source, pieces, attempts):
+    """The first attempt whose candidate passes ``pieces.check`` (module notes)."""
+    tol = pieces.tol
+    measured, refusals, prefiltered = [], [], []
+    for criterion, goal in attempts:
+        try:
+            target, faired, result = _choose(source, goal, criterion, pieces)
+        except ToleranceNotMetError as exc:
+            measured.append(exc.best_deviation)
+            refusals.append((goal, str(exc)))
+            continue
+        if target is not None and _is_identity(source, target, pieces.degree):
+            return _unchanged(source, "the finest admissible target is the source space "
+                              "itself; nothing to fair")
+        if target is not None and _keeps_every_pole(source, target, faired):
+            return _unchanged(source, "the adaptive target needs as many poles as the "
+                              "source; nothing to reduce")
+        if tol is not None and pieces.exceeds is not None and pieces.exceeds(faired, tol):
+            prefiltered.append(faired)
+            continue
+        deviation = pieces.check(faired)
+        if tol is None or deviation <= tol:
+            if pieces.details and result is None:
+                result = _core_fair(source, target, pieces.degree)
+            if result is not None:
+                result = result.replace(surface=faired)
+            return FaceOutcome("faired", "", faired, result, deviation)
+        measured.append(deviation)
+    measured += [pieces.check(faired) for faired in prefiltered]
+    known = [d for d in measured if d is not None]
+    best = min(known) if known else float("inf")
+    where = f"by {pieces.judge}'s measure"
+    if len(refusals) == len(attempts):   # no candidate reached the check
+        if isinstance(attempts[0][0], AdaptiveTarget):   # the core's reason, at tol itself
+            raise ToleranceNotMetError(max(refusals, key=lambda r: r[0])[1], tolerance=tol,
+                                       best_deviation=best)
+        where = f"by the search's estimate (no candidate reached {pieces.judge}'s check)"
+    raise ToleranceNotMetError(
+        f"no target keeps this face within tol={tol:g} {where}, best found {best:.4g}; "
+        "raise the tolerance or leave the face as is.", tolerance=tol, best_deviation=best)
+
+
+def _unchanged(surface, message):
+    return FaceOutcome("unchanged", message, surface, None, 0.0)
+
+
+def _keeps_every_pole(source, target, faired):
+    """True when an adaptive result (``target`` holds spaces, not scales) has at least the
+    source's pole count: it only moved knots, so the face is kept, as the uniform search
+    keeps a face whose only admissible target is the source's own space."""
+    adaptive = any(isinstance(t, SplineSpace) for t in target)
+    return adaptive and faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
+
+
+def _is_identity(source, target, degree):
+    """True when the target (scales, or the adaptive method's spaces) gives back the
+    source's own spaces."""
+    for space, n, deg in zip((source.u_space, source.v_space), target, degree):
+        if n is None:
+            continue
+        chosen = n if isinstance(n, SplineSpace) else target_space(space, int(n), deg)
+        if not chosen.same_as(space):
+            return False
+    return True
+
+
+def _choose(source, tol, criterion, pieces):
+    """Target, the faired (finished) surface and the core result if computed.
+
+    For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
+    pair of non-uniform spaces the core chose, measured only on the face
+    (``pieces.region`` and ``pieces.window``, whose bounds are sample lines); the core's
+    uniform search (a :class:`CoreSearch`) measures in ``pieces.window``; energy fairing
+    (``criterion`` ``"energy"``) keeps the source's spaces and has no target (``None``).
+    """
+    finish, degree = pieces.finish, pieces.degree
+    if criterion == "energy":
+        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
+                              v_knots=source.v_knots,
+                              degree=(source.u_degree, source.v_degree),
+                              weights=source.weights, method="energy")
+        return None, finish(result.surface), result
+    if isinstance(criterion, AdaptiveTarget):
+        result = fair_surface_adaptive(source, tol, target_degree=degree,
+                                       objective=criterion.objective,
+                                       borders=criterion.borders, region=pieces.region,
+                                       window=pieces.window)
+        spaces = (result.surface.u_space, result.surface.v_space)
+        return spaces, finish(result.surface), result
+    if isinstance(criterion, CoreSearch):
+        result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
+                              v_knots=source.v_knots,
+                              degree=(source.u_degree, source.v_degree),
+                              weights=source.weights, target_degree=degree,
+                              search=criterion.rule, measure=criterion.measure,
+                              window=pieces.window)
+        return result.n, finish(result.surface), result
+    if pieces.n is not None:
+        n = pieces.n
+        pair = (n, n) if np.ndim(n) == 0 else tuple(n)
+        if len(pair) != 2:
+            raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
+        result = _core_fair(source, pair, degree)
+        return pair, finish(result.surface), result
+    sampler = pieces.sampler
+    measure = sampler.normal if criterion == "normal" else sampler.parametric
+    target, faired, _, _ = search_scales(source, tol, degree, measure, finish)
+    return target, faired, None
+
+
+def _core_fair(source, target, degree):
+    """The core's :class:`SurfaceFairResult` (with details) for the chosen target."""
+    return fair_surface(source.poles, n=target, u_knots=source.u_knots,
+                        v_knots=source.v_knots, degree=(source.u_degree, source.v_degree),
+                        weights=source.weights, target_degree=degree)
+
+
+def face_finisher(surface, periodic=(), fixed_border=False):
+    r"""Post-processing of every candidate: keep the source's closed and collapsed borders.
+
+    * a **periodic** direction (``"u"`` or ``"v"`` in ``periodic``: the source was
+      unperiodized), or one whose first and last pole rows coincide in the source (a
+      closed seam), gets its first and last rows tied to their mean, so the seam edge
+      stays shared;
+    * a **collapsed** border row (all its poles at one point :math:`c`, the pole of a
+      sphere: a degenerated edge) is set back to :math:`c` in the faired net
+      (:func:`~cq_fairing.core.geometry.collapse_rows`), so the degenerated edge and its
+      vertex stay exact.
+
+    Rows count as coincident or collapsed within ``COINCIDENT`` (1e-9) of the net's extent
+    (:func:`~cq_fairing.core.geometry.closed_axes`).  ``fixed_border`` first restores all
+    the source's border rows (:func:`_fix_border`).
+    """
+    closed = closed_axes(surface)
+    tied = [axis for axis in (0, 1) if "uv"[axis] in periodic or closed[axis]]
+    collapsed = collapsed_rows(surface)
+
+    def finish(faired):
+        if fixed_border:
+            faired = _fix_border(surface, faired)
+        for axis in tied:
+            faired = _tie_rows(faired, axis)
+        return collapse_rows(faired, collapsed)
+    return finish
+
+
+def _tie_rows(surface, axis):
+    """Make the first and last pole rows along ``axis`` equal (their mean)."""
+    hom = surface.homogeneous() if surface.is_rational else surface.poles.copy()
+    hom = np.moveaxis(hom, axis, 0).copy()
+    mean = 0.5 * (hom[0] + hom[-1])
+    hom[0] = hom[-1] = mean
+    hom = np.moveaxis(hom, 0, axis)
+    if surface.is_rational:
+        weights = hom[..., -1]
+        return replace(surface, poles=hom[..., :-1] / weights[..., None], weights=weights)
+    return replace(surface, poles=hom)
+
+
+def _fix_border(source, faired):
+    """``faired`` re-expressed in the source spaces (L2 projection, exact when the spaces
+    are nested) with the source's border rows."""
+    poles = _into(faired, source)
+    src = source.homogeneous() if source.is_rational else source.poles
+    poles[0], poles[-1], poles[:, 0], poles[:, -1] = src[0], src[-1], src[:, 0], src[:, -1]
+    if source.is_rational:
+        weights = poles[..., -1]
+        if np.any(weights <= 0):
+            raise NumericalError("fixing the border gave non-positive weights.")
+        return BSplineSurface(poles[..., :-1] / weights[..., None], source.u_knots,
+                              source.v_knots, source.u_degree, source.v_degree, weights)
+    return BSplineSurface(poles, source.u_knots, source.v_knots, source.u_degree,
+                          source.v_degree)
+
+
+def _into(faired, source):
+    """L2 projection of ``faired`` into the source spaces (homogeneous if rational)."""
+    net = faired.homogeneous() if source.is_rational else faired.poles
+    au = _operator(faired.u_space, source.u_space)
+    av = _operator(faired.v_space, source.v_space)
+    net = np.tensordot(au, net, axes=(1, 0))
+    return np.matmul(av, net)
+
+
+def non_rational(surface):
+    """Least-squares non-rational surface in the same spline spaces as ``surface``, fitted
+    to its points on a ``(3 k_u + 1) x (3 k_v + 1)`` grid."""
+    u = np.linspace(*surface.u_space.domain, 3 * surface.shape[0] + 1)
+    v = np.linspace(*surface.v_space.domain, 3 * surface.shape[1] + 1)
+    points = surface.evaluate_grid(u, v)
+    mu = surface.u_space.collocation(u).toarray()
+    mv = surface.v_space.collocation(v).toarray()
+    pu, pv = np.linalg.pinv(mu), np.linalg.pinv(mv)
+    poles = np.einsum("ia,abd,jb->ijd", pu, points, pv)
+    return BSplineSurface(poles, surface.u_knots, surface.v_knots, surface.u_degree,
+                          surface.v_degree)

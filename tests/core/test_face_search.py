@@ -1,0 +1,151 @@
+"""The face search every backend runs (:mod:`cq_fairing.core.face_search`), with a check
+built here from the core's closest points (a backend's two-sided distance on the face's
+samples): the winner is within the tolerance by an independent dense measure, the
+attempts run in their order and a failing check moves on to the next, a pre-filtered
+candidate is measured only when all fail, the coarsest and identity cases are kept, and
+the finisher keeps closed and collapsed borders."""
+
+import numpy as np
+import pytest
+
+import cq_fairing as cf
+from cq_fairing.core.closest_points import closest_points_surface_restarted
+from cq_fairing.core.face_search import (
+    MARGIN,
+    CoreSearch,
+    face_attempts,
+    face_finisher,
+    sample_counts,
+    search_face,
+)
+
+TOL = 0.05
+
+
+def _noisy(n_u=30, n_v=40, seed=3):
+    """A bicubic 30 x 40 net with seeded noise of 0.02 over a smooth bump (mm)."""
+    u, v = np.meshgrid(np.linspace(0, 1, n_u), np.linspace(0, 1, n_v), indexing="ij")
+    z = 20.0 * np.sin(np.pi * u) * (1.0 - 0.5 * v) + 5.0 * np.cos(2 * np.pi * v) * u
+    z += 0.02 * np.random.default_rng(seed).standard_normal(u.shape)
+    return cf.make_surface(np.stack([100.0 * u, 300.0 * v, z], axis=-1), degree=(3, 3))
+
+
+def _grid(surface, counts=None):
+    (u0, u1), (v0, v1) = surface.domain
+    nu, nv = counts or sample_counts(surface)
+    u, v = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
+    return u, v, np.ones((nu, nv), dtype=bool)
+
+
+class TwoSided:
+    """Two-sided distance on the grid's samples, each way by the core's restarted Newton
+    projection, with a log of the candidates it measured."""
+
+    def __init__(self, source, grid):
+        u, v, _ = grid
+        uu, vv = np.meshgrid(u, v, indexing="ij")
+        self.source, self.u, self.v = source, uu.ravel(), vv.ravel()
+        self.points = source.evaluate_grid(u, v).reshape(-1, 3)
+        self.grid, self.log = grid, []
+
+    def __call__(self, faired):
+        there = closest_points_surface_restarted(faired, self.points, self.u, self.v)[2]
+        back_points = faired.evaluate_grid(*self.grid[:2]).reshape(-1, 3)
+        back = closest_points_surface_restarted(self.source, back_points, self.u, self.v)[2]
+        self.log.append((faired.shape, float(max(there.max(), back.max()))))
+        return self.log[-1][1]
+
+
+def _dense_two_sided(source, faired, count=97):
+    """Independent check: the same two-sided distance on a finer grid than the search's."""
+    return TwoSided(source, _grid(source, (count, count)))(faired)
+
+
+def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
+    source = _noisy()
+    grid = _grid(source)
+    check = TwoSided(source, grid)
+    outcome = search_face(source, TOL, grid, face_finisher(source), check)
+    assert outcome.status == "faired" and outcome.notes == ()
+    assert outcome.deviation == check.log[-1][1] <= TOL
+    assert outcome.surface.shape[0] * outcome.surface.shape[1] < 30 * 40
+    assert _dense_two_sided(source, outcome.surface) <= TOL * 1.02
+    assert outcome.result is not None
+    assert outcome.result.surface is outcome.surface
+
+
+def test_a_failing_check_moves_on_to_the_next_attempt():
+    """A check that refuses everything below a pole count sees the attempts in order
+    (local bisection, core search, parametric bisection at MARGIN * tol, then at tol)
+    and the error names the judge and the best value it measured."""
+    source = _noisy()
+    grid = _grid(source)
+    measured = TwoSided(source, grid)
+
+    def strict(faired):
+        return measured(faired) + 1.0   # never within TOL
+
+    with pytest.raises(cf.ToleranceNotMetError, match="by the judge's measure") as error:
+        search_face(source, TOL, grid, face_finisher(source), strict, judge="the judge")
+    assert len(measured.log) == 4
+    assert error.value.best_deviation == pytest.approx(min(d for _, d in measured.log) + 1.0)
+
+
+def test_a_prefiltered_candidate_is_measured_only_when_every_attempt_fails():
+    source = _noisy()
+    grid = _grid(source)
+    check = TwoSided(source, grid)
+    seen = []
+
+    def first_fails(faired, tol):
+        seen.append(faired.shape)
+        return len(seen) == 1
+
+    outcome = search_face(source, TOL, grid, face_finisher(source), check,
+                          exceeds=first_fails)
+    assert outcome.status == "faired" and len(seen) == 2 and len(check.log) == 1
+    check.log.clear()
+    with pytest.raises(cf.ToleranceNotMetError, match="by the backend's measure"):
+        search_face(source, TOL, grid, face_finisher(source), check,
+                    exceeds=lambda faired, tol: True)
+    assert len(check.log) == 4   # measured after all failed, for the best deviation
+
+
+def test_attempts_of_each_search():
+    assert face_attempts(None) == [(None, None)]
+    local = face_attempts(TOL)
+    assert [c for c, _ in local] == ["normal", CoreSearch("guaranteed"), "parametric",
+                                     "parametric"]
+    assert [g for _, g in local] == [MARGIN * TOL] * 3 + [TOL]
+    linear = face_attempts(TOL, "linear", measure="parametric")
+    assert linear[0] == (CoreSearch("linear", "parametric"), MARGIN * TOL)
+    assert face_attempts(TOL, "local", measure="parametric") == local
+
+
+def test_the_coarsest_net_and_the_source_space_are_kept():
+    """A 4 x 4 bicubic net: its only cubic target is its own space (kept, as the identity);
+    asked for degree 4 it has no admissible target at all (kept, at its coarsest)."""
+    bump = cf.make_surface(_noisy().poles[::9, ::13][:4, :4], degree=(3, 3))
+    grid = _grid(bump)
+    check = TwoSided(bump, grid)
+    outcome = search_face(bump, TOL, grid, face_finisher(bump), check)
+    assert outcome.status == "unchanged" and "source space itself" in outcome.message
+    assert outcome.surface is bump and outcome.deviation == 0.0 and check.log == []
+    outcome = search_face(bump, TOL, grid, face_finisher(bump), check, target_degree=4)
+    assert outcome.status == "unchanged" and "at its coarsest" in outcome.message
+
+
+def test_the_finisher_ties_a_closed_seam_and_keeps_a_collapsed_border():
+    angle = np.linspace(0, 2 * np.pi, 12)[:, None]
+    height = np.linspace(0, 1, 8)[None, :]
+    radius = np.sin(np.pi * height / 2)          # row 0 collapses onto the axis
+    poles = np.stack(np.broadcast_arrays(radius * np.cos(angle), radius * np.sin(angle),
+                                         height), axis=-1)
+    source = cf.make_surface(poles, degree=(3, 3))
+    moved = cf.make_surface(poles + 0.01 * np.random.default_rng(1).normal(size=poles.shape),
+                            degree=(3, 3))
+    finished = face_finisher(source)(moved)
+    assert np.array_equal(finished.poles[0], finished.poles[-1])
+    assert np.abs(finished.poles[:, 0] - poles[0, 0]).max() == 0.0
+    untouched = face_finisher(_noisy())(moved)
+    assert not np.array_equal(untouched.poles[0], untouched.poles[-1])

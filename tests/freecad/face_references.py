@@ -1,0 +1,107 @@
+"""The nets ``cq_fairing.occ.fair_face`` gives, with its defaults, on the faces the
+FreeCAD tests compare the workbench's Tolerance mode with (``tests/data/face_references.npz``).
+
+FreeCAD's Python has no OCP, so the command line's side is stored: the main suite checks
+that the file is still what ``fair_face`` gives (``tests/occ/test_face_references.py``),
+and the headless FreeCAD test that the workbench gives the same nets
+(``tests/freecad/app/test_same_as_cli.py``).  After a change of the face search,
+regenerate it with the Python that has cadquery (the main suite's), from the
+repository root::
+
+    python -m tests.freecad.face_references
+
+The cases: every face of ``fuselage.brep`` at 2.5 mm, and the 50 x 80 noisy face of the
+workbench tests (:func:`noisy_blade_net`) at 0.05 mm.  This module imports numpy only;
+:func:`computed` imports the OCP layer.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+REFERENCES = REPO / "tests" / "data" / "face_references.npz"
+FUSELAGE = ("fuselage.brep", 2.5)
+NOISY = ((50, 80), 0.05)
+
+
+def noisy_blade_net(n_u=50, n_v=80, noise=0.02, seed=3):
+    """A bicubic blade-like net (``n_u x n_v`` poles, mm) with seeded noise, the truth,
+    and the knots of both (clamped, uniform).
+
+    Returns
+    -------
+    noisy, truth : ndarray, shape (n_u, n_v, 3)
+    u_knots, v_knots : ndarray
+        Full clamped knot vectors on [0, 1].
+    """
+    u = np.linspace(0.0, 1.0, n_u)[:, None]
+    v = np.linspace(0.0, 1.0, n_v)[None, :]
+    x = 100.0 * u + 0 * v
+    y = 300.0 * v + 0 * u
+    z = 20.0 * np.sin(np.pi * u) * (1.0 - 0.5 * v) + 5.0 * np.cos(2 * np.pi * v) * u
+    truth = np.stack([x, y, z], axis=2)
+    rng = np.random.default_rng(seed)
+    noisy = truth.copy()
+    noisy[..., 2] += noise * rng.standard_normal(truth.shape[:2])
+    return noisy, truth, _clamped_knots(n_u), _clamped_knots(n_v)
+
+
+def _clamped_knots(poles, degree=3):
+    inner = np.linspace(0.0, 1.0, poles - degree + 1)
+    return np.concatenate([[0.0] * degree, inner, [1.0] * degree])
+
+
+def load():
+    """``{case: {field: value}}`` from :data:`REFERENCES` (case ``"fuselage/3"``,
+    ``"noisy"``; fields ``source``, ``status``, ``poles``, ``u_knots``, ``v_knots``,
+    ``max_deviation``)."""
+    out = {}
+    with np.load(REFERENCES) as data:
+        for key in data.files:
+            case, name = key.rsplit(":", 1)
+            value = data[key]
+            out.setdefault(case, {})[name] = str(value) if value.dtype.kind == "U" else value
+    return out
+
+
+def computed():
+    """The cases as ``fair_face`` (defaults, the tolerance above) gives them now."""
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    from cq_fairing.core.geometry import make_surface
+    from cq_fairing.occ import face_to_surface, fair_face, read_shape
+    from cq_fairing.occ.builders import surface_to_natural_face
+
+    name, tol = FUSELAGE
+    explorer = TopExp_Explorer(read_shape(REPO / "tests" / "data" / name), TopAbs_FACE)
+    faces = []
+    while explorer.More():
+        faces.append(TopoDS.Face_s(explorer.Current()))
+        explorer.Next()
+    cases = {f"fuselage/{k}": (face, tol) for k, face in enumerate(faces)}
+    noisy, _, u_knots, v_knots = noisy_blade_net(*NOISY[0])
+    cases["noisy"] = (surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3))),
+                      NOISY[1])
+    out = {}
+    for case, (face, tol) in cases.items():
+        report = fair_face(face, tol=tol)
+        surface = report.surface if report.surface is not None else face_to_surface(face)[0]
+        out[case] = {"source": face_to_surface(face)[0].poles, "status": report.status,
+                     "poles": surface.poles, "u_knots": surface.u_knots,
+                     "v_knots": surface.v_knots,
+                     "max_deviation": np.float64(report.max_deviation)}
+    return out
+
+
+def main():
+    arrays = {f"{case}:{name}": np.asarray(value) for case, fields in computed().items()
+              for name, value in fields.items()}
+    np.savez_compressed(REFERENCES, **arrays)
+    print(f"wrote {REFERENCES.relative_to(REPO)}: {len(arrays)} arrays")
+
+
+if __name__ == "__main__":
+    main()

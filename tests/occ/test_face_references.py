@@ -1,0 +1,34 @@
+"""The stored command-line nets the FreeCAD tests compare the workbench with
+(``tests/data/face_references.npz``) are what ``cq_fairing.occ.fair_face`` gives now.
+
+If this fails after a change of the face search, regenerate the file
+(``python -m tests.freecad.face_references``) and run the FreeCAD suite: the workbench
+must follow (``tests/freecad/app/test_same_as_cli.py``).
+"""
+
+import numpy as np
+import pytest
+
+from tests.freecad import face_references
+
+STORED = face_references.load()
+NOW = face_references.computed()
+
+
+def test_the_same_cases():
+    assert sorted(STORED) == sorted(NOW)
+    assert {STORED[case]["status"] for case in STORED} == {"faired", "unchanged"}
+
+
+@pytest.mark.parametrize("case", sorted(STORED))
+def test_stored_net_is_fair_faces(case):
+    stored, now = STORED[case], NOW[case]
+    size = float(np.ptp(now["source"].reshape(-1, 3), axis=0).max())
+    assert stored["status"] == now["status"]
+    assert np.array_equal(stored["source"], now["source"])
+    assert stored["poles"].shape == now["poles"].shape
+    assert np.abs(stored["u_knots"] - now["u_knots"]).max() <= 1e-12
+    assert np.abs(stored["v_knots"] - now["v_knots"]).max() <= 1e-12
+    assert np.abs(stored["poles"] - now["poles"]).max() <= 1e-9 * size
+    assert float(stored["max_deviation"]) == pytest.approx(float(now["max_deviation"]),
+                                                           rel=1e-6)
