@@ -98,11 +98,16 @@ def surface_derivatives(surface, u, v, order):
 def _derivatives_in_domain(surface, u, v, order):
     """:func:`surface_derivatives` at 1-d float parameters known to lie in the domain (the
     clamped iterates of :func:`closest_points_surface`): no check."""
+    h = surface.taylor.derivatives_in_domain(u, v, order)
+    return rational_derivatives(h) if surface.is_rational else h
+
+
+def rational_derivatives(h):
+    """Partial derivatives ``{(a, b): S_{u^a v^b}}`` of :math:`S = X / w` from those of
+    the homogeneous surface, ``h`` (``{(a, b): (X, w)}``, ``w`` the last coordinate, the
+    lower orders first), by the quotient rule (The NURBS Book, eq. 4.20)."""
     from math import comb
 
-    h = surface.taylor.derivatives_in_domain(u, v, order)
-    if not surface.is_rational:
-        return h
     w = {key: val[:, -1:] for key, val in h.items()}
     out = {}
     for a, b in h:

@@ -92,17 +92,18 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from ..errors import InvalidInputError
-from .evaluation import surface_derivatives
+from .banded import BandedSPD
+from .evaluation import rational_derivatives
 from .geometry import BSplineSurface
 from .gram import gram_matrix
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
-           "pinning_patch", "side_parameters", "turned_patches", "JoinTurns", "mirror_ratio", "UnionFind",
-           "mean_normal", "shared_basis",
+           "pinning_patch", "side_parameters", "side_points", "turned_patches", "JoinTurns",
+           "mirror_ratio", "UnionFind", "mean_normal", "shared_basis", "tied_in_order",
            "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
            "holds_curvature", "CURVATURE_SLACK"]
 
@@ -294,55 +295,90 @@ def side_parameters(surface, side, t):
     return u0 + (u1 - u0) * np.asarray(t), [v0 if side[1] == "0" else v1]
 
 
-def join_angles(surfaces, join, t, t_b=None):
+def join_angles(surfaces, join, t, t_b=None, known=None):
     """Angle (degrees) between the two patches' normals at the normalised parameters
     ``t`` along ``join`` (folded to at most 90: the faces' orientations do not count);
     ``t_b``: side ``b``'s own normalised parameters of those points, where its
     parametrization along the join differs (default: the same ``t``, reversed with the
-    join)."""
+    join); ``known``: as in :func:`_side_bases`."""
     t = np.asarray(t, dtype=float)
     if t_b is None:
         t_b = 1.0 - t if join.reversed else t
-    normals = [_side_normals(surfaces[index], side, along)
+    normals = [_side_normals(surfaces[index], side, along, known)
                for index, side, along in ((join.a, join.side_a, t),
                                           (join.b, join.side_b, np.asarray(t_b, dtype=float)))]
     cos = np.clip(np.abs(np.sum(normals[0] * normals[1], axis=1)), 0.0, 1.0)
     return np.degrees(np.arccos(cos))
 
 
-def _nearest_along(surfaces, join, t, samples=ANGLE_SAMPLES * 16):
+def _nearest_along(surfaces, join, t, samples=ANGLE_SAMPLES * 16, known=None):
     """Side ``b``'s normalised parameters of the points of its border nearest to side
     ``a``'s border points at ``t`` (among ``samples`` points of side ``b``): where the
     two sources run along the join at different speeds, equal parameters are different
-    places."""
+    places (``known``: as in :func:`_side_bases`)."""
     dense = np.linspace(0.0, 1.0, samples)
-    points = [_side_points(surfaces[index], side, along)
+    points = [side_points(surfaces[index], side, along, known)
               for index, side, along in ((join.a, join.side_a, np.asarray(t, dtype=float)),
                                          (join.b, join.side_b, dense))]
     nearest = np.argmin(np.linalg.norm(points[0][:, None] - points[1][None], axis=2), axis=1)
     return dense[nearest]
 
 
-def _side_points(surface, side, along):
-    """Points along ``side`` at the normalised parameters ``along``."""
-    return _side_derivatives(surface, side, along, 0)[(0, 0)]
+def side_points(surface, side, along, known=None):
+    """Points along ``side`` at the normalised parameters ``along`` (``known``: as in
+    :func:`_side_bases`)."""
+    return _side_derivatives(surface, side, along, 0, known)[(0, 0)]
 
 
-def _side_normals(surface, side, along):
+def _side_normals(surface, side, along, known=None):
     """Unit normals :math:`S_u\times S_v` along ``side`` at the normalised parameters
-    ``along``."""
-    d = _side_derivatives(surface, side, along, 1)
+    ``along`` (``known``: as in :func:`_side_bases`)."""
+    d = _side_derivatives(surface, side, along, 1, known)
     n = np.cross(d[(1, 0)], d[(0, 1)])
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
-def _side_derivatives(surface, side, along, order):
-    """Partial derivatives up to ``order`` along ``side`` at the normalised parameters
-    ``along``, from the surface's Taylor form
-    (:func:`~cq_fairing.core.evaluation.surface_derivatives`)."""
-    u, v = (np.broadcast_to(np.asarray(x, dtype=float), along.shape)
-            for x in side_parameters(surface, side, along))
-    return surface_derivatives(surface, u, v, order)
+def _side_derivatives(surface, side, along, order, known=None):
+    """Partial derivatives ``{(a, b): S_{u^a v^b}}`` up to ``order`` along ``side`` at
+    the normalised parameters ``along``: the (homogeneous) net contracted with the side's
+    basis values there (:func:`_side_bases`, with ``known``), the quotient rule applied
+    for a rational surface (:func:`~cq_fairing.core.evaluation.rational_derivatives`)."""
+    across, lengthwise = _side_bases(surface, side, along, order, known)
+    net = surface.homogeneous() if surface.is_rational else surface.poles
+    if side[0] == "v":
+        net = net.swapaxes(0, 1)
+    k, m, d = net.shape
+    lines = (across[:order + 1] @ net.reshape(k, m * d)).reshape(-1, m, d)
+    h = {}
+    for total in range(order + 1):
+        for cross in range(total, -1, -1):
+            key = (cross, total - cross) if side[0] == "u" else (total - cross, cross)
+            h[key] = lengthwise[total - cross] @ lines[cross]
+    return rational_derivatives(h) if surface.is_rational else h
+
+
+def _side_bases(surface, side, along, order, known=None):
+    """``(across, lengthwise)``: the basis functions of ``surface``'s space across
+    ``side`` and their derivatives up to ``order`` at its border, (order + 1, k_across),
+    and those of its space along it at the normalised parameters ``along``, (order + 1,
+    q, k_along) (:meth:`~cq_fairing.core.spaces.SplineSpace.basis_values`): the same for
+    every surface on those spaces, each kept in ``known`` (a dict), when given, for the
+    next one."""
+    u, v = side_parameters(surface, side, along)
+    spaces = ((surface.u_space, u), (surface.v_space, v))
+    if side[0] == "v":
+        spaces = spaces[::-1]
+    out = []
+    for space, x in spaces:
+        key = (space.key, order, np.asarray(x, dtype=float).tobytes())
+        if known is None or key not in known:
+            values = space.basis_values(x, order)
+            if known is None:
+                out.append(values)
+                continue
+            known[key] = values
+        out.append(known[key])
+    return out[0][:, 0], out[1]
 
 
 def cross_curvatures(surfaces, join, t, t_b=None):
@@ -396,13 +432,16 @@ def holds_curvature(sources, join):
 class JoinTurns:
     """The sources' normal angles along every smooth join of ``joins``
     (:data:`ANGLE_SAMPLES` samples), measured once, against which faired patches are
-    checked (:meth:`turned`)."""
+    checked (:meth:`turned`); the basis values at the samples are kept per space
+    (:func:`_side_bases`): patches faired again and again keep their spaces."""
 
     def __init__(self, sources, joins):
         self.joins = list(joins)
         self.samples = np.linspace(0.0, 1.0, ANGLE_SAMPLES)
+        self._bases = {}
         self.source = {k: join_angles(sources, join, self.samples,
-                                      _nearest_along(sources, join, self.samples))
+                                      _nearest_along(sources, join, self.samples,
+                                                     known=self._bases), known=self._bases)
                        for k, join in enumerate(self.joins) if join.smooth}
 
     def turned(self, surfaces, moved):
@@ -420,8 +459,8 @@ class JoinTurns:
         moved = set(moved)
         return {k for k, angles in self.source.items()
                 if {self.joins[k].a, self.joins[k].b} & moved
-                and np.max(join_angles(surfaces, self.joins[k], self.samples) - angles)
-                > ANGLE_SLACK}
+                and np.max(join_angles(surfaces, self.joins[k], self.samples,
+                                       known=self._bases) - angles) > ANGLE_SLACK}
 
     def tangent(self):
         """True when every smooth join is tangent in the sources within
@@ -530,6 +569,22 @@ class UnionFind:
             root, parity = self.find(key)
             groups.setdefault(root, []).append((key, parity))
         return groups
+
+
+def tied_in_order(pairs, size):
+    """The positions of the ``pairs`` (of nodes ``0 .. size - 1``, in order) that
+    :meth:`UnionFind.tie` taking them one after the other would tie (``None``): each
+    that joins two sets not joined by the pairs before it.  They are Kruskal's spanning
+    forest with each pair's position as its weight (unique, so the forest is); a pair
+    within one node, or repeating an earlier one, joins nothing."""
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    lo, hi = pairs.min(axis=1), pairs.max(axis=1)
+    candidates = np.flatnonzero(lo != hi)
+    _, first = np.unique(lo[candidates] * size + hi[candidates], return_index=True)
+    candidates = candidates[np.sort(first)]
+    weights = sp.coo_matrix((candidates + 1.0, (lo[candidates], hi[candidates])),
+                            shape=(size, size))
+    return np.sort(minimum_spanning_tree(weights).data.astype(int) - 1)
 
 
 def _chords(patches, joins):
@@ -1008,14 +1063,15 @@ def _cross_rows(work, join, chords, depth=2):
 
 def _kept_rows(surface, side, unit, flip, lifted, rows):
     """A kept patch's ``rows`` (indices from its border) along ``side``, each projected
-    onto ``unit`` (root order)."""
+    onto ``unit`` (root order; the Gram matrix of ``unit`` factored once, banded:
+    :class:`~cq_fairing.core.banded.BandedSPD`)."""
     space = surface.v_space if side[0] == "u" else surface.u_space
     net = _net(surface, lifted) if side[0] == "u" else np.swapaxes(_net(surface, lifted), 0, 1)
-    gram = gram_matrix(unit).toarray()
+    gram = BandedSPD(gram_matrix(unit))
     out = []
     for r in rows:
         row_space, row = _unit_curve(space, net[r], flip)
-        out.append(sla.solve(gram, gram_matrix(unit, row_space) @ row, assume_a="pos"))
+        out.append(gram.solve(gram_matrix(unit, row_space) @ row))
     return np.array(out)
 
 

@@ -50,7 +50,7 @@ from .joins import (
     fair_patches,
     holds_curvature,
     pinning_patch,
-    side_parameters,
+    side_points,
     turned_patches,
 )
 from .spaces import SplineSpace
@@ -256,7 +256,7 @@ def border_gap(first, side_first, second, side_second, reversed_, samples=33):
     ``side_second`` of ``second`` at ``samples`` equal normalised parameters along them
     (``reversed_``: the second's run the other way)."""
     t = np.linspace(0.0, 1.0, samples)
-    points = [surface.evaluate_grid(*side_parameters(surface, side, ts)).reshape(samples, -1)
+    points = [side_points(surface, side, ts)
               for surface, side, ts in ((first, side_first, t),
                                         (second, side_second, 1.0 - t if reversed_ else t))]
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())

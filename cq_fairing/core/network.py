@@ -64,6 +64,7 @@ This module imports numpy and scipy only.
 
 from collections import Counter
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -74,7 +75,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import InvalidInputError
 from .geometry import BSplineSurface, folded
 from .gram import gram_matrix
-from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio, shared_basis
+from .joins import JoinTurns, UnionFind, mean_normal, mirror_ratio, shared_basis, tied_in_order
 from .patch_grid import insert_knot
 from .spaces import SplineSpace
 
@@ -82,7 +83,7 @@ __all__ = ["NetworkResult", "PatchNetwork", "fair_network", "network_joinable"]
 
 SAMPLES = 9          # same-parameter samples per patch and direction
 KKT_EPS = 1e-12      # regularisation of the constraint block (relative)
-HELD = -1            # the class of every kept pole in the constraints' union-find
+RHS_BLOCK = 8        # right-hand sides per triangular solve (:func:`_solved`)
 LAMBDA_RANGE = (1e-8, 1e4)
 BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
@@ -320,11 +321,18 @@ class _Forms:
     def __init__(self, patches):
         self.patches = patches
         self.offsets = np.cumsum([0] + [p.shape[0] * p.shape[1] for p in patches])
-        unit = {}
-        blocks = [_patch_forms(*(_scaled_grams(space, unit)
-                                 for space in (p.u_space, p.v_space))) for p in patches]
-        self.mass = sp.block_diag([m for m, _ in blocks], format="csr")
-        self.energy = sp.block_diag([h for _, h in blocks], format="csr")
+        unit, entries = {}, ([], [])
+        for offset, p in zip(self.offsets, patches):
+            forms = _patch_forms(*(_scaled_grams(space, unit)
+                                   for space in (p.u_space, p.v_space)))
+            for collected, (rows, columns, values) in zip(entries, forms):
+                collected.append((rows + offset, columns + offset, values))
+        size = int(self.offsets[-1])
+        self.mass, self.energy = (
+            sp.csr_matrix((np.concatenate([v for _, _, v in collected]),
+                           (np.concatenate([r for r, _, _ in collected]),
+                            np.concatenate([c for _, c, _ in collected]))), shape=(size, size))
+            for collected in entries)
         self.source = np.concatenate([p.poles.reshape(-1, 3) for p in patches])
 
 
@@ -332,27 +340,41 @@ def _scaled_grams(space, unit):
     r"""The Gram matrices :math:`G, G', G''` of ``space`` (its basis functions and their
     first and second derivatives): those of its knots mapped onto :math:`[0, 1]`
     (cached in ``unit``) times :math:`h`, :math:`1/h` and :math:`1/h^3`, :math:`h` the
-    domain's width."""
+    domain's width; as ``(rows, columns, values)`` of their entries."""
     lo, hi = space.domain
     width = hi - lo
     normalised = np.round((space.knots - lo) / width, 12)
     key = (space.degree, normalised.tobytes())
     if key not in unit:
         on_unit = SplineSpace.from_knots(normalised, space.degree)
-        unit[key] = [gram_matrix(on_unit, nu=nu) for nu in (0, 1, 2)]
-    g0, g1, g2 = unit[key]
-    return g0 * width, g1 / width, g2 / width ** 3
+        unit[key] = [gram_matrix(on_unit, nu=nu).tocoo() for nu in (0, 1, 2)]
+    return [(g.row, g.col, g.data * scale, g.shape[0])
+            for g, scale in zip(unit[key], (width, 1.0 / width, 1.0 / width ** 3))]
 
 
 def _patch_forms(u_grams, v_grams):
     r"""``(M, s H)`` of a patch whose directions have the Gram matrices ``u_grams`` and
-    ``v_grams`` (:func:`_scaled_grams`): its L2 Gram matrix :math:`G_u\otimes G_v` and
-    its thin-plate energy :math:`H = G''_u\otimes G_v + 2 G'_u\otimes G'_v + G_u\otimes
-    G''_v` scaled by :math:`s = \mathrm{tr} M / \mathrm{tr} H`."""
-    g = (u_grams, v_grams)
-    m = sp.kron(g[0][0], g[1][0])
-    h = sp.kron(g[0][2], g[1][0]) + 2 * sp.kron(g[0][1], g[1][1]) + sp.kron(g[0][0], g[1][2])
-    return m, m.diagonal().sum() / max(h.diagonal().sum(), 1e-300) * h
+    ``v_grams`` (:func:`_scaled_grams`), as ``(rows, columns, values)`` of their entries
+    (duplicates to be summed): its L2 Gram matrix :math:`G_u\otimes G_v` and its
+    thin-plate energy :math:`H = G''_u\otimes G_v + 2 G'_u\otimes G'_v + G_u\otimes
+    G''_v` scaled by :math:`s = \mathrm{tr} M / \mathrm{tr} H` (the trace of a Kronecker
+    product is the product of the traces)."""
+    traces = [[values[rows == columns].sum() for rows, columns, values, _ in g]
+              for g in (u_grams, v_grams)]
+    (tu, tv) = traces
+    scale = tu[0] * tv[0] / max(tu[2] * tv[0] + 2 * tu[1] * tv[1] + tu[0] * tv[2], 1e-300)
+    energy = [_kron_entries(u_grams[i], v_grams[j], factor * scale)
+              for i, j, factor in ((2, 0, 1.0), (1, 1, 2.0), (0, 2, 1.0))]
+    return _kron_entries(u_grams[0], v_grams[0], 1.0), tuple(
+        np.concatenate(parts) for parts in zip(*energy))
+
+
+def _kron_entries(a, b, factor):
+    """``(rows, columns, values)`` of ``factor`` times the Kronecker product of the
+    matrices ``a`` and ``b``, each ``(rows, columns, values, size)`` of its entries."""
+    (ra, ca, va, _), (rb, cb, vb, size) = a, b
+    return ((ra[:, None] * size + rb).ravel(), (ca[:, None] * size + cb).ravel(),
+            (factor * va[:, None] * vb).ravel())
 
 
 class _System:
@@ -467,7 +489,10 @@ class _System:
 
         .. math:: \bigl(\varepsilon I + s\,(E^T W)\circ N N^T\bigr)\,\nu =
                   \sum_d n_d \circ E^T K^{-1} f_d - p,\qquad
-                  x_d = K^{-1} f_d - s W\,(n_d \circ \nu)."""
+                  x_d = K^{-1} \bigl(f_d - s E\,(n_d \circ \nu)\bigr)
+
+        (:math:`E` has two entries per column: :math:`E\,(n_d \circ \nu)` is a sparse
+        product, and one more solve on three columns gives the :math:`x_d`)."""
         unknowns = self.basis.shape[1]
         if unknowns == 0:
             return self.held
@@ -479,14 +504,16 @@ class _System:
         lu = spla.splu((self.kkt[0] + weights @ self.kkt[1] + scale * self.kkt[2]).tocsc())
         plane_rows, plane_columns, normals, plane_rhs = self.coupling
         rhs = np.vstack([self.rhs[0] + per_unknown[:, None] * self.rhs[1], scale * self.rhs[2]])
-        solved = lu.solve(np.hstack([rhs, plane_columns]))
+        solved = _solved(lu, np.hstack([rhs, plane_columns]))
         x, w = solved[:, :3], solved[:, 3:]
         if plane_rhs.size:
             schur = (KKT_EPS * np.identity(plane_rhs.size)
                      + scale * (plane_rows @ w[:unknowns]) * (normals @ normals.T))
             nu = sla.solve(schur, np.einsum("rd,rd->r", normals,
                                                   plane_rows @ x[:unknowns]) - plane_rhs)
-            x = x - scale * w @ (normals * nu[:, None])
+            pushed = np.zeros_like(x)
+            pushed[:unknowns] = plane_rows.T @ (normals * nu[:, None])
+            x = x - scale * _solved(lu, pushed)
         return self.basis @ x[:unknowns] + self.held
 
     def surfaces(self, poles):
@@ -496,6 +523,15 @@ class _System:
             out.append(BSplineSurface(net, patch.u_knots, patch.v_knots, patch.u_degree,
                                       patch.v_degree))
         return out
+
+
+def _solved(lu, columns):
+    """``lu.solve`` of ``columns``, :data:`RHS_BLOCK` at a time.  On many right-hand
+    sides SuperLU's solve runs BLAS-3 kernels large enough for OpenBLAS to thread them,
+    and threads that wait for a core on a loaded machine make it tens of times slower;
+    a few columns at a time cost about the same on an idle machine."""
+    return np.hstack([lu.solve(columns[:, start:start + RHS_BLOCK])
+                      for start in range(0, columns.shape[1], RHS_BLOCK)])
 
 
 def _join_sides(forms, joins):
@@ -543,10 +579,11 @@ class _Vertices:
         Per join, the vertex of each border pole of its side ``a``.
     sizes : collections.Counter
         ``{vertex: number of border poles tied there}``.
-    cut_rows : dict
-        ``{join: rows}``: the C2 rows across each cut of one surface
-        (:func:`_curvature_rows`); :func:`_constraints` leaves out those whose second
-        rows are tied already.
+    pairs : numpy.ndarray
+        (m, 2): the border poles the joins tie pole for pole, join after join.
+    rows : _Rows
+        The rows the joins may constrain the network with, in the order
+        :func:`_constraints` takes them (:func:`_join_rows`).
     fans, crossings : dict
         The vertices that are fans (:func:`_fans`) while at most one of their patches
         is kept (:meth:`fans_among`), and crossings (:func:`_crossings`) while none is
@@ -557,10 +594,12 @@ class _Vertices:
     """
 
     def __init__(self, forms, sides):
+        self.pairs = np.array([pair for _, border_a, _, border_b, _, _ in sides
+                               for pair in zip(border_a.tolist(), border_b.tolist())],
+                              dtype=int).reshape(-1, 2)
         self.poles = UnionFind()
-        for _, border_a, _, border_b, _, _ in sides:
-            for a, b in zip(border_a.tolist(), border_b.tolist()):
-                self.poles.tie(a, b)
+        for a, b in self.pairs.tolist():
+            self.poles.tie(a, b)
         self.corners = {}
         for corner in _corners(forms):
             if corner[0] in self.poles.parent:
@@ -572,8 +611,9 @@ class _Vertices:
                        if poles[0] in ends]
         self.along = [[self.root(a) for a in side[1].tolist()] for side in sides]
         self.sizes = Counter(self.root(pole) for pole in list(self.poles.parent))
-        self.cut_rows = {k: _curvature_rows(forms, side[0], self)
-                         for k, side in enumerate(sides) if side[0].cut}
+        self.rows = _join_rows(sides, self.along, {k: _curvature_rows(forms, side[0], self)
+                                                   for k, side in enumerate(sides)
+                                                   if side[0].cut})
         self.fans = _fans(forms.source, sides, self)
         self.crossings = _crossings(sides, self)
         self.normals = {c: _source_normal(forms.source, c)
@@ -619,20 +659,29 @@ def _constraints(system, sides, continuity, split, vertices, held=None):
     three coordinates: :func:`_plane_rows`) and the number of those rows per
     coordinate.
 
-    A mirrored row that would tie two poles already tied (through other rows, or both
-    held by kept patches) is left out: it could only repeat or contradict the others.
-    At a fan vertex (:func:`_fans`) the mirrored rows at the vertex itself are left out
-    too: there they would make the edges from the vertex collinear in pairs, which three
-    or five edges cannot be; its edges' first poles are held in one tangent plane
-    instead (:func:`_plane_rows`)."""
-    g0 = UnionFind()   # G0 identifications of poles, then (cycles) of their classes
-    for index in np.flatnonzero(system.fixed).tolist():
-        g0.tie(HELD, index)      # the kept patches' poles: one held class
-    apart = set(split.tolist())
-    ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
-            for a, b in zip(border_a.tolist(), border_b.tolist())
-            if a not in apart and b not in apart and g0.tie(a, b) is None]
-    rows, fans, ratios = [], {}, [side[-1] for side in sides]
+    The kept patches' poles are one held class; the joins' border poles are tied pair
+    after pair (``vertices.pairs``, those of the ``split`` vertices left out), each pair
+    that joins two classes not joined yet being a G0 identity (so that a class holds
+    one kept pole at most: :func:`~cq_fairing.core.joins.tied_in_order`).  A row
+    (``vertices.rows``, in order) that would tie two classes already tied (through the
+    rows before it, or both held by kept patches) is left out the same way: it could
+    only repeat or contradict the others.  At a fan vertex (:func:`_fans`) the mirrored
+    rows at the vertex itself are left out too: there they would make the edges from the
+    vertex collinear in pairs, which three or five edges cannot be; its edges' first
+    poles are held in one tangent plane instead (:func:`_plane_rows`)."""
+    size = int(system.offsets[-1])
+    fixed = np.flatnonzero(system.fixed)
+    apart = np.zeros(size + 1, dtype=bool)
+    apart[split] = True
+    pairs = vertices.pairs[~apart[vertices.pairs].any(axis=1)]
+    held_pairs = np.column_stack([np.full(fixed.size, size), fixed])   # node size: held
+    tied = tied_in_order(np.vstack([held_pairs, pairs]), size + 1)
+    ties = pairs[tied[tied >= fixed.size] - fixed.size]
+    forest = np.vstack([held_pairs, pairs])[tied]
+    graph = sp.coo_matrix((np.ones(len(forest)), (forest[:, 0], forest[:, 1])),
+                          shape=(size + 1, size + 1))
+    classes, label = connected_components(graph, directed=False)
+    fans, ratios = {}, [side[-1] for side in sides]
     mirrored = {k for k, side in enumerate(sides) if side[0].smooth and continuity == "G1"
                 and (held is None or k in held)}
     if mirrored:
@@ -640,27 +689,66 @@ def _constraints(system, sides, continuity, split, vertices, held=None):
         fans = {root: corners for root, corners in vertices.fans_among(system.fixed).items()
                 if root in ends}
         ratios = _straightened(sides, vertices.crossings_among(system.fixed, fans))
-    cycles = UnionFind()
-    for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
-        if not (join.cut or k in mirrored):
-            continue
-        mu = ratios[k]
-        for root, ia, na, ib, nb in zip(vertices.along[k], *(
+    rows = vertices.rows
+    active = np.array([join.cut or k in mirrored for k, (join, *_) in enumerate(sides)],
+                      dtype=bool)
+    taken = np.flatnonzero(active[rows.side] & ~np.isin(rows.vertex, list(fans)))
+    taken = taken[tied_in_order(label[rows.ends[taken]], classes)]
+    values, mirror = rows.values[taken], rows.mirror[taken]
+    values[mirror, 2:4] *= np.asarray(ratios)[rows.side[taken][mirror], None]   # mu
+    used = values != 0.0
+    matrix = sp.csr_matrix((values[used], (np.nonzero(used)[0], rows.columns[taken][used])),
+                           shape=(len(taken), size))
+    return ties, matrix, _plane_rows(system, fans, vertices.normals, label), len(taken)
+
+
+class _Rows(NamedTuple):
+    r"""Rows the joins of a network may constrain it with (:func:`_join_rows`), one per
+    entry, each over six poles at most (``columns``; ``values`` 0 where fewer).
+
+    Attributes
+    ----------
+    side : numpy.ndarray
+        The join of each row.
+    vertex : numpy.ndarray
+        A mirrored row's vertex (its border poles' class), -1 for a C2 row.
+    mirror : numpy.ndarray
+        True for a mirrored row, :math:`w_a + \mu w_b = 0` over
+        ``(inner_a, border_a, inner_b, border_b)`` with ``values`` (1, -1, 1, -1): its
+        join's :math:`\mu` multiplies the last two.
+    ends : numpy.ndarray
+        (n, 2): the two poles whose classes the row ties (the inner poles of a mirrored
+        row, the second rows' poles of a C2 row).
+    columns, values : numpy.ndarray
+        (n, 6): the row's poles and coefficients.
+    """
+
+    side: np.ndarray
+    vertex: np.ndarray
+    mirror: np.ndarray
+    ends: np.ndarray
+    columns: np.ndarray
+    values: np.ndarray
+
+
+def _join_rows(sides, along, cut_rows):
+    """The :class:`_Rows` of the joins ``sides`` (:func:`_join_sides`), join after join:
+    its mirrored rows (``along``: the vertex of each of side a's border poles), then its
+    C2 rows (``cut_rows``: ``{join: [(columns, values)]}``, :func:`_curvature_rows`)."""
+    entries = []    # (side, vertex, mirror, ends, columns, values)
+    for k, (_, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
+        for root, ia, na, ib, nb in zip(along[k], *(
                 x.tolist() for x in (border_a, inner_a, border_b, inner_b))):
-            if root in fans:
-                continue
-            if cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
-                rows.append(((na, ia, nb, ib), (1.0, -1.0, mu, -mu)))
-        for poles, values in vertices.cut_rows.get(k, ()):
-            if cycles.tie(g0.find(poles[2])[0], g0.find(poles[5])[0]) is None:
-                rows.append((poles, values))
-    size = int(system.offsets[-1])
-    columns = np.concatenate([np.asarray(c, dtype=int) for c, _ in rows]) if rows else []
-    values = np.concatenate([np.asarray(v, dtype=float) for _, v in rows]) if rows else []
-    counts = [len(c) for c, _ in rows]
-    matrix = sp.csr_matrix((values, (np.repeat(np.arange(len(rows)), counts), columns)),
-                           shape=(len(rows), size))
-    return ties, matrix, _plane_rows(system, fans, vertices.normals, g0), len(rows)
+            entries.append((k, root, True, (na, nb), (na, ia, nb, ib, 0, 0),
+                            (1.0, -1.0, 1.0, -1.0, 0.0, 0.0)))
+        for poles, values in cut_rows.get(k, ()):
+            entries.append((k, -1, False, (poles[2], poles[5]), poles, values))
+    side, vertex, mirror, ends, columns, values = (list(x) for x in zip(*entries)) \
+        if entries else ([],) * 6
+    return _Rows(np.array(side, dtype=int), np.array(vertex, dtype=int),
+                 np.array(mirror, dtype=bool), np.array(ends, dtype=int).reshape(-1, 2),
+                 np.array(columns, dtype=int).reshape(-1, 6),
+                 np.array(values, dtype=float).reshape(-1, 6))
 
 
 def _curvature_rows(forms, join, vertices):
@@ -789,13 +877,13 @@ def _straightened(sides, crossings):
     return ratios
 
 
-def _plane_rows(system, fans, normals, g0):
+def _plane_rows(system, fans, normals, label):
     r"""Rows :math:`n\cdot(e - c) = 0` over the three coordinates: the first pole
     :math:`e` of every edge from a fan vertex :math:`c` in the plane of the vertex
     normal :math:`n` (the mean unit normal of the sources' corners there, ``normals``,
     signs aligned; a kept patch's own where one is kept), so that the patches around it share one
-    tangent plane at the vertex.  Per pair of pole classes one row; none between held
-    poles.
+    tangent plane at the vertex.  Per pair of pole classes (``label``: each pole's
+    class, the held class that of the last entry) one row; none between held poles.
 
     Returns
     -------
@@ -807,7 +895,7 @@ def _plane_rows(system, fans, normals, g0):
         \mathrm{diag}(N_{:,2}) D\,]` on the coordinates' poles one after the other.
     """
     size = int(system.offsets[-1])
-    held = g0.find(HELD)[0]
+    held = label[size]
     pairs, directions, seen = [], [], set()
     for root, corners in fans.items():
         kept = [c for c in corners if system.fixed[c[1]]]     # a kept patch's corner
@@ -816,7 +904,7 @@ def _plane_rows(system, fans, normals, g0):
             continue
         for corner, *edges in corners:
             for edge in edges:
-                key = (g0.find(edge)[0], root)
+                key = (label[edge], root)
                 if key in seen or key[0] == held:
                     continue
                 seen.add(key)
@@ -842,59 +930,67 @@ def _source_normal(source, corner):
 class _Probes:
     """Every patch's samples (at least :data:`SAMPLES` per direction, three per span), its
     source's points and normals there, and the refined spaces' basis values, so that a
-    candidate network costs a few small products: the patches on the same spaces share
-    their samples and are evaluated together."""
+    candidate network costs a few small products: the patches with as many samples and
+    poles in each direction are evaluated together, each with its own bases."""
 
     def __init__(self, sources, refined):
-        self.groups = {}
-        for f, source in enumerate(sources):
-            self.groups.setdefault((source.u_space.key, source.v_space.key), []).append(f)
+        self.groups, spaces = {}, {}
+        for f, (source, patch) in enumerate(zip(sources, refined)):
+            key = (source.u_space.key, source.v_space.key, patch.u_space.key, patch.v_space.key)
+            if key not in spaces:
+                spaces[key] = _sample_bases(source, patch)
+            shape = tuple(b.shape for b in spaces[key][0::2])
+            self.groups.setdefault(shape, []).append((f, key))
         self.bases, self.points, self.normals = {}, {}, {}
-        for key, members in self.groups.items():
-            self.bases[key] = _sample_bases(sources[members[0]], refined[members[0]])
-            self.points[key], self.normals[key] = self._evaluate(
-                key, np.stack([refined[f].poles for f in members]))
+        for shape, members in self.groups.items():
+            self.bases[shape] = [np.stack([spaces[key][k] for _, key in members])
+                                 for k in range(4)]
+            self.points[shape], self.normals[shape] = self._evaluate(
+                shape, np.stack([refined[f].poles for f, _ in members]), slice(None))
 
-    def _evaluate(self, key, poles):
-        """Points and unnormalised normals of the nets ``poles`` (g, k_u, k_v, 3) on the
-        spaces ``key``, at their samples: (g, n_u, n_v, 3) each."""
-        (bu, du), (bv, dv) = self.bases[key]
+    def _evaluate(self, shape, poles, rows):
+        """Points and unnormalised normals of the nets ``poles`` (g, k_u, k_v, 3) of the
+        members ``rows`` of the group ``shape``, at their samples: (g, n_u, n_v, 3)
+        each."""
+        bu, du, bv, dv = (b[rows] for b in self.bases[shape])
         g, ku, kv, d = poles.shape
-        along_u, slope_u = (np.matmul(b, poles.reshape(g, ku, kv * d)).reshape(g, -1, kv, d)
-                            for b in (bu, du))
-        points = np.einsum("gijd,kj->gikd", along_u, bv)
-        su = np.einsum("gijd,kj->gikd", slope_u, bv)
-        sv = np.einsum("gijd,kj->gikd", along_u, dv)
+        flat = poles.reshape(g, ku, kv * d)
+        # (g, n_u, k_v, d) -> (g, n_u, d, k_v) @ (g, 1, k_v, n_v) -> (g, n_u, n_v, d)
+        along_u, slope_u = ((b @ flat).reshape(g, -1, kv, d).swapaxes(2, 3) for b in (bu, du))
+        across_v, slope_v = (b.swapaxes(1, 2)[:, None] for b in (bv, dv))
+        points = (along_u @ across_v).swapaxes(2, 3)
+        su = (slope_u @ across_v).swapaxes(2, 3)
+        sv = (along_u @ slope_v).swapaxes(2, 3)
         return points, np.cross(su, sv)
 
     def distances(self, surfaces, kept):
         """Each patch's largest same-parameter distance from its source (0 for ``kept``);
         infinite where the surface folds over (:func:`~cq_fairing.core.geometry.folded`)."""
         out = np.zeros(len(surfaces))
-        for key, members in self.groups.items():
-            rows = [q for q, f in enumerate(members) if f not in kept]
+        for shape, members in self.groups.items():
+            rows = [q for q, (f, _) in enumerate(members) if f not in kept]
             if not rows:
                 continue
             points, normals = self._evaluate(
-                key, np.stack([surfaces[members[q]].poles for q in rows]))
-            distance = np.linalg.norm(points - self.points[key][rows], axis=-1).max(axis=(1, 2))
-            reference = self.normals[key][rows]
+                shape, np.stack([surfaces[members[q][0]].poles for q in rows]), rows)
+            distance = np.linalg.norm(points - self.points[shape][rows], axis=-1).max(axis=(1, 2))
+            reference = self.normals[shape][rows]
             # a surface can only fold where its normals point away from the source's
             apart = (np.einsum("gijd,gijd->gij", normals, reference) < 0.0).any(axis=(1, 2))
             for k in np.flatnonzero(apart):
                 if folded(normals[k], reference[k]).any():
                     distance[k] = np.inf
-            out[[members[q] for q in rows]] = distance
+            out[[members[q][0] for q in rows]] = distance
         return out
 
 
 def _sample_bases(source, refined):
-    """``[[B_u, B_u'], [B_v, B_v']]``: the refined spaces' basis values and first
-    derivatives at the samples of ``source``'s spaces (at least :data:`SAMPLES` per
-    direction, three per span)."""
+    """``[B_u, B_u', B_v, B_v']``: the refined spaces' basis values and first derivatives
+    at the samples of ``source``'s spaces (at least :data:`SAMPLES` per direction, three
+    per span)."""
     samples = (np.unique(np.concatenate(
         [np.linspace(a, b, 3) for a, b in zip(space.breakpoints[:-1], space.breakpoints[1:])]
         + [np.linspace(*space.domain, SAMPLES)]))
         for space in (source.u_space, source.v_space))
-    return [[space.collocation(x, nu).toarray() for nu in (0, 1)]
-            for space, x in zip((refined.u_space, refined.v_space), samples)]
+    return [space.collocation(x, nu).toarray()
+            for space, x in zip((refined.u_space, refined.v_space), samples) for nu in (0, 1)]

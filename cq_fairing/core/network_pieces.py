@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .joins import BorderJoin, _along, side_parameters
+from .joins import BorderJoin, _along, side_points
 from .joint_projection import SOURCE_GAP, border_gap, join_tolerance
 from .network import network_joinable
 from .patch_grid import cut_surface, join_pieces
@@ -186,8 +186,7 @@ def _side_point(surface, side, x):
 def _side_points(surface, side, x):
     """Points of ``side`` at its along-parameters ``x``."""
     lo, hi = surface.domain[_along(side)]
-    t = (np.asarray(x, dtype=float) - lo) / (hi - lo)
-    return surface.evaluate_grid(*side_parameters(surface, side, t)).reshape(len(t), -1)
+    return side_points(surface, side, (np.asarray(x, dtype=float) - lo) / (hi - lo))
 
 
 def _nearest_on_side(surface, side, point, along):

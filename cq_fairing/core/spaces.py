@@ -222,6 +222,24 @@ class SplineSpace:
             (values.ravel(), (rows, cols.ravel())), shape=(x.size, self.dimension)
         )
 
+    def basis_values(self, x, order=0):
+        """Dense values ``B[nu, j, i] = N_i^{(nu)}(x_j)`` of every basis function and its
+        derivatives up to ``order``: the rows of :meth:`collocation` for ``nu = 0 ..
+        order`` at once, for a few parameters.
+
+        Returns
+        -------
+        ndarray, shape (order + 1, q, k)
+        """
+        x = np.asarray(x, dtype=float).ravel()
+        spans = find_spans(self, x)
+        values = basis_functions(self, x, spans, order)
+        p = self.degree
+        out = np.zeros((order + 1, x.size, self.dimension))
+        columns = spans[:, None] - p + np.arange(p + 1)
+        np.put_along_axis(out, np.broadcast_to(columns, values.shape), values, axis=2)
+        return out
+
     def evaluate(self, coefficients, x, nu=0):
         """Evaluate ``sum_i c_i N_i^{(nu)}(x)``.
 

@@ -14,11 +14,13 @@ from cq_fairing.core.joins import (
     BorderJoin,
     JointPatch,
     JoinTurns,
+    UnionFind,
     cross_curvatures,
     fair_patches,
     holds_curvature,
     join_angles,
     pinning_patch,
+    tied_in_order,
 )
 from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
@@ -425,3 +427,56 @@ def test_a_shared_border_is_the_least_squares_compromise_of_both_patches():
     assert np.linalg.norm(first + second, axis=1).max() \
         <= 1e-8 * np.linalg.norm(first, axis=1).min()
     assert np.linalg.norm(first, axis=1).min() > 1e-7
+
+
+@given(st.lists(st.tuples(st.integers(0, 11), st.integers(0, 11)), max_size=40))
+def test_pairs_tied_in_order_are_those_a_union_find_ties_one_after_the_other(pairs):
+    """``tied_in_order`` (Kruskal's forest, the pairs' positions as weights) against
+    ``UnionFind.tie`` taking the pairs one by one, repeated pairs and a node with itself
+    included."""
+    union = UnionFind()
+    expected = [k for k, (a, b) in enumerate(pairs) if union.tie(a, b) is None]
+    assert tied_in_order(pairs, 12).tolist() == expected
+
+
+def _angles_at(surfaces, join, t, border):
+    """Normal angles (degrees) across ``join`` at ``t`` from ``border(surface, side, t)``
+    (points and unit normals)."""
+    na = border(surfaces[join.a], join.side_a, t)[1]
+    nb = border(surfaces[join.b], join.side_b, 1 - t if join.reversed else t)[1]
+    return np.degrees(np.arccos(np.clip(np.abs(np.sum(na * nb, axis=1)), 0.0, 1.0)))
+
+
+def _own_border(surface, side, t):
+    """Points and unit normals along a side by the surface's own evaluation (rational
+    where it is)."""
+    (u0, u1), (v0, v1) = surface.domain
+    u, v = ([{"u0": u0, "u1": u1}[side]], v0 + (v1 - v0) * t) if side[0] == "u" else \
+        (u0 + (u1 - u0) * t, [{"v0": v0, "v1": v1}[side]])
+    point, su, sv = (surface.evaluate_grid(u, v, nu, nv).reshape(len(t), 3)
+                     for nu, nv in ((0, 0), (1, 0), (0, 1)))
+    normal = np.cross(su, sv)
+    return point, normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
+def test_join_angles_of_nets_on_the_same_spaces_share_their_basis_values():
+    """Basis values kept per space (``known``, as JoinTurns keeps them) from one set of
+    patches to the next on the same spaces: the angles of the grid's joins (every kind
+    of side, one reversed), and of a rational pair, are those of scipy's bases and of
+    the surfaces' own rational evaluation, for the sources and for other nets."""
+    patches, joins = _grid()
+    pair, pair_joins = _rational_pair()
+    rng = np.random.default_rng(4)
+    t = np.linspace(0.0, 1.0, 33)
+    for surfaces, links, border in ((patches, joins, _border), (pair, pair_joins, _own_border)):
+        known = {}
+        moved = [BSplineSurface(s.poles + rng.normal(0.0, 0.02, s.poles.shape), s.u_knots,
+                                s.v_knots, 3, 3, s.weights) for s in surfaces]
+        sizes = []
+        for nets in (surfaces, moved):
+            for join in links:
+                expected = _angles_at(nets, join, t, border)
+                assert np.abs(join_angles(nets, join, t, known=known) - expected).max() <= 1e-6
+                assert np.abs(join_angles(nets, join, t) - expected).max() <= 1e-6
+            sizes.append(len(known))
+        assert sizes[0] == sizes[1] > 0     # the second nets found every value known

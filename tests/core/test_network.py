@@ -2,18 +2,26 @@
 core.examples.patch_grid: joins measured with scipy's bases (tests.core.naive),
 deviation on a dense grid, against the sources and the joint projection."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from cq_fairing.core.examples import patch_grid, patch_network
 from cq_fairing.core.geometry import BSplineSurface
-from cq_fairing.core.joins import BorderJoin, JoinTurns
+from cq_fairing.core.joins import BorderJoin, JoinTurns, UnionFind
 from cq_fairing.core.network import (
     KKT_EPS,
+    RHS_BLOCK,
     SAMPLES,
     PatchNetwork,
     _constraints,
+    _curvature_rows,
     _Forms,
+    _solved,
+    _straightened,
     _System,
     fair_network,
     network_joinable,
@@ -367,3 +375,92 @@ def test_a_network_tangent_in_the_source_gets_its_rows_where_closed_joins_turn()
     gap, angle = _joins_measured(result.surfaces, joins)
     assert gap <= 1e-9 * 2.0 and angle <= 0.05
     assert _dense_deviation(result.surfaces, patches).max() <= 0.01 * 1.02
+
+
+def _constraints_one_by_one(system, network, split, held=None):
+    """The constraints of :func:`_constraints` by the rules it states, one tie at a time
+    with a union-find: the kept poles one held class; the joins' border poles tied pair
+    after pair, a pair that joins two classes a G0 identity; the rows join after join
+    (mirrored rows, those at a fan vertex left out, then the C2 rows of a cut), a row
+    that joins two classes of its ends not joined yet kept.  ``(ties, rows, planes'
+    pairs)``."""
+    sides, vertices = network.sides, network.vertices
+    g0 = UnionFind()
+    for index in np.flatnonzero(system.fixed).tolist():
+        g0.tie("held", index)
+    apart = set(split.tolist())
+    ties = [(a, b) for _, border_a, _, border_b, _, _ in sides
+            for a, b in zip(border_a.tolist(), border_b.tolist())
+            if a not in apart and b not in apart and g0.tie(a, b) is None]
+    mirrored = {k for k, side in enumerate(sides) if side[0].smooth
+                and (held is None or k in held)}
+    fans, ratios = {}, [side[-1] for side in sides]
+    if mirrored:
+        ends = {vertices.along[k][e] for k in mirrored for e in (0, -1)}
+        fans = {root: c for root, c in vertices.fans_among(system.fixed).items() if root in ends}
+        ratios = _straightened(sides, vertices.crossings_among(system.fixed, fans))
+    cycles, rows = UnionFind(), []
+    for k, (join, border_a, inner_a, border_b, inner_b, _) in enumerate(sides):
+        if not (join.cut or k in mirrored):
+            continue
+        for root, ia, na, ib, nb in zip(vertices.along[k], *(
+                x.tolist() for x in (border_a, inner_a, border_b, inner_b))):
+            if root not in fans and cycles.tie(g0.find(na)[0], g0.find(nb)[0]) is None:
+                rows.append(dict(zip((na, ia, nb, ib), (1.0, -1.0, ratios[k], -ratios[k]))))
+        if join.cut:
+            for poles, values in _curvature_rows(network.forms, join, vertices):
+                if cycles.tie(g0.find(poles[2])[0], g0.find(poles[5])[0]) is None:
+                    rows.append(dict(zip(poles, values)))
+    return ties, rows
+
+
+@pytest.mark.parametrize("example, kept, held", [
+    ("grid", (), None), ("grid", (0,), None), ("grid", (1, 2), {0, 2}),
+    ("fan", (), None), ("fan", (0,), None), ("l", (), {1}), ("l", (0,), None)])
+def test_the_constraints_are_those_of_ties_taken_one_at_a_time(example, kept, held):
+    """The G0 identities and the rows kept, found for all at once (spanning forests),
+    are those a union-find taking them one after the other keeps, in the same order:
+    on the grid (its inner crossing; one join a cut of one surface, with its C2 rows),
+    the fan (a vertex held in one tangent plane) and the L, with kept patches and with
+    some joins held closed only."""
+    if example == "fan":
+        patches, joins = _fan()
+    else:
+        source = patch_grid() if example == "grid" else patch_network()
+        patches, joins = source.patches, list(source.joins)
+        if example == "grid":
+            joins[1] = replace(joins[1], cut=True)
+    network = PatchNetwork(patches, joins)
+    system = _System(network.forms, set(kept), network.sides, "G1", network.spread,
+                     network.vertices, held)
+    split = np.array([], dtype=int)
+    ties, mirrored, planes, g1_rows = _constraints(system, network.sides, "G1", split,
+                                                   network.vertices, held)
+    expected_ties, expected_rows = _constraints_one_by_one(system, network, split, held)
+    assert [tuple(t) for t in np.asarray(ties).tolist()] == expected_ties
+    assert g1_rows == len(expected_rows) == mirrored.shape[0] > 0
+    for row, expected in zip(mirrored.tolil().rows, expected_rows):
+        assert set(row) == set(expected)
+    assert np.allclose(mirrored.toarray(), [
+        [expected.get(c, 0.0) for c in range(mirrored.shape[1])] for expected in expected_rows])
+    assert (planes[0].shape[0] > 0) == (example == "fan")
+
+
+def test_many_right_hand_sides_are_solved_a_block_at_a_time_as_one():
+    """``_solved`` takes the columns RHS_BLOCK at a time: the same solution as a dense
+    solve, for a count of columns that is no multiple of the block."""
+    rng = np.random.default_rng(7)
+    matrix = sp.random(60, 60, density=0.1, random_state=8) + 10.0 * sp.identity(60)
+    columns = rng.normal(size=(60, 3 * RHS_BLOCK + 5))
+    solved = _solved(spla.splu(matrix.tocsc()), columns)
+    assert np.allclose(solved, np.linalg.solve(matrix.toarray(), columns), rtol=1e-10,
+                       atol=1e-12)
+
+
+
+def test_a_patch_without_joins_is_a_network_of_its_own(grid):
+    """No join, no row: the patch takes the largest weight within the tolerance, as a
+    part of its own, and stays within it on the dense grid."""
+    result = fair_network(grid.patches[:1], [], 0.01)
+    assert result.smoothing > 0 and not result.kept and result.g1_rows == 0
+    assert _dense_deviation(result.surfaces, grid.patches[:1]).max() <= 0.01 * 1.02

@@ -74,6 +74,22 @@ def test_surface_grid_evaluation_matches_dense_scipy_bases(degrees, extra, ratio
                            atol=1e-9 * max(np.abs(ref).max(), 1.0)), (a, b)
 
 
+@given(degree=st.integers(1, 5), extra=st.integers(0, 12), seed=st.integers(0, 2**31 - 1))
+def test_dense_basis_values_are_scipys_basis_and_its_derivatives(degree, extra, seed):
+    """``basis_values`` (every basis function and its derivatives up to the order, dense)
+    against scipy's BSpline, ends and interior knots included."""
+    rng = np.random.default_rng(seed)
+    knots = random_clamped_knots(rng, degree + 1 + extra, degree)
+    space = SplineSpace.from_knots(knots, degree)
+    x = np.concatenate([rng.random(9), [0.0, 1.0], knots[degree + 1:-degree - 1]])
+    order = min(degree, 2)
+    values = space.basis_values(x, order)
+    assert values.shape == (order + 1, x.size, space.dimension)
+    for nu in range(order + 1):
+        ref = basis_matrix(knots, degree, x, nu)
+        assert np.allclose(values[nu], ref, rtol=1e-9, atol=1e-9 * max(np.abs(ref).max(), 1.0))
+
+
 def test_collocation_rows_are_a_partition_of_unity():
     space = SplineSpace.quasi_uniform(13, 4, (2.0, 5.0))
     x = np.linspace(2.0, 5.0, 101)
