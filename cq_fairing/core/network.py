@@ -63,7 +63,7 @@ This module imports numpy and scipy only.
 """
 
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -109,9 +109,15 @@ class NetworkResult:
     g1_rows : int
         Mirrored-row constraints imposed (with the C2 rows across cuts).
     kept : set of int
-        The patches that kept their surfaces: those asked for, and those the joins would
-        hold out of their tolerance even without energy (they then constrain their
+        The patches that kept their surfaces: those asked for, those the joins would
+        hold out of their tolerance even without energy, and those on a smooth join that
+        would turn more than the source's even held (they then constrain their
         neighbours instead).
+    reasons : dict
+        Why the network kept each patch it was not asked to keep: ``("tolerance", d)``,
+        the joins alone hold it ``d`` from its source (the same-parameter distance on
+        the samples, the energy at zero; infinite where it folds), or ``("turned",
+        joins)``, the indices of its smooth joins that would turn.
     """
 
     surfaces: list
@@ -119,6 +125,7 @@ class NetworkResult:
     deviations: np.ndarray
     g1_rows: int
     kept: set
+    reasons: dict = field(default_factory=dict)
 
 
 def network_joinable(a, side_a, b, side_b, reversed_):
@@ -209,6 +216,7 @@ class PatchNetwork:
         sources = self.sources
         tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(sources),))
         kept = set(kept)
+        turned_by = {}   # patch: the joins that turned it
         # tangent sources: closed joins first, mirrored rows where they then turn
         held = set() if self.turns is not None and self.turns.tangent() else None
         for _ in range(len(sources) + len(self.joins)):
@@ -221,11 +229,14 @@ class PatchNetwork:
                 held |= turned
                 continue
             if not turned:
-                return result
+                break
             # their joins would turn more than the source's even held: keep them
-            kept |= {patch for k in turned
-                     for patch in (self.joins[k].a, self.joins[k].b)} & moved
-        return result
+            for k in sorted(turned):
+                for patch in {self.joins[k].a, self.joins[k].b} & moved:
+                    turned_by.setdefault(patch, []).append(k)
+            kept |= set(turned_by)
+        turned_reasons = {p: ("turned", joins) for p, joins in turned_by.items()}
+        return replace(result, reasons={**turned_reasons, **result.reasons})
 
 
 def _smoothest(network, tols, kept, held=None):
@@ -235,6 +246,7 @@ def _smoothest(network, tols, kept, held=None):
     sources = network.sources
     kept = set(kept)
     count = len(sources)
+    reasons = {}
     for _ in range(count):
         system = _System(network.forms, kept, network.sides, network.continuity,
                          network.spread, network.vertices, held)
@@ -243,9 +255,11 @@ def _smoothest(network, tols, kept, held=None):
         over = {f for f in range(count) if best[1][f] > tols[f]} - kept
         if not over:
             break
+        reasons.update({f: ("tolerance", float(best[1][f])) for f in over})
         kept |= over     # the joins hold these too far: they constrain their neighbours
     if len(kept) == count:
-        return NetworkResult(list(sources), 0.0, np.zeros(count), system.g1_rows, kept)
+        return NetworkResult(list(sources), 0.0, np.zeros(count), system.g1_rows, kept,
+                             reasons)
     part = system.patch_components
     members = [np.flatnonzero(part == c) for c in range(part.max() + 1)]
     lo = np.full(len(members), np.log(LAMBDA_RANGE[0]))
@@ -264,7 +278,8 @@ def _smoothest(network, tols, kept, held=None):
             else:
                 hi[c] = mid[c]
     surfaces = [sources[f] if f in kept else s for f, s in enumerate(surfaces)]
-    return NetworkResult(surfaces, float(lam.min()), deviations, system.g1_rows, kept)
+    return NetworkResult(surfaces, float(lam.min()), deviations, system.g1_rows, kept,
+                         reasons)
 
 
 def _refined(patch):

@@ -26,14 +26,17 @@ its tolerance costs a few measures, not one per face.
 This module imports numpy only (and the core).
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+
+import numpy as np
 
 from .geometry import collapsed_kept
+from .joins import ANGLE_SLACK
 from .joint_projection import runs_reversed
 from .network import PatchNetwork
 from .network_pieces import lay_out_pieces
 
-__all__ = ["fair_networks", "NetworkFairing", "RETRIES", "SHRINK", "UNMOVED"]
+__all__ = ["fair_networks", "kept_reasons", "kept_sentence", "NetworkFairing", "RETRIES", "SHRINK", "UNMOVED"]
 
 RETRIES = 2
 SHRINK = 0.7
@@ -60,6 +63,12 @@ class NetworkFairing:
         parts (:func:`~cq_fairing.core.network.fair_network`).
     surfaces : dict
         ``{face: BSplineSurface}`` of the moved faces, as checked.
+    reasons : dict
+        ``{face: reason}``: why the network kept each face of :attr:`kept` that the
+        solve kept (the joins alone hold it over its tolerance, or a smooth join of it
+        would turn more than the source's; :func:`kept_reasons`, worded by
+        :func:`kept_sentence`); a face kept because all its pieces lie along joins the
+        network does not fair across has none.
     """
 
     moved: list
@@ -67,6 +76,7 @@ class NetworkFairing:
     joins: list
     smoothing: float
     surfaces: dict
+    reasons: dict = field(default_factory=dict)
 
 
 def fair_networks(sources, movable, joins, tolerances, check, *, continuity="G1",
@@ -101,7 +111,8 @@ def fair_networks(sources, movable, joins, tolerances, check, *, continuity="G1"
     Returns
     -------
     list of NetworkFairing
-        The networks whose every moved face is within its tolerance.
+        The networks whose every moved face is within its tolerance, and those whose
+        joins alone keep every face (no face moved, each with its reason).
     """
     faces = {f for f in sources if f in movable and tolerances.get(f) is not None}
     layout = lay_out_pieces(sources, faces, joins, tolerances, reversed_)
@@ -113,6 +124,54 @@ def fair_networks(sources, movable, joins, tolerances, check, *, continuity="G1"
             if done is not None:
                 out.append(done)
     return out
+
+
+def kept_reasons(pieces_of, reasons, tols, join_faces):
+    """``{face: reason}`` of the faces whose pieces the network's solve kept
+    (:attr:`~cq_fairing.core.network.NetworkResult.reasons`): ``("tolerance", d, tol)``,
+    the worst distance ``d`` a piece's joins alone hold it at, over the tolerance ``tol``
+    it was solved to (infinite where it folds), else ``("turned", faces)``, the other
+    faces across the smooth joins that would turn (empty where the join runs between
+    its own pieces).  :func:`kept_sentence` words it.
+
+    Parameters
+    ----------
+    pieces_of : dict
+        ``{face: [piece, ...]}`` of the faces kept, pieces indexed as the network's.
+    reasons : dict
+        The network's ``{piece: ("tolerance", d) or ("turned", [join, ...])}``.
+    tols : sequence of float
+        The tolerance each piece was solved to.
+    join_faces : sequence of (int, int)
+        The two faces of each of the network's joins.
+    """
+    out = {}
+    for face, own in pieces_of.items():
+        why = [reasons[k] + (tols[k],) for k in own if k in reasons]
+        over = [(d, tol) for kind, d, tol in why if kind == "tolerance"]
+        if over:
+            out[face] = ("tolerance", *max(over))
+        elif why:
+            out[face] = ("turned", sorted({other for _, joins, _ in why for join in joins
+                                           for other in join_faces[join] if other != face}))
+    return out
+
+
+def kept_sentence(reason, name=lambda face: f"face {face + 1}"):
+    """The report's sentence for a face a network kept (:func:`kept_reasons`),
+    ``name(face)`` naming its neighbours."""
+    if reason[0] == "tolerance":
+        _, distance, tol = reason
+        what = (f"stays {distance:.3g} from its source at the network's samples, over the "
+                f"{tol:g} it was solved to" if np.isfinite(distance) else
+                "folds over itself (its normal turns against the source's)")
+        return (f"with its network's joins held it {what}; kept as it was, and its "
+                "neighbours close onto it")
+    where = (f"with {', '.join(name(face) for face in reason[1])}" if reason[1]
+             else "between its own pieces")
+    return (f"with its network's joins held its smooth joins ({where}) would turn more "
+            f"than the source's angle + {ANGLE_SLACK:g} deg; kept as it was, and its "
+            "neighbours close onto it")
 
 
 def _components(joins):
@@ -138,7 +197,9 @@ def _components(joins):
 
 def _fair_component(layout, sources, pieces, tolerances, check, continuity):
     """Solve one network of pieces, retried at smaller tolerances while a moved face
-    misses its own: its :class:`NetworkFairing`, or ``None``."""
+    misses its own: its :class:`NetworkFairing` (with no face moved where the joins
+    alone hold or turn every face, each kept with its reason), or ``None`` when the
+    retries run out."""
     position = {piece: k for k, piece in enumerate(pieces)}
     linked = [k for k, j in enumerate(layout.joins) if j.a in position]
     core_joins = [replace(j, a=position[j.a], b=position[j.b])
@@ -151,8 +212,13 @@ def _fair_component(layout, sources, pieces, tolerances, check, continuity):
     for _ in range(RETRIES + 1):
         result = network.fair(tols, kept=kept)
         moved = sorted({owner[k] for k in range(len(pieces)) if k not in result.kept})
-        if not moved:
-            return None
+        kept_faces = sorted(set(faces) - set(moved))
+        reasons = kept_reasons({f: [k for k in range(len(pieces)) if owner[k] == f]
+                                for f in kept_faces}, result.reasons, tols,
+                               [(layout.faces[layout.joins[k].a], layout.faces[layout.joins[k].b])
+                                for k in linked])
+        if not moved:   # the faces' reasons still tell why
+            return NetworkFairing([], kept_faces, [], result.smoothing, {}, reasons)
         # a kept piece of a moved face on the refined spaces of the moved ones, so that
         # the face's net does not depend on which of its pieces moved
         solved = {p: network.refined[k] if k in result.kept else result.surfaces[k]
@@ -164,8 +230,7 @@ def _fair_component(layout, sources, pieces, tolerances, check, continuity):
                  for f in moved}
         nearest = sorted(moved, key=lambda f: -worst[f] / tolerances[f])
         if all(check(f, surfaces[f]) <= tolerances[f] for f in nearest):
-            return NetworkFairing(moved, sorted(set(faces) - set(moved)),
-                                  layout.joins_held(set(linked)), result.smoothing,
-                                  dict(sorted(surfaces.items())))
+            return NetworkFairing(moved, kept_faces, layout.joins_held(set(linked)),
+                                  result.smoothing, dict(sorted(surfaces.items())), reasons)
         tols = [SHRINK * t for t in tols]
     return None

@@ -126,7 +126,8 @@ def _energy_networks(job, adjacency, polynomial, continuity, gridded):
     networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity,
                              refaired=alone)
     moved = {face for network in networks for face in network.moved}
-    for face in sorted(alone - moved):
+    reasoned = {face for network in networks for face in network.reasons}
+    for face in sorted(alone - moved - reasoned):
         joins = adjacency.joins_of(face)
         if joins:
             neighbours = sorted({f + 1 for join in joins for f in join.faces if f != face})

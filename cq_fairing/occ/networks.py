@@ -8,6 +8,7 @@ measured against its own face by OCCT, both ways
 """
 
 from ..core.network_fairing import fair_networks as fair_core_networks
+from ..core.network_fairing import kept_sentence
 
 __all__ = ["fair_networks"]
 
@@ -15,7 +16,8 @@ __all__ = ["fair_networks"]
 def fair_networks(job, adjacency, readable, reversed_, continuity, refaired=frozenset()):
     """Fair the unchanged faces of ``readable``, and those of ``refaired``, as networks
     across their joins (:func:`~cq_fairing.core.network_fairing.fair_networks`); install
-    the moved faces.
+    the moved faces, and give the faces a network kept its reason
+    (:attr:`~cq_fairing.core.network_fairing.NetworkFairing.reasons`).
 
     Parameters
     ----------
@@ -50,4 +52,7 @@ def fair_networks(job, adjacency, readable, reversed_, continuity, refaired=froz
         for face in network.moved:
             why = "" if face in refaired else " (its net was already at its coarsest)"
             job.faired(face, measured[face], message + why, readable[face].shape)
+        for face, reason in network.reasons.items():
+            alone = " (joins='free' fairs it alone)" if face in refaired else ""
+            job.reports[face] = job.kept(face, "unchanged", kept_sentence(reason) + alone)
     return networks

@@ -28,6 +28,7 @@ from cq_fairing.core.face_search import (
     uv_window,
 )
 from cq_fairing.core.joint_projection import unholdable
+from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
 from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: the default
 from cq_fairing.core.plans import largest_resolved_scale
@@ -683,7 +684,9 @@ def _hold(found, elements, alone, tolerance, joins, method):
     and must stay within ``tolerance``; a face kept as it was says why: its joins hold
     it over the tolerance, its pinned sides leave it nothing to fair, it has a join no
     fairing can hold (:func:`~cq_fairing.core.joint_projection.unholdable`), or it was
-    already at its coarsest (:func:`_nothing_faired`) and no network moved it.
+    already at its coarsest (:func:`_nothing_faired`) and no network moved it (with the
+    network's reason where one kept it:
+    :func:`~cq_fairing.core.network_fairing.kept_sentence`).
     ``elements`` are the faces faired then their neighbours (fixed: no tolerance, no
     target)."""
     faired = list(alone)
@@ -712,6 +715,11 @@ def _hold(found, elements, alone, tolerance, joins, method):
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
     for i in coarsest - set(outcome.surfaces):
         faired[i] = _kept_as_is(elements[i], COARSEST)
+    for network in outcome.networks:   # a network's reason is the most specific
+        for i, reason in network.reasons.items():
+            alone = "" if i in coarsest else " (Joins=free fairs it alone)"
+            faired[i] = _kept_as_is(elements[i], kept_sentence(
+                reason, lambda face: elements[face][0]) + alone)
     return faired, outcome
 
 

@@ -9,7 +9,7 @@ from cq_fairing.core.deviations import deviation
 from cq_fairing.core.examples import patch_grid, patch_network
 from cq_fairing.core.grid_fairing import RETRIES, fair_grids, grown_scales
 from cq_fairing.core.joint_projection import Join, JoinSide
-from cq_fairing.core.network_fairing import fair_networks
+from cq_fairing.core.network_fairing import fair_networks, kept_reasons, kept_sentence
 from tests.core.patch_references import grid_pieces, network_surfaces
 
 TOL = 0.01
@@ -136,3 +136,20 @@ def test_a_face_with_a_join_outside_the_network_keeps_its_surface():
     moved, t = networks[0].surfaces[1], np.linspace(0.0, 1.0, 11)
     border = moved.evaluate_grid([0.0], t) - sources[0].evaluate_grid([1.0], t)  # u0 / u1
     assert moved.shape == (5, 5) and np.abs(border).max() <= 1e-9 * SIZE
+
+
+def test_a_kept_face_takes_the_worst_of_its_pieces_reasons():
+    """Two pieces of face 5: a distance over the tolerance outweighs a turned join; a
+    turned join alone names the faces across it, none across a cut between its own
+    pieces; an infinite distance is a fold."""
+    join_faces = [(5, 7), (5, 5), (9, 5)]
+    both = kept_reasons({5: [0, 1]}, {0: ("turned", [0]), 1: ("tolerance", 0.2)},
+                        [0.1, 0.1], join_faces)
+    assert both == {5: ("tolerance", 0.2, 0.1)}
+    turned = kept_reasons({5: [0, 1], 6: [2]}, {0: ("turned", [0, 2]), 1: ("turned", [1])},
+                          [0.1, 0.1, 0.1], join_faces)
+    assert turned == {5: ("turned", [7, 9])}   # face 6's piece kept for no reason: none
+    assert "(with face 8, face 10)" in kept_sentence(turned[5])
+    assert "between its own pieces" in kept_sentence(("turned", []))
+    assert "stays 0.2 from its source" in kept_sentence(both[5])
+    assert "folds" in kept_sentence(("tolerance", np.inf, 0.1))

@@ -104,6 +104,22 @@ def test_a_tolerance_below_what_the_joins_need_keeps_every_patch(grid):
     assert all(s is p for s, p in zip(result.surfaces, grid.patches))
 
 
+def test_each_patch_the_network_keeps_has_its_reason(grid):
+    """A patch asked to be kept has no reason; one the joins alone hold over its own
+    (tiny) tolerance has ``("tolerance", d)``, ``d`` over that tolerance; on the grid at
+    a tolerance below what its joins need, every patch has that reason."""
+    example = patch_network()
+    asked = fair_network(example.patches, example.joins, 0.01, kept=[0])
+    assert asked.kept == {0} and asked.reasons == {}
+    result = fair_network(example.patches, example.joins, [0.01, 1e-12, 0.01])
+    assert result.kept == {1} and set(result.reasons) == {1}
+    kind, distance = result.reasons[1]
+    assert kind == "tolerance" and distance > 1e-12
+    grid_result = fair_network(grid.patches, grid.joins, 1e-4)
+    assert set(grid_result.reasons) == {0, 1, 2, 3}
+    assert all(k == "tolerance" and d > 1e-4 for k, d in grid_result.reasons.values())
+
+
 def test_one_span_patches_are_refined_and_stay_the_same_surface_where_kept():
     one_span = patch_grid(poles=4)
     result = fair_network(one_span.patches, one_span.joins, 0.02)

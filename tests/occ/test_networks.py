@@ -12,6 +12,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
 
 from cq_fairing.core.examples import patch_network
+from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.occ.convert import face_to_surface
 from cq_fairing.occ.io import read_shape
 from cq_fairing.occ.shapes import fair_shape
@@ -95,3 +96,26 @@ def test_an_l_of_patches_at_their_coarsest_is_the_core_network_of_the_example(me
     for report, k in zip(result.faces, order):
         assert report.faired and report.surface.shape == reference[k].shape == (5, 5)
         assert np.abs(report.surface.poles - reference[k].poles).max() <= 1e-9 * 2.0
+
+
+def test_every_face_the_network_keeps_says_why(runs):
+    """Each face a network keeps (not asked to) says why in its report: the distance its
+    joins alone hold it at, over the tolerance, or the neighbours across the smooth
+    joins that would turn, which are its neighbours in the model."""
+    result = runs["smooth"]
+    reasons = {face: kept_sentence(reason) for network in result.joins.networks
+               for face, reason in network.reasons.items()}
+    assert len(reasons) >= 60
+    for face, why in reasons.items():
+        report = result.faces[face]
+        assert report.status == "unchanged" and report.message == why
+        if "stays" in why:
+            assert float(why.split("stays ")[1].split()[0]) > TOL
+        elif "joins (with face" in why:
+            named = {int(k.split()[1]) for k in why.split("joins (with ")[1].split(")")[0]
+                     .split(", ")}
+            neighbours = {f + 1 for join in result.joins.adjacency.joins_of(face)
+                          for f in join.faces if f != face}
+            assert named <= neighbours
+        else:
+            assert "folds" in why or "between its own pieces" in why

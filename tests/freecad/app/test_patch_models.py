@@ -151,7 +151,8 @@ def test_with_the_energy_method_the_faces_are_the_same_network(doc):
 
 def test_with_the_energy_method_faces_no_network_moves_are_kept_with_the_reason(doc):
     """At 0.001 mm energy still moves each face of the L alone, but with the joins held
-    no network fits that tolerance: the faces are kept as they were, and say why."""
+    no network fits that tolerance: the faces are kept as they were, and say how far the
+    joins alone hold them."""
     obj = _sewn(doc, patch_network().patches, "L")
     alone, held = (make.fair_elements(obj, [f"Face{i + 1}" for i in range(3)],
                                       dict(SETTINGS, method="energy", tolerance=0.001),
@@ -160,7 +161,8 @@ def test_with_the_energy_method_faces_no_network_moves_are_kept_with_the_reason(
                    for joins in ("free", "smooth"))
     assert all(0 < r.max_deviation <= 0.001 for r in alone)
     assert all(r.poles_after == (4, 4) and r.max_deviation == 0.0 for r in held)
-    assert all("no network of faces moved it" in r.note for r in held)
+    assert all("with its network's joins held it stays " in r.note
+               and r.note.endswith("(Joins=free fairs it alone)") for r in held)
     assert held.joins.summary()["network_faces"] == 0
 
 
@@ -188,7 +190,7 @@ def test_the_feature_reports_grids_networks_and_why_faces_stay(doc):
     """The feature's Status names the patch grid faired as one surface, the faces faired
     together by energy, and why faces at their coarsest stay as they are when no network
     of them fits the tolerance (the L at 0.001 mm: the joins alone hold each face
-    further than that)."""
+    further than that, and each face says how far)."""
     grid = make.make_fairing(_sewn(doc, patch_grid().patches, "Grid"), tolerance=TOL,
                              angle_tolerance=GRID_ANGLE)
     network = make.make_fairing(_sewn(doc, patch_network().patches, "L"), tolerance=TOL,
@@ -203,7 +205,7 @@ def test_the_feature_reports_grids_networks_and_why_faces_stay(doc):
     assert grid.Status.endswith("; 1 patch grids (4 faces) faired as one surface each")
     assert network.Status.endswith("; 3 faces at their coarsest faired together")
     assert network.PolesAfter == "5 x 5; 5 x 5; 5 x 5"
-    assert tight.Status.startswith("OK; Face1 kept unchanged: its net is already at its "
-                                   "coarsest"), tight.Status
-    assert tight.Status.count("kept unchanged") == 3
+    assert tight.Status.startswith("OK; Face1 kept unchanged: with its network's joins "
+                                   "held it stays "), tight.Status
+    assert tight.Status.count("over the 0.001 it was solved to") == 3
     assert tight.PolesAfter == "4 x 4; 4 x 4; 4 x 4" and tight.MaxDeviation.Value == 0.0
