@@ -46,8 +46,9 @@ The options
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
 ``measure`` : {"geometric", "parametric"}, default "geometric"
     The distance the core's tolerance search bounds: closest-point or same-parameter.
-    ``"wavelet"`` with ``tol`` in the core; the workbench's ``Measure`` (default
-    ``"parametric"``) applies to its core step rules only and is refused with ``"local"``.
+    ``"wavelet"`` with ``tol`` in the core.  A face's core step rules bound the default
+    (occ layer, command line) or the workbench's ``Measure`` (same values and default,
+    refused other than the default with ``"local"``, which does not use it).
 ``schedule`` : {"auto", "direct", "hybrid"}, default "auto"
     Spaces the core's projection visits (:mod:`cq_fairing.core.schedule`).  ``"wavelet"``.
 ``joins`` : {"smooth", "closed", "free", "curvature"}, default "smooth"

@@ -17,7 +17,7 @@ import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
            "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask",
-           "periodic_directions"]
+           "face_region", "periodic_directions"]
 
 
 def full_knots(knots, mults):
@@ -111,7 +111,22 @@ def inside_mask(face, u, v):
     sample by sample, for a face trimmed to its UV box (or untrimmed)."""
     if _is_uv_rectangle(face):
         return np.ones((len(u), len(v)), dtype=bool)
-    return np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u])
+    return _on_face(face, u, v)
+
+
+def face_region(face):
+    """The core's ``region(u, v)`` of ``face`` (:func:`inside_mask` of any grid), or
+    ``None`` for a face trimmed to its UV box (or untrimmed), which its UV box, the
+    core's ``window``, bounds."""
+    if _is_uv_rectangle(face):
+        return None
+    return lambda u, v: _on_face(face, u, v)
+
+
+def _on_face(face, u, v):
+    """OCCT's answer for every grid sample: ``face.isPartOfDomain(u_i, v_j)``."""
+    return np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u],
+                    dtype=bool).reshape(len(u), len(v))
 
 
 def part_surface(surface):

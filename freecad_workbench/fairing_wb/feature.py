@@ -16,8 +16,9 @@ from . import conversion, make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 5  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
-# 4: the Joins and AngleTolerance properties; 5: Search "local", the default
+VERSION = 6  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
+# 4: the Joins and AngleTolerance properties; 5: Search "local", the default; 6: Measure
+# "geometric", the default
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -53,7 +54,8 @@ PROPERTIES = (
      "candidate is checked both ways on the face", False),
     ("App::PropertyEnumeration", "Measure", "Fairing",
      "Deviation bounded by the core's searches (guaranteed, linear, polyfit; local: "
-     "parametric only): parametric (upper bound, fast) or geometric", False),
+     "geometric only): geometric (closest points) or parametric (same parameters, an "
+     "upper bound)", False),
     ("App::PropertyString", "PolesBefore", "Figures", "Control points of the source", True),
     ("App::PropertyString", "PolesAfter", "Figures", "Control points of the result", True),
     ("App::PropertyLength", "MaxDeviation", "Figures",
@@ -172,10 +174,22 @@ class Fairing:
                 setattr(obj, name, list(values))
 
     def onDocumentRestored(self, obj):
-        """Migrate older documents: add missing properties, extend enumerations."""
+        """Migrate older documents: add missing properties, extend enumerations, and give
+        a local search the default ``Measure`` (:meth:`_measure_of_local`)."""
         self._add_properties(obj)
         self._extend_enumerations(obj)
+        if getattr(self, "Version", 1) < 6:
+            self._measure_of_local(obj)
         self.Type, self.Version = TYPE, VERSION
+
+    @staticmethod
+    def _measure_of_local(obj):
+        """Before version 6 ``Measure``'s default was ``parametric``, the one value the
+        local search, which does not use it, took; now that is the default,
+        ``geometric``.  A local search's ``parametric`` becomes ``geometric`` (its net
+        is the same); a core search keeps its ``Measure``."""
+        if obj.Search == "local" and obj.Measure == "parametric":
+            obj.Measure = make.MEASURES[0]
 
     def execute(self, obj):
         """Fair every linked face/edge; any failure sets ``Status`` (one sentence) and
@@ -199,7 +213,7 @@ class Fairing:
         """Keyword arguments of :func:`make.fair_face` from the properties.
 
         ``Objective`` applies to the adaptive method only and is ignored otherwise;
-        ``Measure`` other than ``parametric`` with ``Search`` ``local`` is refused by
+        ``Measure`` other than ``geometric`` with ``Search`` ``local`` is refused by
         :func:`make.fair_face` (the recompute fails, ``Status`` says why).
         """
         objective = obj.Objective if obj.Method == "adaptive" else "compact"

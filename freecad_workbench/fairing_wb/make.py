@@ -29,7 +29,10 @@ from cq_fairing.core.face_search import (
 )
 from cq_fairing.core.joint_projection import unholdable
 from cq_fairing.core.network_fairing import kept_sentence
-from cq_fairing.core.options import BORDERS  # "auto" first: the enumeration's default
+from cq_fairing.core.options import (
+    BORDERS,  # "auto" first: the enumeration's default
+    MEASURES,  # "geometric" first: the default
+)
 from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: the default
 from cq_fairing.core.plans import largest_resolved_scale
 
@@ -45,7 +48,6 @@ MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
 OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "corners", "edges")
-MEASURES = ("parametric", "geometric")
 DEVIATION_SAMPLES = 30
 # why a face at its coarsest that no network moved is kept (Status)
 COARSEST = ("its net is already at its coarsest (nothing to remove) and no network of "
@@ -63,10 +65,10 @@ class FairedShape:
         ``(k_u, k_v)`` for a face, ``(k,)`` for an edge.
     max_deviation : float
         Largest closest-point distance between faired and source surface, both ways
-        (model units, mm): in Tolerance mode with the wavelet method the value of the
-        check that accepted the net (:func:`searched_face`: the face's samples and the
-        centres of their cells), otherwise at ``DEVIATION_SAMPLES`` squared samples of
-        each on the face (``analysis.two_sided_deviation``, as the deviation map).
+        (model units, mm): in Tolerance mode the value of the check that accepted the
+        net (:func:`searched_face`: the face's samples and the centres of their cells),
+        in Target mode at ``DEVIATION_SAMPLES`` squared samples of each on the face
+        (``analysis.two_sided_deviation``, as the deviation map).
     seconds : float
         Wall time of conversion + fairing + rebuild.
     note : str
@@ -283,38 +285,28 @@ def _curve_search_keywords(search, measure, method):
     return {"search": search, "measure": measure}
 
 
-def fair_surface_net(source, tolerance=None, target=None, method="wavelet",
-                     objective="compact", borders="auto"):
-    """Fair a core surface by tolerance or by target control points (core call only):
-    target mode, and the adaptive and energy methods, which check the true
-    closest-point distance themselves (a face's wavelet tolerance search is
-    :func:`fair_face`'s, :func:`cq_fairing.core.face_search.search_face`)."""
-    if (tolerance is None) == (target is None):
-        raise cf.InvalidInputError(
-            "give either a tolerance (mm) or target control points (u, v), not both/neither.")
-    keywords = _core_keywords(method, objective, tolerance, borders)
-    if tolerance is not None:
-        _require_accuracy_control()
-        return cf.fair_surface(source.poles, tol=_check_tolerance(tolerance),
-                               u_knots=source.u_knots, v_knots=source.v_knots,
-                               degree=(source.u_degree, source.v_degree),
-                               weights=source.weights, **keywords)
+def _target_net(source, target):
+    """The wavelet projection of a core surface onto ``target`` control points ``(u, v)``
+    (Target mode); a count equal to the source's keeps that direction as it is."""
     n = _target_spans(target, source.shape, (source.u_degree, source.v_degree), "face")
-    # A target equal to the source's pole count keeps that direction as it is.
     n = tuple(None if t == k else m for t, k, m in zip(target, source.shape, n))
     return cf.fair_surface(source.poles, n, u_knots=source.u_knots, v_knots=source.v_knots,
-                           degree=(source.u_degree, source.v_degree), weights=source.weights,
-                           **keywords)
+                           degree=(source.u_degree, source.v_degree), weights=source.weights)
 
 
-def searched_face(face, source, tolerance, search="local", measure="parametric"):
-    r"""The wavelet method's tolerance search of ``face`` (whose net is ``source``): the
-    core's :func:`~cq_fairing.core.face_search.search_face`, the one ``cq-fairing`` and
+def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
+                  method="wavelet", objective="compact", borders="auto"):
+    r"""The tolerance search of ``face`` (whose net is ``source``) by ``method``: the
+    core's :func:`~cq_fairing.core.face_search.search_face` with the attempts of
+    :func:`~cq_fairing.core.face_search.face_attempts`, the search ``cq-fairing`` and
     :func:`cq_fairing.occ.fair_face` run, with the workbench's pieces.
 
     * the samples: a grid of :func:`~cq_fairing.core.face_search.sample_counts` over the
       face's UV box (``face.ParameterRange``, clipped to the surface's domain) with the
       mask of those on the face (:func:`conversion.inside_mask`);
+    * the face for the core's searches: its UV box as their ``window``
+      (:func:`~cq_fairing.core.face_search.uv_window`) and, for the adaptive method, the
+      samples on the face as its ``region`` (:func:`conversion.face_region`);
     * the check: :class:`analysis.SampledDeviation`, two-sided, on the grid and the
       centres of its cells that lie on the face, with its cheap lower bound as the
       pre-filter;
@@ -341,14 +333,15 @@ def searched_face(face, source, tolerance, search="local", measure="parametric")
                                                       conversion.inside_mask(face, cu, cv))))
     outcome = search_face(
         source, tolerance, grid, face_finisher(source, conversion.periodic_directions(face)),
-        check, attempts=face_attempts(tolerance, search, measure=measure),
-        exceeds=check.exceeds, window=uv_window(conversion.uv_range(face, source), source),
-        details=False, judge="the workbench")
+        check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
+        exceeds=check.exceeds, region=conversion.face_region(face),
+        window=uv_window(conversion.uv_range(face, source), source), details=False,
+        judge="the workbench")
     return outcome, check
 
 
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
-              search="local", measure="parametric", objective="compact", borders="auto"):
+              search="local", measure=MEASURES[0], objective="compact", borders="auto"):
     r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
     Parameters
@@ -363,7 +356,8 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         keeps the net; ``adaptive``: exact L2 projection onto targets whose knots follow
         the error, usually far fewer poles at the same tolerance (rational faces in
         homogeneous coordinates, without the energy polish).
-        ``energy`` and ``adaptive`` need ``tolerance``.
+        ``energy`` and ``adaptive`` need ``tolerance``.  In Tolerance mode every method
+        runs the command line's face search (:func:`searched_face`).
     boundary : {"free", "corners", "edges"}
         ``free``: L2-best surface, the boundary may move within the tolerance;
         ``corners``: the four corner points stay; ``edges``: boundary curves are the
@@ -377,10 +371,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         face's UV box.  Either way each candidate is checked both ways on the face's
         samples, and if it fails the local search runs again with the parametric
         distance, an upper bound of the true distance.
-    measure : {"parametric", "geometric"}
-        The distance the core's searches bound (``parametric`` is an upper bound of the
-        ``geometric`` one and about 3x faster); refused, other than ``parametric``, with
-        ``search="local"``.
+    measure : {"geometric", "parametric"}
+        The distance the core's searches bound (``geometric``: closest points, the
+        default of every layer; ``parametric``: same parameters, an upper bound of it);
+        refused, other than ``geometric``, with ``search="local"``.
     objective : {"compact", "faithful", "fair"}
         ``method="adaptive"`` only: ``compact`` is the fewest poles within ``tolerance``;
         ``faithful`` the smallest net whose residual variance is down to the source's
@@ -393,7 +387,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         (corners kept, each edge fitted to its own border curve) where that gives fewer
         poles; ``free`` is the plain projection, often a much faster search on a face
         whose pinned net slides along it (the 50 x 80 test face: 19 x 21 poles in
-        about 4 s instead of 11 x 11 in 23-30 s); ``pinned`` always pins.
+        about 1.6 s instead of 11 x 11 in about 11 s); ``pinned`` always pins.
 
     Raises
     ------
@@ -406,18 +400,21 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     source = conversion.surface_from_face(face)
     _check_boundary(source, boundary)
     _check_search(search, measure)
-    _check_adaptive_only(method, objective, borders)
+    if (tolerance is None) == (target is None):
+        raise cf.InvalidInputError(
+            "give either a tolerance (mm) or target control points (u, v), not both/neither.")
+    _core_keywords(method, objective, tolerance, borders)
     note = ""
-    if tolerance is not None and method == "wavelet":
+    if tolerance is not None:
         outcome, check = searched_face(face, source, _check_tolerance(tolerance), search,
-                                       measure)
+                                       measure, method, objective, borders)
         faired, deviation, note = outcome.surface, outcome.deviation, _outcome_note(outcome)
         if boundary != "free":
             faired = _closed_like(source, _fix_boundary(source, faired, boundary))
             deviation = check(faired)
     else:
-        result = fair_surface_net(source, tolerance, target, method, objective, borders)
-        faired = _closed_like(source, _fix_boundary(source, result.surface, boundary))
+        faired = _closed_like(source, _fix_boundary(source, _target_net(source, target).surface,
+                                                    boundary))
         deviation = face_deviation(face, source, faired)
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
@@ -450,7 +447,7 @@ def face_deviation(face, source, faired):
 
 
 def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="local",
-              measure="parametric", objective="compact"):
+              measure=MEASURES[0], objective="compact"):
     """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``).
 
     The arguments are those of :func:`fair_face` with one target count; the adaptive
@@ -802,7 +799,7 @@ def _source_link(source):
 
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
-                 search="local", measure="parametric", objective="compact", name="Fairing",
+                 search="local", measure=MEASURES[0], objective="compact", name="Fairing",
                  doc=None, borders="auto", joins="smooth", angle_tolerance=1.0):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
 

@@ -483,7 +483,7 @@ class LevelsPanel:
         self._remove_preview()
         doc = self.link[0].Document
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
-                                     "search": "linear", "measure": "parametric",
+                                     "search": make.SEARCHES[0], "measure": make.MEASURES[0],
                                      "objective": "compact"},
                          {"boundary": "free", "borders": "auto"})
         before = {o.Name for o in doc.Objects}

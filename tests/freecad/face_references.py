@@ -10,9 +10,12 @@ repository root::
 
     python -m tests.freecad.face_references
 
-The cases: every face of ``fuselage.brep`` at 2.5 mm, and the 50 x 80 noisy face of the
-workbench tests (:func:`noisy_blade_net`) at 0.05 mm.  This module imports numpy only;
-:func:`computed` imports the OCP layer.
+The faces: every face of ``fuselage.brep`` at 2.5 mm, and the 50 x 80 noisy face of the
+workbench tests (:func:`noisy_blade_net`) at 0.05 mm; the settings (:data:`SETTINGS`):
+the defaults on both, ``method="adaptive"`` on the fuselage, ``method="energy"`` on both,
+and ``method="adaptive", borders="free"`` on the noisy face.  A case is named
+``"<setting>/<face>"`` (``"energy/fuselage/3"``, ``"wavelet/noisy"``).  This module
+imports numpy only; :func:`computed` imports the OCP layer.
 """
 
 from pathlib import Path
@@ -23,6 +26,11 @@ REPO = Path(__file__).resolve().parents[2]
 REFERENCES = REPO / "tests" / "data" / "face_references.npz"
 FUSELAGE = ("fuselage.brep", 2.5)
 NOISY = ((50, 80), 0.05)
+#: ``{setting: (options of fair_face and of the workbench's make_fairing, faces)}``.
+SETTINGS = {"wavelet": ({}, ("fuselage", "noisy")),
+            "adaptive": ({"method": "adaptive"}, ("fuselage",)),
+            "energy": ({"method": "energy"}, ("fuselage", "noisy")),
+            "adaptive-free": ({"method": "adaptive", "borders": "free"}, ("noisy",))}
 
 
 def noisy_blade_net(n_u=50, n_v=80, noise=0.02, seed=3):
@@ -53,9 +61,14 @@ def _clamped_knots(poles, degree=3):
 
 
 def load():
-    """``{case: {field: value}}`` from :data:`REFERENCES` (case ``"fuselage/3"``,
-    ``"noisy"``; fields ``source``, ``status``, ``poles``, ``u_knots``, ``v_knots``,
-    ``max_deviation``)."""
+    """``{case: {field: value}}`` from :data:`REFERENCES`.
+
+    Fields: ``source`` (the face's poles), ``status`` (``"faired"``, ``"unchanged"`` or
+    ``"tolerance-not-met"``), ``message`` (why it is kept, ``""`` when faired),
+    ``poles``, ``u_knots``, ``v_knots`` (the net the face ends with: the source's where
+    kept), ``max_deviation`` (OCCT's check of the faired face; the best deviation found
+    where the tolerance is not met; 0 where unchanged).
+    """
     out = {}
     with np.load(REFERENCES) as data:
         for key in data.files:
@@ -65,35 +78,57 @@ def load():
     return out
 
 
+def setting(case):
+    """``(options, tol)`` of ``case``: the options of its setting and its face's
+    tolerance."""
+    name, face = case.split("/", 1)
+    return SETTINGS[name][0], (NOISY[1] if face == "noisy" else FUSELAGE[1])
+
+
 def computed():
-    """The cases as ``fair_face`` (defaults, the tolerance above) gives them now."""
+    """The cases as ``fair_face`` (the options of :data:`SETTINGS`, the tolerance above)
+    gives them now."""
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS
 
     from cq_fairing.core.geometry import make_surface
-    from cq_fairing.occ import face_to_surface, fair_face, read_shape
+    from cq_fairing.occ import read_shape
     from cq_fairing.occ.builders import surface_to_natural_face
 
-    name, tol = FUSELAGE
-    explorer = TopExp_Explorer(read_shape(REPO / "tests" / "data" / name), TopAbs_FACE)
-    faces = []
+    explorer = TopExp_Explorer(read_shape(REPO / "tests" / "data" / FUSELAGE[0]), TopAbs_FACE)
+    faces = {}
     while explorer.More():
-        faces.append(TopoDS.Face_s(explorer.Current()))
+        faces[f"fuselage/{len(faces)}"] = TopoDS.Face_s(explorer.Current())
         explorer.Next()
-    cases = {f"fuselage/{k}": (face, tol) for k, face in enumerate(faces)}
     noisy, _, u_knots, v_knots = noisy_blade_net(*NOISY[0])
-    cases["noisy"] = (surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3))),
-                      NOISY[1])
+    faces["noisy"] = surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3)))
     out = {}
-    for case, (face, tol) in cases.items():
-        report = fair_face(face, tol=tol)
-        surface = report.surface if report.surface is not None else face_to_surface(face)[0]
-        out[case] = {"source": face_to_surface(face)[0].poles, "status": report.status,
-                     "poles": surface.poles, "u_knots": surface.u_knots,
-                     "v_knots": surface.v_knots,
-                     "max_deviation": np.float64(report.max_deviation)}
+    for name, (_, kinds) in SETTINGS.items():
+        for key, face in faces.items():
+            if key.split("/")[0] in kinds:
+                case = f"{name}/{key}"
+                out[case] = _outcome(face, *setting(case))
     return out
+
+
+def _outcome(face, options, tol):
+    """The fields of :func:`load` of ``fair_face(face, tol=tol, **options)``."""
+    from cq_fairing.errors import ToleranceNotMetError
+    from cq_fairing.occ import face_to_surface, fair_face
+
+    source = face_to_surface(face)[0]
+    try:
+        report = fair_face(face, tol=tol, **options)
+    except ToleranceNotMetError as exc:
+        status, message, surface, deviation = ("tolerance-not-met", str(exc), source,
+                                               exc.best_deviation)
+    else:
+        status, message, deviation = report.status, report.message, report.max_deviation
+        surface = report.surface if report.surface is not None else source
+    return {"source": source.poles, "status": status, "message": message,
+            "poles": surface.poles, "u_knots": surface.u_knots, "v_knots": surface.v_knots,
+            "max_deviation": np.float64(deviation)}
 
 
 def main():

@@ -16,8 +16,12 @@ NOW = face_references.computed()
 
 
 def test_the_same_cases():
+    """Every setting is stored, and the cases cover a faired face, a face kept for
+    nothing to fair and one kept for its tolerance."""
     assert sorted(STORED) == sorted(NOW)
-    assert {STORED[case]["status"] for case in STORED} == {"faired", "unchanged"}
+    assert {case.split("/")[0] for case in STORED} == set(face_references.SETTINGS)
+    assert {STORED[case]["status"] for case in STORED} == {"faired", "unchanged",
+                                                           "tolerance-not-met"}
 
 
 @pytest.mark.parametrize("case", sorted(STORED))
@@ -25,6 +29,7 @@ def test_stored_net_is_fair_faces(case):
     stored, now = STORED[case], NOW[case]
     size = float(np.ptp(now["source"].reshape(-1, 3), axis=0).max())
     assert stored["status"] == now["status"]
+    assert stored["message"] == now["message"]
     assert np.array_equal(stored["source"], now["source"])
     assert stored["poles"].shape == now["poles"].shape
     assert np.abs(stored["u_knots"] - now["u_knots"]).max() <= 1e-12
