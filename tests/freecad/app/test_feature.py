@@ -1,6 +1,5 @@
 """The parametric Fairing feature on real models, inside FreeCAD (no mocks)."""
 
-import time
 
 import numpy as np
 import pytest
@@ -343,19 +342,6 @@ def test_make_fairing_refuses_what_it_would_ignore(doc, noisy):
     with pytest.raises(cf.InvalidInputError, match="Noisy has no Face7, it has 1 faces"):
         make.make_fairing((noisy, ["Face7"]), tolerance=0.05)
     assert not [o for o in doc.Objects if o.Name.startswith("Fairing")]
-
-
-def test_preview_speed_on_50x80_face(noisy):
-    face = noisy.Shape.Faces[0]
-    for kwargs, limit in ((dict(target=(18, 26)), 0.5), (dict(tolerance=0.05), 1.0)):
-        best = min(_timed(make.fair_face, face, **kwargs) for _ in range(3))
-        assert best < limit, (kwargs, best)
-
-
-def _timed(func, *args, **kwargs):
-    start = time.perf_counter()
-    func(*args, **kwargs)
-    return time.perf_counter() - start
 
 
 def test_trimmed_rational_face_keeps_its_trim(doc):

@@ -24,6 +24,7 @@ import FreeCADGui as Gui  # noqa: E402
 from fairing_wb.qt import QtCore, QtGui, QtWidgets  # noqa: E402
 
 RESULTS = []
+TIMINGS = []
 COMMANDS = ("Fairing_FairSurface", "Fairing_FairCurve", "Fairing_DeviationMap",
             "Fairing_CurvatureMap", "Fairing_Levels", "Fairing_PointsToSurface",
             "Fairing_Preferences")
@@ -31,6 +32,12 @@ COMMANDS = ("Fairing_FairSurface", "Fairing_FairCurve", "Fairing_DeviationMap",
 
 def check(name, condition, detail=""):
     RESULTS.append({"name": name, "passed": bool(condition), "detail": str(detail)})
+
+
+def timing(name, seconds, detail=""):
+    """Record a wall time for the log (``timing:`` lines): a figure, not a check; the
+    targets live in ``benchmarks/bench_workbench.py`` and BENCHMARKS.md."""
+    TIMINGS.append({"name": name, "detail": f"{seconds:.3f} s; {detail}".rstrip("; ")})
 
 
 def pump(seconds=0.3):
@@ -404,7 +411,7 @@ def run():
     # search, the command line's: its 38 x 65 net, tests/data/face_references.npz).
     find("fairing_target_u").setValue(18)
     find("fairing_target_v").setValue(26)
-    check("target preview on 50x80 under 1 s", timed_preview() < 1.0, f"{timed_preview():.3f} s")
+    timing("target preview on 50x80", timed_preview())
     find("fairing_mode").setCurrentIndex(0)
     find("fairing_tolerance").setProperty("rawValue", 0.05)
     check("default search local, measure disabled with it",
@@ -417,7 +424,7 @@ def run():
     figures = find("fairing_figures").text()
     check("preview figures shown", "50 x 80 -> 38 x 65" in figures and "max deviation" in figures,
           figures)
-    check("tolerance preview on 50x80 under 1 s", best < 1.0, f"{best:.3f} s; {figures}")
+    timing("tolerance preview on 50x80", best, figures)
     grab_window(os.path.join(ARTIFACTS, "fair_surface_panel.png"))
     undo_before = doc.UndoCount
     check("OK pressed", press_task_ok())
@@ -625,6 +632,8 @@ def main():
     os.makedirs(ARTIFACTS, exist_ok=True)
     with open(os.path.join(ARTIFACTS, "gui_results.json"), "w") as handle:
         json.dump(RESULTS, handle, indent=1)
+    with open(os.path.join(ARTIFACTS, "gui_timings.json"), "w") as handle:
+        json.dump(TIMINGS, handle, indent=1)
     rc = 0 if RESULTS and all(r["passed"] for r in RESULTS) else 1
     sys.stdout.flush()
     os._exit(rc)
