@@ -315,14 +315,7 @@ def test_a_pinned_rational_side_keeps_its_border_and_tangent_plane(side, seed):
 
 def _rational_border(surface, side):
     """Points and unit normals along a side by the surface's own (rational) evaluation."""
-    (u0, u1), (v0, v1) = surface.domain
-    t = SAMPLES
-    u, v = ([{"u0": u0, "u1": u1}[side]], v0 + (v1 - v0) * t) if side[0] == "u" else \
-        (u0 + (u1 - u0) * t, [{"v0": v0, "v1": v1}[side]])
-    point, su, sv = (surface.evaluate_grid(u, v, nu, nv).reshape(len(t), 3)
-                     for nu, nv in ((0, 0), (1, 0), (0, 1)))
-    normal = np.cross(su, sv)
-    return point, normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    return _own_border(surface, side, SAMPLES)
 
 
 @given(st.integers(3, 7), st.sampled_from(["G0", "G1"]))
