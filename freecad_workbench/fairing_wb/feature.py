@@ -212,12 +212,16 @@ class Fairing:
     def settings(obj):
         """Keyword arguments of :func:`make.fair_face` from the properties.
 
-        ``Objective`` applies to the adaptive method only and is ignored otherwise;
-        ``Measure`` other than ``geometric`` with ``Search`` ``local`` is refused by
+        ``Objective`` applies to the adaptive method only and is ignored otherwise,
+        ``Search`` and ``Measure`` to the wavelet method only, likewise; ``Measure``
+        other than ``geometric`` with ``Search`` ``local`` is refused by
         :func:`make.fair_face` (the recompute fails, ``Status`` says why).
         """
         objective = obj.Objective if obj.Method == "adaptive" else "compact"
-        common = {"method": obj.Method, "search": obj.Search, "measure": obj.Measure,
+        wavelet = obj.Method == "wavelet"
+        common = {"method": obj.Method,
+                  "search": obj.Search if wavelet else make.SEARCHES[0],
+                  "measure": obj.Measure if wavelet else make.MEASURES[0],
                   "objective": objective}
         if obj.Mode == "Tolerance":
             return {"tolerance": obj.Tolerance.Value, "target": None, **common}

@@ -32,6 +32,7 @@ from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
     MEASURES,  # "geometric" first: the default
+    check_applies,
 )
 from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: the default
 from cq_fairing.core.plans import largest_resolved_scale
@@ -258,14 +259,19 @@ def _check_boundary(source, boundary):
             "'free' for it.")
 
 
-def _check_search(search, measure):
+def _check_search(search, measure, method="wavelet"):
     """``search`` is one of :data:`SEARCHES` and ``measure`` one of :data:`MEASURES`;
+    both belong to the wavelet method's search and are refused, other than their
+    defaults, with another method (the core's
+    :func:`~cq_fairing.core.options.check_applies`, as the command line refuses them);
     ``measure`` is that of the core's searches and is refused, other than its default,
     with ``"local"``, which measures on the face's own samples."""
     if search not in SEARCHES or measure not in MEASURES:
         raise cf.InvalidInputError(
             f"search must be one of {SEARCHES} and measure one of {MEASURES}, got "
             f"{search!r} and {measure!r}.")
+    check_applies(method, (("search", search), ("measure", measure)),
+                  {"search": SEARCHES[0], "measure": MEASURES[0]})
     if search == "local" and measure != MEASURES[0]:
         core = ", ".join(repr(s) for s in SEARCHES[1:])
         raise cf.InvalidInputError(
@@ -279,7 +285,7 @@ def _curve_search_keywords(search, measure, method):
     (:func:`_check_search`); none for the adaptive and energy methods, which do not use
     them (the core refuses them there), nor for ``"local"``: an edge has no face
     samples, and the core's own search (its default) fairs it."""
-    _check_search(search, measure)
+    _check_search(search, measure, method)
     if method != "wavelet" or search == "local":
         return {}
     return {"search": search, "measure": measure}
@@ -399,7 +405,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     start = time.perf_counter()
     source = conversion.surface_from_face(face)
     _check_boundary(source, boundary)
-    _check_search(search, measure)
+    _check_search(search, measure, method)
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
@@ -838,7 +844,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
     _check_adaptive_only(method, objective, borders)
-    _check_search(search, measure)
+    _check_search(search, measure, method)
     check_joins(joins, angle_tolerance)
     obj_source, subs = _source_link(source)
     doc = doc or obj_source.Document

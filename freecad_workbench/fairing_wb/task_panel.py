@@ -52,6 +52,8 @@ def make_call(link, settings, face, joins=None):
     elif settings["method"] == "adaptive":  # search and measure do not apply
         args += [f"tolerance={settings['tolerance']!r}",
                  f"objective={settings['objective']!r}", f"borders={face['borders']!r}"]
+    elif settings["method"] == "energy":    # nor here
+        args.append(f"tolerance={settings['tolerance']!r}")
     else:
         args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
                  f"measure={settings['measure']!r}"]
@@ -107,8 +109,9 @@ class FairSurfacePanel:
     """Tolerance, mode, target, method, objective, borders, boundary, figures; Preview /
     OK / Cancel.
 
-    Objective and borders are enabled for the adaptive method only; search and measure for the other
-    methods in tolerance mode (the adaptive method checks the true distance itself).
+    Objective and borders are enabled for the adaptive method only; search and measure for the
+    wavelet method in tolerance mode (the adaptive method checks the true distance itself,
+    energy keeps the net).
     """
 
     def __init__(self, link=None, fairing=None, kind="Face"):
@@ -226,11 +229,12 @@ class FairSurfacePanel:
     def _mode_changed(self, *_):
         by_tolerance = self.mode.currentIndex() == 0
         adaptive = self.method.currentText() == "adaptive"
+        wavelet = self.method.currentText() == "wavelet"
         self.tolerance.setEnabled(by_tolerance)
         self.objective.setEnabled(adaptive)
         self.borders.setEnabled(adaptive and self.kind == "Face")
-        self.search.setEnabled(by_tolerance and not adaptive)
-        self.measure.setEnabled(by_tolerance and not adaptive and not self._local())
+        self.search.setEnabled(by_tolerance and wavelet)
+        self.measure.setEnabled(by_tolerance and wavelet and not self._local())
         self.target_u.setEnabled(not by_tolerance)
         self.target_v.setEnabled(not by_tolerance)
 
@@ -243,8 +247,11 @@ class FairSurfacePanel:
         """Keyword arguments of :func:`make.fair_face` (without ``boundary``); ``measure``
         is the default with the local search, which does not use it."""
         method = self.method.currentText()
-        measure = make.MEASURES[0] if self._local() else self.measure.currentText()
-        common = {"method": method, "search": self.search.currentText(),
+        wavelet = method == "wavelet"
+        measure = make.MEASURES[0] if self._local() or not wavelet else \
+            self.measure.currentText()
+        common = {"method": method,
+                  "search": self.search.currentText() if wavelet else make.SEARCHES[0],
                   "measure": measure,
                   "objective": self.objective.currentText() if method == "adaptive"
                   else "compact"}

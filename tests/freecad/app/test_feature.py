@@ -120,6 +120,22 @@ def test_tolerance_mode_meets_tolerance_checked_by_occt(doc, blade):
         [int(x) for x in coarse.split(" x ")])
 
 
+def test_search_and_measure_belong_to_the_wavelet_method(doc, noisy):
+    """Given with energy (or adaptive), a search or measure other than the default is
+    refused as the command line refuses it; a feature whose Method is energy ignores
+    its Search and Measure properties, as it ignores Objective."""
+    face = noisy.Shape.Faces[0]
+    for options in (dict(search="linear"), dict(measure="parametric", search="linear")):
+        with pytest.raises(Exception, match="applies to method='wavelet' only, got "
+                                            "method='energy'"):
+            make.fair_face(face, tolerance=0.05, method="energy", **options)
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05, method="energy")
+    obj.Search, obj.Measure = "linear", "parametric"
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.PolesAfter == "50 x 80"
+
+
 @pytest.mark.parametrize("search", ["local", "linear", "guaranteed"])
 def test_noisy_face_tolerance_and_truth(doc, noisy, search):
     obj = make.make_fairing((noisy, ["Face1"]), tolerance=0.05, search=search)
