@@ -27,6 +27,8 @@ NETWORK_ANGLE = 5.0   # the L's joins turn by up to 3.2 deg
 SETTINGS = {"tolerance": TOL, "target": None, "method": "wavelet", "search": "linear",
             "measure": "parametric", "objective": "compact"}
 FACE_SETTINGS = {"boundary": "free", "borders": "auto"}
+# search and measure belong to the wavelet method: energy takes their defaults
+ENERGY = dict(SETTINGS, method="energy", search=make.SEARCHES[0], measure=make.MEASURES[0])
 
 
 @pytest.fixture
@@ -75,7 +77,7 @@ def _order(obj, patches):
 
 def _fair(obj, joins, angle, method="wavelet"):
     subs = [f"Face{i + 1}" for i in range(len(obj.Shape.Faces))]
-    settings = dict(SETTINGS, method=method)
+    settings = SETTINGS if method == "wavelet" else dict(ENERGY, method=method)
     return make.fair_elements(obj, subs, settings, FACE_SETTINGS, joins=joins,
                               angle_tolerance=angle)
 
@@ -155,7 +157,7 @@ def test_with_the_energy_method_faces_no_network_moves_are_kept_with_the_reason(
     joins alone hold them."""
     obj = _sewn(doc, patch_network().patches, "L")
     alone, held = (make.fair_elements(obj, [f"Face{i + 1}" for i in range(3)],
-                                      dict(SETTINGS, method="energy", tolerance=0.001),
+                                      dict(ENERGY, tolerance=0.001),
                                       FACE_SETTINGS, joins=joins,
                                       angle_tolerance=NETWORK_ANGLE)
                    for joins in ("free", "smooth"))
