@@ -243,13 +243,9 @@ def _not_for_energy(face, info, tol, refusal):
     """Report of a face the energy method does not fair: rational faces (also those
     ``convert=True`` made rational, a cylinder's) are ``'skipped-rational'``; any other
     refusal of the core (a face with a degree-1 direction) leaves the face
-    ``'unchanged'`` with the core's reason."""
-    if face_info(face).rational:
-        return FaceFairReport(face, "skipped-rational", (
-            "rational face left unchanged: method='energy' fairs polynomial surfaces only; "
-            "use method='wavelet' or 'adaptive' for it."), info=info, tolerance=tol)
-    return FaceFairReport(face, "unchanged", f"face left unchanged: {refusal}", info=info,
-                          tolerance=tol)
+    ``'unchanged'``; both say the core's reason, as the workbench does."""
+    status = "skipped-rational" if face_info(face).rational else "unchanged"
+    return FaceFairReport(face, status, str(refusal), info=info, tolerance=tol)
 
 
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts):

@@ -598,8 +598,10 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     With several faces in target mode, each face is clamped to its own control-point
     counts.  In tolerance mode a face with no coarser net within the tolerance is kept as
     it is (:func:`_kept`), with the reason, as ``cq-fairing fair`` keeps it: one face or
-    several, the others are faired.  ``settings``
-    and ``face_settings`` as in :func:`fair_elements`.
+    several, the others are faired.  So is a B-spline face the energy method refuses (a
+    rational one, one with a degree-1 direction), with the core's reason
+    (:func:`_not_for_energy`).  ``settings`` and ``face_settings`` as in
+    :func:`fair_elements`.
 
     Several faces of one shape are faired alone first; in tolerance mode and with
     ``joins`` other than ``"free"`` they are then faired again together along the edges
@@ -647,6 +649,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
                 results.append(_kept(element, sub, error))
+            except cf.UnsupportedGeometryError as error:
+                results.append(_not_for_energy(element, sub, error, settings["method"]))
         else:
             own = None if target is None else target[0]
             results.append(fair_edge(element, **{**settings, "target": own}))
@@ -771,6 +775,16 @@ def _kept(face, sub, error):
     (:func:`_kept_as_is`)."""
     return _kept_as_is((sub, face), f"no coarser net within {error.tolerance:.4g} mm "
                                     f"(best found {error.best_deviation:.4g} mm)")
+
+
+def _not_for_energy(face, sub, error, method):
+    """:class:`FairedShape` of a B-spline face the energy method refuses (``error``: its
+    weights, a degree-1 direction), left as it is with the core's reason, as
+    ``cq-fairing fair`` leaves it; any other ``error`` (a face that is no B-spline, a
+    refusal of another method) is raised again."""
+    if method != "energy" or not isinstance(face.Surface, Part.BSplineSurface):
+        raise error
+    return _kept_as_is((sub, face), " ".join(str(error).split()))
 
 
 def error_sentence(error):

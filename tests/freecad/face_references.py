@@ -10,10 +10,12 @@ repository root::
 
     python -m tests.freecad.face_references
 
-The faces: every face of ``fuselage.brep`` at 2.5 mm, and the 50 x 80 noisy face of the
-workbench tests (:func:`noisy_blade_net`) at 0.05 mm; the settings (:data:`SETTINGS`):
-the defaults on both, ``method="adaptive"`` on the fuselage, ``method="energy"`` on both,
-and ``method="adaptive", borders="free"`` on the noisy face.  A case is named
+The faces: every face of ``fuselage.brep`` at 2.5 mm, the 50 x 80 noisy face of the
+workbench tests (:func:`noisy_blade_net`) at 0.05 mm, and a 20 x 30 rational one
+(:func:`rational_blade_net`) at 0.05 mm; the settings (:data:`SETTINGS`): the defaults on
+the fuselage and the noisy face, ``method="adaptive"`` on the fuselage,
+``method="energy"`` on all three (it keeps the rational face with its reason), and
+``method="adaptive", borders="free"`` on the noisy face.  A case is named
 ``"<setting>/<face>"`` (``"energy/fuselage/3"``, ``"wavelet/noisy"``).  This module
 imports numpy only; :func:`computed` imports the OCP layer.
 """
@@ -26,10 +28,11 @@ REPO = Path(__file__).resolve().parents[2]
 REFERENCES = REPO / "tests" / "data" / "face_references.npz"
 FUSELAGE = ("fuselage.brep", 2.5)
 NOISY = ((50, 80), 0.05)
+RATIONAL = ((20, 30), 0.05)
 #: ``{setting: (options of fair_face and of the workbench's make_fairing, faces)}``.
 SETTINGS = {"wavelet": ({}, ("fuselage", "noisy")),
             "adaptive": ({"method": "adaptive"}, ("fuselage",)),
-            "energy": ({"method": "energy"}, ("fuselage", "noisy")),
+            "energy": ({"method": "energy"}, ("fuselage", "noisy", "rational")),
             "adaptive-free": ({"method": "adaptive", "borders": "free"}, ("noisy",))}
 
 
@@ -55,6 +58,21 @@ def noisy_blade_net(n_u=50, n_v=80, noise=0.02, seed=3):
     return noisy, truth, _clamped_knots(n_u), _clamped_knots(n_v)
 
 
+def rational_blade_net(n_u=20, n_v=30):
+    """The noisy blade net of :func:`noisy_blade_net` with weights
+    :math:`1 + 0.2 \\sin(\\pi u) \\sin(\\pi v)` on its parameter grid.
+
+    Returns
+    -------
+    poles : ndarray, shape (n_u, n_v, 3)
+    weights : ndarray, shape (n_u, n_v)
+    u_knots, v_knots : ndarray
+    """
+    noisy, _, u_knots, v_knots = noisy_blade_net(n_u, n_v)
+    u, v = np.linspace(0.0, 1.0, n_u)[:, None], np.linspace(0.0, 1.0, n_v)[None, :]
+    return noisy, 1.0 + 0.2 * np.sin(np.pi * u) * np.sin(np.pi * v), u_knots, v_knots
+
+
 def _clamped_knots(poles, degree=3):
     inner = np.linspace(0.0, 1.0, poles - degree + 1)
     return np.concatenate([[0.0] * degree, inner, [1.0] * degree])
@@ -63,8 +81,8 @@ def _clamped_knots(poles, degree=3):
 def load():
     """``{case: {field: value}}`` from :data:`REFERENCES`.
 
-    Fields: ``source`` (the face's poles), ``status`` (``"faired"``, ``"unchanged"`` or
-    ``"tolerance-not-met"``), ``message`` (why it is kept, ``""`` when faired),
+    Fields: ``source`` (the face's poles), ``status`` (``"faired"``, ``"unchanged"``,
+    ``"skipped-rational"`` or ``"tolerance-not-met"``), ``message`` (why it is kept, ``""`` when faired),
     ``poles``, ``u_knots``, ``v_knots`` (the net the face ends with: the source's where
     kept), ``max_deviation`` (OCCT's check of the faired face; the best deviation found
     where the tolerance is not met; 0 where unchanged).
@@ -82,7 +100,8 @@ def setting(case):
     """``(options, tol)`` of ``case``: the options of its setting and its face's
     tolerance."""
     name, face = case.split("/", 1)
-    return SETTINGS[name][0], (NOISY[1] if face == "noisy" else FUSELAGE[1])
+    return SETTINGS[name][0], {"noisy": NOISY[1], "rational": RATIONAL[1]}.get(
+        face, FUSELAGE[1])
 
 
 def computed():
@@ -103,6 +122,9 @@ def computed():
         explorer.Next()
     noisy, _, u_knots, v_knots = noisy_blade_net(*NOISY[0])
     faces["noisy"] = surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3)))
+    poles, weights, u_knots, v_knots = rational_blade_net(*RATIONAL[0])
+    faces["rational"] = surface_to_natural_face(
+        make_surface(poles, u_knots, v_knots, (3, 3), weights=weights))
     out = {}
     for name, (_, kinds) in SETTINGS.items():
         for key, face in faces.items():
@@ -124,7 +146,8 @@ def _outcome(face, options, tol):
         status, message, surface, deviation = ("tolerance-not-met", str(exc), source,
                                                exc.best_deviation)
     else:
-        status, message, deviation = report.status, report.message, report.max_deviation
+        status, message = report.status, report.message
+        deviation = 0.0 if report.max_deviation is None else report.max_deviation
         surface = report.surface if report.surface is not None else source
     return {"source": source.poles, "status": status, "message": message,
             "poles": surface.poles, "u_knots": surface.u_knots, "v_knots": surface.v_knots,

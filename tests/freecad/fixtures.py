@@ -10,7 +10,7 @@ import numpy as np
 
 import FreeCAD
 import Part
-from face_references import noisy_blade_net
+from face_references import noisy_blade_net, rational_blade_net
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = REPO / "tests" / "data"  # bundled models, sources and licences in SOURCES.md there
@@ -43,7 +43,14 @@ def noisy_blade_surface(n_u=50, n_v=80, noise=0.02, seed=3):
     return _part_surface(noisy), _part_surface(truth)
 
 
-def _part_surface(net):
+def rational_blade_surface(n_u=20, n_v=30):
+    """The rational blade of :func:`face_references.rational_blade_net` as a
+    ``Part.BSplineSurface``."""
+    poles, weights, _, _ = rational_blade_net(n_u, n_v)
+    return _part_surface(poles, weights)
+
+
+def _part_surface(net, weights=None):
     n_u, n_v = net.shape[:2]
     surface = Part.BSplineSurface()
     uk = list(np.linspace(0, 1, n_u - 2))
@@ -51,7 +58,11 @@ def _part_surface(net):
     um = [4] + [1] * (n_u - 4) + [4]
     vm = [4] + [1] * (n_v - 4) + [4]
     poles = [[FreeCAD.Vector(*map(float, p)) for p in row] for row in net]
-    surface.buildFromPolesMultsKnots(poles, um, vm, uk, vk, False, False, 3, 3)
+    if weights is None:
+        surface.buildFromPolesMultsKnots(poles, um, vm, uk, vk, False, False, 3, 3)
+    else:
+        surface.buildFromPolesMultsKnots(poles, um, vm, uk, vk, False, False, 3, 3,
+                                         [[float(w) for w in row] for row in weights])
     return surface
 
 
