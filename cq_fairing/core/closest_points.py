@@ -235,20 +235,46 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     return uv[:, 0], uv[:, 1], dist
 
 
+class RestartSamples:
+    r"""The coarse samples :func:`closest_points_surface_restarted` restarts from:
+    ``per_span`` per knot span and direction of ``surface`` (one per span where that
+    would exceed ``max_samples`` per direction; ends and breakpoints included), their
+    points held in a ``cKDTree``.  Made once, they serve every projection onto the same
+    surface (building the tree of a 50 x 80 net's 58 000 samples costs about 10 ms).
+
+    Attributes
+    ----------
+    axes : (ndarray, ndarray)
+        The sample parameters per direction.
+    tree : scipy.spatial.cKDTree
+        The samples' points, flat in row-major ``(u, v)`` order.
+    """
+
+    def __init__(self, surface, per_span=4, max_samples=257):
+        axes = []
+        for space in (surface.u_space, surface.v_space):
+            x = sample_parameters(space, per_span=per_span)
+            axes.append(x if x.size <= max_samples else sample_parameters(space, per_span=1))
+        self.axes = tuple(axes)
+        grid = surface.evaluate_grid(*axes)
+        self.tree = cKDTree(grid.reshape(-1, grid.shape[-1]))
+
+
 def closest_points_surface_restarted(surface, points, u0, v0, per_span=4, max_samples=257,
-                                     starts=2):
+                                     starts=2, samples=None):
     r"""Foot points by :func:`closest_points_surface` from ``(u0, v0)``, restarted from
     the nearest coarse samples of the surface that lie elsewhere.
 
-    The coarse samples are ``per_span`` per knot span and direction (one per span where
-    that would exceed ``max_samples`` per direction; ends and breakpoints included), held
-    in a ``cKDTree``.  Each of a point's ``starts`` nearest samples that is nearer than
-    its foot point, or lies more than two samples away from it in parameters, is a new
-    Newton start, and the nearest result is kept: Newton from the same parameter can
-    stop at an extremum that is not the nearest (the IEA blade's airfoil face has points
-    nearer to the other side of its closed trailing edge, where the samples at both ends
-    of v coincide).  No distance returned exceeds the nearest coarse sample's, and each
-    is that of an actual surface point: never below the exact one.
+    The coarse samples are :class:`RestartSamples` of ``surface`` (``per_span`` per knot
+    span and direction, at most ``max_samples`` per direction), or ``samples``, made
+    for ``surface`` already.  Each of a point's ``starts`` nearest samples that is
+    nearer than its foot point, or lies more than two samples away from it in
+    parameters, is a new Newton start, and the nearest result is kept: Newton from the
+    same parameter can stop at an extremum that is not the nearest (the IEA blade's
+    airfoil face has points nearer to the other side of its closed trailing edge, where
+    the samples at both ends of v coincide).  No distance returned exceeds the nearest
+    coarse sample's, and each is that of an actual surface point: never below the exact
+    one.
 
     Returns
     -------
@@ -256,12 +282,10 @@ def closest_points_surface_restarted(surface, points, u0, v0, per_span=4, max_sa
     """
     points = np.asarray(points, dtype=float)
     u, v, dist = closest_points_surface(surface, points, u0, v0)
-    axes = []
-    for space in (surface.u_space, surface.v_space):
-        x = sample_parameters(space, per_span=per_span)
-        axes.append(x if x.size <= max_samples else sample_parameters(space, per_span=1))
-    grid = surface.evaluate_grid(*axes).reshape(-1, points.shape[1])
-    near, index = cKDTree(grid).query(points, k=min(starts, grid.shape[0]))
+    if samples is None:
+        samples = RestartSamples(surface, per_span, max_samples)
+    axes = samples.axes
+    near, index = samples.tree.query(points, k=min(starts, samples.tree.n))
     for column in range(near.shape[1] if near.ndim == 2 else 1):
         d0, k = (near[:, column], index[:, column]) if near.ndim == 2 else (near, index)
         i, j = np.unravel_index(k, (axes[0].size, axes[1].size))

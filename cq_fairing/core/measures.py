@@ -8,6 +8,7 @@ place.  Each of those modules states its mathematics.
 """
 
 from .closest_points import (
+                             RestartSamples,
                              closest_points_curve,
                              closest_points_surface,
                              closest_points_surface_restarted,
@@ -31,7 +32,7 @@ from .probes import CurveProbe, SurfaceProbe
 __all__ = [
     "Deviation", "DeviationMap", "sample_parameters", "extent", "curve_derivatives",
     "surface_derivatives", "closest_points_curve", "closest_points_surface",
-    "closest_points_surface_restarted",
+    "closest_points_surface_restarted", "RestartSamples",
     "CurveProbe", "SurfaceProbe", "deviation", "deviation_map",
     "curve_curvature", "curvature_derivative_energy", "surface_curvatures",
     "bending_energy", "count_extrema", "count_sign_changes", "curve_wiggles",

@@ -221,6 +221,7 @@ class SurfaceProbe:
         self._feet = {}
         self._source_blocks = None
         self._collocations = {}
+        self._strided = {}
 
     def _keep(self, key, i, j, u, v):
         """Remember the feet ``(u, v)`` of samples ``(i, j)`` on the ``"source"`` or on
@@ -401,8 +402,7 @@ class SurfaceProbe:
         """
         if tol is not None and stride > 1 and min(self.points.shape[:2]) > 4 * stride:
             self._adapt(faired)
-            sub = SurfaceProbe(self.source, method=self.method,
-                               uv=(self.u[::stride], self.v[::stride]), region=self.region)
+            sub = self._strided_probe(stride)
             value, k = sub.max_deviation(faired, tol, stride=1)
             if value > tol:
                 i, j = np.unravel_index(k, sub.points.shape[:2])
@@ -420,6 +420,16 @@ class SurfaceProbe:
             return bound.argmax()
         return _pruned_max(bound, lambda idx, below: self.true_distance(faired, other, idx,
                                                                          tol=below), tol)
+
+    def _strided_probe(self, stride):
+        """The probe of every ``stride``-th sample per direction, made once per grid: its
+        source points, region mask and collocation matrices serve every candidate (it
+        keeps no feet, so each measurement is that of a new probe)."""
+        if stride not in self._strided:
+            self._strided[stride] = SurfaceProbe(
+                self.source, method=self.method, uv=(self.u[::stride], self.v[::stride]),
+                region=self.region)
+        return self._strided[stride]
 
 
 class _LazyGrid:

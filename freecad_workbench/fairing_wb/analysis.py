@@ -15,14 +15,19 @@ Curvatures are the core's (:func:`cq_fairing.core.fairness.grid_curvatures`).
 import numpy as np
 from scipy.spatial import cKDTree
 
-from cq_fairing.core.closest_points import closest_points_surface, closest_points_surface_restarted
+from cq_fairing.core.closest_points import (
+    RestartSamples,
+    closest_points_surface,
+    closest_points_surface_restarted,
+)
 from cq_fairing.core.fairness import grid_curvatures
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "SampledDeviation", "curvature", "points_and_normals",
            "foot_points"]
 
-PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured before a full check
+PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured first
+ROUNDING = 1e-12        # share of the extent by which evaluation routes may differ
 
 
 def sample_parameters(uv_range, count):
@@ -164,25 +169,62 @@ class SampledDeviation:
                              for u, v, inside in self.grids])
         self.u, self.v = uv[:, 0], uv[:, 1]
         self.points = self._on_grids(source)
+        self._source_samples = None
+        self._last = None
 
     def _on_grids(self, surface):
         """``surface``'s points at the samples, (q, 3), evaluated grid by grid."""
         return np.concatenate([surface.evaluate_grid(u, v)[inside]
                                for u, v, inside in self.grids])
 
-    def distances(self, faired, index=slice(None), faired_points=None):
-        """The two-sided distance at the samples ``index`` (all by default);
-        ``faired_points``: ``faired``'s points there, if already evaluated."""
+    def _restarts(self):
+        """The source's :class:`~cq_fairing.core.closest_points.RestartSamples`, made once."""
+        if self._source_samples is None:
+            self._source_samples = RestartSamples(self.source)
+        return self._source_samples
+
+    def _candidate(self, faired):
+        """``faired``'s points at the samples, its parametric distance
+        :math:`|F(u_i, v_i) - S(u_i, v_i)|` there, the samples in decreasing order of it
+        and its ``RestartSamples``, kept for the last candidate (:meth:`exceeds` then
+        :meth:`__call__` measure the same one)."""
+        if self._last is None or self._last[0] is not faired:
+            points = self._on_grids(faired)
+            parametric = np.linalg.norm(points - self.points, axis=1)
+            self._last = (faired, points, parametric, np.argsort(parametric)[::-1],
+                          RestartSamples(faired))
+        return self._last[1:]
+
+    def distances(self, faired, index=slice(None)):
+        """The two-sided distance at the samples ``index`` (all by default), each sample
+        measured on its own (its value is the same in any batch)."""
         u, v = self.u[index], self.v[index]
-        there = closest_points_surface_restarted(faired, self.points[index], u, v)[2]
-        if faired_points is None:
-            faired_points = self._on_grids(faired)[index]
-        back = closest_points_surface_restarted(self.source, faired_points, u, v)[2]
+        faired_points, _, _, faired_samples = self._candidate(faired)
+        there = closest_points_surface_restarted(faired, self.points[index], u, v,
+                                                 samples=faired_samples)[2]
+        back = closest_points_surface_restarted(self.source, faired_points[index], u, v,
+                                                samples=self._restarts())[2]
         return np.maximum(there, back)
 
     def __call__(self, faired):
-        """The largest two-sided distance of ``faired`` over the samples."""
-        return float(self.distances(faired).max())
+        r"""The largest two-sided distance of ``faired`` over the samples
+        (``distances(faired).max()``), measured only where it can be the largest.
+
+        Both distances at a sample are at most its parametric distance (each Newton run
+        starts at the same parameter and never moves away), so the samples are measured
+        in decreasing order of it, in doubling batches from ``PREFILTER_SAMPLES``, until
+        the next one's is below the largest distance found by more than ``ROUNDING`` of
+        the source's extent (the parametric distance and the Newton runs evaluate the
+        surfaces by different routes, equal to rounding).  No sample passed over can
+        exceed that maximum, and each sample's value is that of the full measurement, so
+        the maximum is the full one."""
+        _, parametric, order, _ = self._candidate(faired)
+        slack = ROUNDING * self.source.size
+        best, start, batch = 0.0, 0, PREFILTER_SAMPLES
+        while start < order.size and parametric[order[start]] > best - slack:
+            best = max(best, float(self.distances(faired, order[start:start + batch]).max()))
+            start, batch = start + batch, 2 * batch
+        return best
 
     def exceeds(self, faired, tol, samples=PREFILTER_SAMPLES):
         r"""True when :meth:`__call__` of ``faired`` exceeds ``tol`` for certain, found on
@@ -192,12 +234,10 @@ class SampledDeviation:
         largest parametric distance are measured as :meth:`__call__` measures them (each
         sample on its own), so their largest value is a lower bound of the full maximum.
         ``False`` says nothing."""
-        points = self._on_grids(faired)
-        parametric = np.linalg.norm(points - self.points, axis=1)
-        widest = np.argsort(parametric)[::-1][:samples]
+        _, parametric, order, _ = self._candidate(faired)
+        widest = order[:samples]
         widest = widest[parametric[widest] > tol]
-        return widest.size > 0 and bool(
-            self.distances(faired, widest, points[widest]).max() > tol)
+        return widest.size > 0 and bool(self.distances(faired, widest).max() > tol)
 
 
 def curvature(surface, uv_range, count=40, kind="mean"):

@@ -17,7 +17,7 @@ import cq_fairing as cf
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
            "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask",
-           "face_region", "periodic_directions"]
+           "face_region", "is_uv_rectangle", "periodic_directions"]
 
 
 def full_knots(knots, mults):
@@ -105,20 +105,21 @@ def periodic_directions(face):
                                              ("v", surface.isVPeriodic())) if periodic)
 
 
-def inside_mask(face, u, v):
+def inside_mask(face, u, v, rectangle=None):
     """``(len(u), len(v))`` booleans: which grid parameters ``(u_i, v_j)`` lie on ``face``
     (inside its trim or on it, OCCT's ``isPartOfDomain``); all true, without asking OCCT
-    sample by sample, for a face trimmed to its UV box (or untrimmed)."""
-    if _is_uv_rectangle(face):
+    sample by sample, for a face trimmed to its UV box (or untrimmed).  ``rectangle``:
+    :func:`is_uv_rectangle` of ``face`` where already known."""
+    if _rectangle(face, rectangle):
         return np.ones((len(u), len(v)), dtype=bool)
     return _on_face(face, u, v)
 
 
-def face_region(face):
+def face_region(face, rectangle=None):
     """The core's ``region(u, v)`` of ``face`` (:func:`inside_mask` of any grid), or
     ``None`` for a face trimmed to its UV box (or untrimmed), which its UV box, the
-    core's ``window``, bounds."""
-    if _is_uv_rectangle(face):
+    core's ``window``, bounds.  ``rectangle`` as for :func:`inside_mask`."""
+    if _rectangle(face, rectangle):
         return None
     return lambda u, v: _on_face(face, u, v)
 
@@ -174,13 +175,20 @@ def part_curve(curve):
     return result
 
 
-def _is_uv_rectangle(face):
-    """True when the face is its surface restricted to ``face.ParameterRange``."""
+def is_uv_rectangle(face):
+    """True when the face is its surface restricted to ``face.ParameterRange``: one
+    wire, and the area of that restriction within 1e-6 of the face's (OCCT integrates
+    both areas, a few milliseconds each on a 50 x 80 net)."""
     if len(face.Wires) != 1:
         return False
     u0, u1, v0, v1 = face.ParameterRange
-    box = face.Surface.toShape(u0, u1, v0, v1)
-    return abs(box.Area - face.Area) <= 1e-6 * max(face.Area, 1e-300)
+    area = face.Area
+    return abs(face.Surface.toShape(u0, u1, v0, v1).Area - area) <= 1e-6 * max(area, 1e-300)
+
+
+def _rectangle(face, rectangle):
+    """``rectangle`` where given, else :func:`is_uv_rectangle` of ``face``."""
+    return is_uv_rectangle(face) if rectangle is None else rectangle
 
 
 def _wire_on_surface(face, wire, surface):
@@ -204,7 +212,7 @@ def _tolerance(shape):
     return max([shape.Tolerance] + [v.Tolerance for v in shape.Vertexes])
 
 
-def face_on_surface(surface, face):
+def face_on_surface(surface, face, rectangle=None):
     """A face on the new ``Part`` surface bounded like ``face`` in parameter space.
 
     Untrimmed faces and faces trimmed to a parameter rectangle (e.g. the two halves of the
@@ -213,6 +221,7 @@ def face_on_surface(surface, face):
     source's edge tolerances; a face that is still not valid is repaired by OCCT's shape
     fixer (wire order and orientation, edges shorter than the tolerance) within the
     source face's largest tolerance.  The result has ``face``'s orientation.
+    ``rectangle``: :func:`is_uv_rectangle` of ``face`` where already known.
 
     Raises
     ------
@@ -220,7 +229,7 @@ def face_on_surface(surface, face):
         If the trimmed face cannot be rebuilt into a valid face.
     """
     u0, u1, v0, v1 = face.ParameterRange
-    if _is_uv_rectangle(face):
+    if _rectangle(face, rectangle):
         return _oriented_like(surface.toShape(u0, u1, v0, v1), face)
     try:
         wires = [_wire_on_surface(face, wire, surface) for wire in face.Wires]

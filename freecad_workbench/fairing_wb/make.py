@@ -301,7 +301,7 @@ def _target_net(source, target):
 
 
 def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
-                  method="wavelet", objective="compact", borders="auto"):
+                  method="wavelet", objective="compact", borders="auto", rectangle=None):
     r"""The tolerance search of ``face`` (whose net is ``source``) by ``method``: the
     core's :func:`~cq_fairing.core.face_search.search_face` with the attempts of
     :func:`~cq_fairing.core.face_search.face_attempts`, the search ``cq-fairing`` and
@@ -319,6 +319,9 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
     * the finisher: :func:`~cq_fairing.core.face_search.face_finisher` (closed and
       periodic seams tied, collapsed borders kept).
 
+    ``rectangle``: :func:`conversion.is_uv_rectangle` of ``face`` where already known
+    (asked of OCCT once for all the masks).
+
     Returns
     -------
     (cq_fairing.core.face_search.FaceOutcome, analysis.SampledDeviation)
@@ -331,16 +334,17 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
     """
     (a, b), (c, d) = source.domain
     u0, u1, v0, v1 = face.ParameterRange
+    rectangle = conversion.is_uv_rectangle(face) if rectangle is None else rectangle
     nu, nv = sample_counts(source)
     u, v = np.clip(np.linspace(u0, u1, nu), a, b), np.clip(np.linspace(v0, v1, nv), c, d)
-    grid = (u, v, conversion.inside_mask(face, u, v))
+    grid = (u, v, conversion.inside_mask(face, u, v, rectangle))
     cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
-    check = analysis.SampledDeviation(source, (grid, (cu, cv,
-                                                      conversion.inside_mask(face, cu, cv))))
+    check = analysis.SampledDeviation(
+        source, (grid, (cu, cv, conversion.inside_mask(face, cu, cv, rectangle))))
     outcome = search_face(
         source, tolerance, grid, face_finisher(source, conversion.periodic_directions(face)),
         check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
-        exceeds=check.exceeds, region=conversion.face_region(face),
+        exceeds=check.exceeds, region=conversion.face_region(face, rectangle),
         window=uv_window(conversion.uv_range(face, source), source), details=False,
         judge="the workbench")
     return outcome, check
@@ -411,9 +415,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
     _core_keywords(method, objective, tolerance, borders)
     note = ""
+    rectangle = conversion.is_uv_rectangle(face)
     if tolerance is not None:
         outcome, check = searched_face(face, source, _check_tolerance(tolerance), search,
-                                       measure, method, objective, borders)
+                                       measure, method, objective, borders, rectangle)
         faired, deviation, note = outcome.surface, outcome.deviation, _outcome_note(outcome)
         if boundary != "free":
             faired = _closed_like(source, _fix_boundary(source, faired, boundary))
@@ -421,13 +426,13 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     else:
         faired = _closed_like(source, _fix_boundary(source, _target_net(source, target).surface,
                                                     boundary))
-        deviation = face_deviation(face, source, faired)
+        deviation = face_deviation(face, source, faired, rectangle)
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
             f"source, more than the tolerance {tolerance:.4g} mm; use boundary 'free' or a "
             "larger tolerance.", tolerance=tolerance, best_deviation=deviation)
-    shape = conversion.face_on_surface(conversion.part_surface(faired), face)
+    shape = conversion.face_on_surface(conversion.part_surface(faired), face, rectangle)
     return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
                        time.perf_counter() - start, note, faired)
 
@@ -440,15 +445,15 @@ def _outcome_note(outcome):
     return f"faired: {'; '.join(outcome.notes)}" if outcome.notes else ""
 
 
-def face_deviation(face, source, faired):
+def face_deviation(face, source, faired, rectangle=None):
     """Largest two-sided deviation (``analysis.two_sided_deviation``) between ``source``
     and ``faired`` at ``DEVIATION_SAMPLES`` squared samples of ``face``'s UV box that lie
     on the face (inside its trim; a trim too thin to hold a sample falls back on its UV
-    box)."""
+    box).  ``rectangle``: :func:`conversion.is_uv_rectangle` of ``face`` where known."""
     uv_range = conversion.uv_range(face, source)
     both = np.abs(analysis.two_sided_deviation(source, faired, uv_range, DEVIATION_SAMPLES)[1])
     inside = conversion.inside_mask(
-        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
+        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES), rectangle)
     return float((both[inside] if inside.any() else both).max())
 
 

@@ -568,3 +568,22 @@ def test_a_curve_verdict_measures_the_way_back_only_where_the_way_there_is_withi
     within = either <= tol
     assert np.array_equal(either[within], both[within])
     assert np.all(either[~within] <= both[~within])
+
+
+def test_restart_samples_made_once_give_every_projection_the_feet_made_per_call():
+    """``RestartSamples`` kept for a surface and handed to each projection onto it give
+    the same feet and distances, bit for bit, as the samples each call makes itself."""
+    u, v = np.meshgrid(np.linspace(0, 1, 24), np.linspace(0, 1, 31), indexing="ij")
+    z = 8.0 * np.sin(np.pi * u) * np.cos(1.5 * np.pi * v)
+    z += 0.05 * np.random.default_rng(5).standard_normal(u.shape)
+    surface = cf.make_surface(np.stack([60.0 * u, 90.0 * v, z], axis=-1), degree=(3, 3))
+    samples = M.RestartSamples(surface)
+    assert samples.tree.n == samples.axes[0].size * samples.axes[1].size
+    rng = np.random.default_rng(11)
+    for count in (40, 900):
+        points = rng.uniform([0, 0, -10], [60, 90, 10], (count, 3))
+        u0, v0 = rng.uniform(0, 1, count), rng.uniform(0, 1, count)
+        alone = M.closest_points_surface_restarted(surface, points, u0, v0)
+        shared = M.closest_points_surface_restarted(surface, points, u0, v0, samples=samples)
+        for a, b in zip(alone, shared):
+            assert np.array_equal(a, b)

@@ -5,6 +5,7 @@ import pytest
 
 import FreeCAD
 import Part
+import cq_fairing as cf
 from fairing_wb import analysis, conversion, deviation_map, make
 
 import fixtures
@@ -233,3 +234,19 @@ def test_maps_of_a_trimmed_face_cover_its_trim_only(doc):
         assert mapped.Mesh.Area <= face.Area
     deviation = deviation_map.find_maps(fairing, "Deviation")[0]
     assert fairing.MaxDeviation.Value == pytest.approx(deviation.Maximum, rel=0.5)
+
+
+def test_the_sampled_check_is_the_largest_distance_over_every_sample():
+    """``SampledDeviation`` measures only the samples whose parametric distance could beat
+    the largest distance found; its value is the maximum over all samples, bit for bit,
+    for nets from far too coarse to the one that passes 0.05 mm."""
+    face = fixtures.noisy_blade_surface(50, 80)[0].toShape().Faces[0]
+    source = conversion.surface_from_face(face)
+    u, v = np.linspace(0, 1, 101), np.linspace(0, 1, 161)
+    cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
+    check = analysis.SampledDeviation(source, ((u, v, np.ones((101, 161), bool)),
+                                               (cu, cv, np.ones((100, 160), bool))))
+    for n in ((9, 6), (20, 30), (35, 62)):
+        faired = cf.fair_surface(source.poles, n, u_knots=source.u_knots,
+                                 v_knots=source.v_knots, degree=(3, 3)).surface
+        assert check(faired) == check.distances(faired).max() > 0.0
