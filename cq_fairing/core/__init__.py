@@ -18,6 +18,7 @@ fairing        fair_curve / fair_surface: validation and dispatch to one method
 interpolation  data points to control points
 evaluation     sample parameters and derivatives of curves and surfaces
 closest_points closest points on curves and surfaces (damped Newton)
+enclosing      the smallest ball enclosing a few points (Welzl)
 probes         a source sampled once, measured against many candidates
 deviations     deviation (true closest-point distance) and deviation maps
 fairness       curvature (one implementation), energies, wiggles, fairness summaries

@@ -22,6 +22,7 @@ from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.GeomAbs import GeomAbs_SurfaceType
 from OCP.gp import gp_Pnt
 from OCP.ShapeBuild import ShapeBuild_Edge
+from OCP.ShapeFix import ShapeFix_ShapeTolerance
 from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
 from OCP.TopAbs import (
@@ -36,11 +37,12 @@ from OCP.TopAbs import (
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Shape
-from OCP.TopTools import TopTools_IndexedMapOfShape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from ..core.geometry import BSplineSurface, make_surface
 from ..errors import InvalidInputError, UnsupportedGeometryError
 from .pcurves import projected_pcurve
+from .vertices import covering_point, curve_ends, members, move_vertex, reach, vertex_point
 
 __all__ = ["FaceInfo", "list_faces", "face_info", "face_to_surface", "surface_to_face",
            "to_geom_surface", "indexed_faces", "as_face", "as_shape", "is_occt_error"]
@@ -481,45 +483,85 @@ def _tolerance(shape):
 
 def settle_tolerances(shape, edges, before):
     r"""Make the tolerances of ``shape`` consistent after ``edges`` changed, with a margin
-    where they grew.
+    where they grew, and move the vertices of ``edges`` to the middle of their curve ends.
 
-    ``BRepLib::UpdateTolerances`` raises every vertex tolerance to exactly the distance
-    to the curve ends it must cover.  A BREP file stores tolerances and coordinates with
-    15 significant digits, so an exact tolerance can read back a hair below that distance
-    (testtoler face 55: 1.8685231246390617 written as 1.86852312463906) and the read
-    shape fails ``BRepCheck``.  Each touched edge and vertex whose tolerance rose above
-    the one it had (``before``, a :class:`Tolerances` taken before the change) therefore
-    gets :math:`t \leftarrow t (1 + 10^{-9}) + 10^{-12} M`, with :math:`M` the largest
-    coordinate magnitude of the edge's vertices: more than the rounding of 15 digits,
+    ``BRepLib::UpdateTolerances`` raises every edge tolerance to its faces' and every
+    vertex tolerance to the diagonal of the box around its point and the curve ends it
+    must cover.  Where a faired face moved its corners, the edges meeting there end
+    together again but away from the vertex's point: such a vertex moves to the centre
+    of the ends' smallest enclosing ball (:mod:`~cq_fairing.occ.vertices`) where that
+    needs a smaller tolerance than its own point.  A vertex's need is the largest
+    distance from its point to those ends (``BRepCheck_Vertex`` measures the same), and
+    at least the tolerance of each edge at it (OCCT's rule: a vertex is no tighter than
+    its edges).  OCCT's box diagonal is no less than that need, so the vertices settled
+    are those whose tolerance it raised.
+
+    A BREP file stores tolerances and coordinates with 15 significant digits, so an
+    exact tolerance can read back a hair below that distance (testtoler face 55:
+    1.8685231246390617 written as 1.86852312463906) and the read shape fails
+    ``BRepCheck``.  Each touched edge and each vertex whose need rose above the
+    tolerance it had (``before``, a :class:`Tolerances` taken before the change)
+    therefore gets :math:`t \leftarrow t (1 + 10^{-9}) + 10^{-12} M`, with :math:`M` the
+    largest coordinate magnitude of its vertices: more than the rounding of 15 digits,
     far below any modelling tolerance.  One still within its former tolerance keeps it
-    unchanged: the faired shape's tolerances are not raised where the geometry does not
-    need it.  Each edge and vertex is padded once, however many touched edges share it.
+    unchanged, and a vertex then stays where it is: the faired shape's tolerances are
+    not raised where the geometry does not need it.  An edge's need is OCCT's estimate
+    (``BRepLib::SameParameter``), a distance between points of coordinates up to
+    :math:`M`; one above the former tolerance by less than the spacing of doubles at
+    :math:`M` (testtoler's edges of tolerance 4.44 at coordinates of 2.2e4: 2.5e-12,
+    below the spacing 3.6e-12) is that estimate's round-off and keeps the former
+    tolerance too.  Each edge and vertex is settled once, however many touched edges
+    share it.
     """
     BRepLib.UpdateTolerances_s(shape, False)
-    builder = BRep_Builder()
-    padded = TopTools_IndexedMapOfShape()   # each edge and vertex once, however often touched
+    settled = TopTools_IndexedMapOfShape()
     for edge in edges:
-        vertices = (TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge))
-        size = max(np.abs(_xyz(BRep_Tool.Pnt_s(v))).max() for v in vertices)
-        for item in (edge, *vertices):
-            if padded.Contains(item):
-                continue
-            padded.Add(item)
-            tolerance = _tolerance(item)
-            if tolerance <= before.of(item):
-                continue
-            if item.ShapeType() == TopAbs_VERTEX:
-                builder.UpdateVertex(TopoDS.Vertex_s(item), _padded(tolerance, size))
-            else:
-                builder.UpdateEdge(TopoDS.Edge_s(item), _padded(tolerance, size))
+        if not settled.Contains(edge):
+            settled.Add(edge)
+            ends = (TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge))
+            _settle_edge(edge, before.of(edge), max(np.abs(vertex_point(v)).max() for v in ends))
+    users = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndUniqueAncestors_s(shape, TopAbs_VERTEX, TopAbs_EDGE, users)
+    for i in range(1, users.Extent() + 1):
+        vertex = TopoDS.Vertex_s(users.FindKey(i))
+        former = before.of(vertex)
+        if BRep_Tool.Tolerance_s(vertex) > former:   # OCCT's need covers the vertex's own
+            _settle_vertex(vertex, members(users.FindFromIndex(i)), former)
+
+
+def _settle_edge(edge, former, size):
+    """The former tolerance where OCCT's need is within it or its round-off, else that
+    need padded (:func:`settle_tolerances`)."""
+    need = BRep_Tool.Tolerance_s(edge)
+    if need > former:
+        _set_tolerance(edge, former if need - former < np.spacing(size) else
+                       _padded(need, size))
+
+
+def _settle_vertex(vertex, edges, former):
+    """Keep ``vertex`` and its former tolerance where its need allows, else move it
+    where the need is least and give it that need, padded (:func:`settle_tolerances`)."""
+    floor = max(BRep_Tool.Tolerance_s(TopoDS.Edge_s(edge)) for edge in edges)
+    point, ends = vertex_point(vertex), curve_ends(vertex, edges)
+    if ends is None:       # not only curve ends: OCCT's need, padded where it rose
+        distance = BRep_Tool.Tolerance_s(vertex)
+    else:
+        distance = reach(point, ends)
+        if distance > max(floor, former):   # the point, not an edge, sets a new need
+            point, distance = covering_point(point, ends)
+            move_vertex(vertex, point)
+    _set_tolerance(vertex, former if max(distance, floor) <= former else
+                   max(_padded(distance, np.abs(point).max()), floor))
+
+
+def _set_tolerance(item, tolerance):
+    """Give an edge or vertex exactly ``tolerance``, lower than it has or not
+    (``BRep_Builder::UpdateEdge``/``UpdateVertex`` only raise it)."""
+    ShapeFix_ShapeTolerance().SetTolerance(item, tolerance, item.ShapeType())
 
 
 def _padded(tolerance, size):
     return tolerance * (1.0 + TEXT_MARGIN) + COORDINATE_MARGIN * size
-
-
-def _xyz(point):
-    return np.array([point.X(), point.Y(), point.Z()])
 
 
 def surface_to_face(surface, original_face):

@@ -2,15 +2,15 @@
 
 import numpy as np
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepTools import BRepTools
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GProp import GProp_GProps
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Compound
-from OCP.TopTools import TopTools_IndexedMapOfShape
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 
 def faces_of(shape):
@@ -111,3 +111,50 @@ def three_faces_on_one_edge():
             wire.Add(edge)
         faces.append(BRepBuilderAPI_MakeFace(wire.Wire(), True).Face())
     return faces, spine
+
+
+def vertices_of(shape):
+    return _sub_shapes(shape, TopAbs_VERTEX, TopoDS.Vertex_s)
+
+
+def tolerances(shapes):
+    """``BRep_Tool::Tolerance`` of each edge or vertex in ``shapes``."""
+    return np.array([BRep_Tool.Tolerance_s(s) for s in shapes])
+
+
+def vertex_reaches(shape):
+    """For each vertex of ``shape`` (``vertices_of`` order): the largest distance from
+    its point to the end at it of every curve of every edge at it, by OCCT's adaptors:
+    ``BRepAdaptor_Curve(edge)`` (the 3-D curve; none for a degenerated edge) and
+    ``BRepAdaptor_Curve(edge, face)`` (the pcurve on the face's surface) for each face
+    of the edge, with the edge reversed too on a seam (its second pcurve)."""
+    faces_at, edges_at = (TopTools_IndexedDataMapOfShapeListOfShape() for _ in range(2))
+    TopExp.MapShapesAndUniqueAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, faces_at)
+    TopExp.MapShapesAndUniqueAncestors_s(shape, TopAbs_VERTEX, TopAbs_EDGE, edges_at)
+    reaches = []
+    for vertex in vertices_of(shape):
+        ends = []
+        for edge in edges_at.FindFromKey(vertex):
+            edge = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
+            curves = [] if BRep_Tool.Degenerated_s(edge) else [BRepAdaptor_Curve(edge)]
+            for face in faces_at.FindFromKey(edge):
+                face = TopoDS.Face_s(face)
+                curves.append(BRepAdaptor_Curve(edge, face))
+                if BRep_Tool.IsClosed_s(edge, face):
+                    curves.append(BRepAdaptor_Curve(TopoDS.Edge_s(edge.Reversed()), face))
+            for curve in curves:
+                if TopExp.FirstVertex_s(edge).IsSame(vertex):
+                    ends.append(curve.Value(curve.FirstParameter()))
+                if TopExp.LastVertex_s(edge).IsSame(vertex):
+                    ends.append(curve.Value(curve.LastParameter()))
+        point = BRep_Tool.Pnt_s(vertex)
+        reaches.append(max(point.Distance(end) for end in ends))
+    return np.array(reaches)
+
+
+def brep_round_trip(shape, path):
+    """``shape`` written to the BREP text file ``path`` and read back."""
+    BRepTools.Write_s(shape, str(path))
+    back = TopoDS_Shape()
+    BRepTools.Read_s(back, str(path), BRep_Builder())
+    return back

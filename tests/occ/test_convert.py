@@ -5,14 +5,16 @@ from collections import Counter
 import numpy as np
 import pytest
 from OCP.BRep import BRep_Tool
-from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_Copy,
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_NurbsConvert,
+)
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepLib import BRepLib
 from OCP.BRepTools import BRepTools
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
-from OCP.TopExp import TopExp
+from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
 from OCP.TopoDS import TopoDS
-from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.errors import InvalidInputError, UnsupportedGeometryError
@@ -27,7 +29,17 @@ from cq_fairing.occ.convert import (
     settle_tolerances,
     to_geom_surface,
 )
-from tests.occ.helpers import area, edges_of, faces_of, occ_points, uv_box_grid
+from tests.occ.helpers import (
+    area,
+    brep_round_trip,
+    edges_of,
+    faces_of,
+    occ_points,
+    tolerances,
+    uv_box_grid,
+    vertex_reaches,
+    vertices_of,
+)
 
 MODELS = ["terrain.brep", "IEA_15MW_CFD.stp", "impeller.igs", "testtoler.brep",
           "ring_nurbs.brep", "linkrods.step"]
@@ -166,11 +178,13 @@ def test_located_face_round_trip():
     np.testing.assert_allclose(occ_points(rebuilt, u, v), occ_points(face, u, v), atol=1e-9)
 
 
-def test_settled_tolerances_pad_each_edge_and_vertex_once(real):
+def test_settled_tolerances_pad_each_edge_once_and_cover_every_curve_end(real, tmp_path):
     """A fuselage face moved 1e-5 off its edges' 3-D curves: the edges and their
     vertices need larger tolerances.  Settled with every edge listed twice (a vertex is
-    shared by two edges of the face anyway), each tolerance is OCCT's own
-    (``BRepLib::UpdateTolerances`` on an identical copy) plus one margin at most."""
+    shared by two edges of the face anyway), each edge tolerance is OCCT's own
+    (``BRepLib::UpdateTolerances`` on an identical copy) plus one margin at most; each
+    vertex covers every curve end at it (OCCT's evaluation) with no more than OCCT's
+    tolerance plus one margin, and the shape reads back valid from a BREP text file."""
     source = real("fuselage.brep")
     surface, _ = face_to_surface(indexed_faces(source)[0])
     moved = BSplineSurface(surface.poles + 1e-5, surface.u_knots, surface.v_knots,
@@ -183,21 +197,43 @@ def test_settled_tolerances_pad_each_edge_and_vertex_once(real):
         finish_edges(edges)
         return copy, edges, before
 
-    def tolerances(shape):
-        items = TopTools_IndexedMapOfShape()
-        TopExp.MapShapes_s(shape, TopAbs_EDGE, items)
-        TopExp.MapShapes_s(shape, TopAbs_VERTEX, items)
-        shapes = (items.FindKey(i) for i in range(1, items.Extent() + 1))
-        return np.array([BRep_Tool.Tolerance_s(TopoDS.Vertex_s(s))
-                         if s.ShapeType() == TopAbs_VERTEX
-                         else BRep_Tool.Tolerance_s(TopoDS.Edge_s(s)) for s in shapes])
-
     exact, _, _ = moved_copy()
     BRepLib.UpdateTolerances_s(exact, False)
     settled, edges, before = moved_copy()
     settle_tolerances(settled, edges + edges, before)
-    raw, padded = tolerances(exact), tolerances(settled)
     size = np.abs(surface.poles).max() * 1.01
-    assert (padded > tolerances(source)).sum() >= 4   # the face's edges and corners rose
+    raw, padded = tolerances(edges_of(exact)), tolerances(edges_of(settled))
+    assert (padded > tolerances(edges_of(source))).sum() == 3   # the face's edges rose
     assert np.all(padded >= raw)
     assert np.all(padded - raw <= TEXT_MARGIN * raw + COORDINATE_MARGIN * size)
+    corners = tolerances(vertices_of(settled))
+    assert (corners > tolerances(vertices_of(source))).sum() == 3
+    assert np.all(vertex_reaches(settled) <= corners)
+    occt = tolerances(vertices_of(exact))
+    assert np.all(corners <= occt + TEXT_MARGIN * occt + COORDINATE_MARGIN * size)
+    assert BRepCheck_Analyzer(brep_round_trip(settled, tmp_path / "settled.brep")).IsValid()
+
+
+def test_a_face_moved_whole_takes_its_vertices_along():
+    """A free face's surface translated by (1e-4, -2e-4, 3e-4): its edges, rebuilt on the
+    new surface, end at the moved corners, so each vertex moves with them (the centre of
+    the curve ends, to round-off) and keeps its tolerance; at its old point it would
+    need 3.7e-4."""
+    face = BRepBuilderAPI_MakeFace(gp_Pln(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)),
+                                   -1.0, 2.0, -0.5, 1.5).Face()
+    face = TopoDS.Face_s(BRepBuilderAPI_NurbsConvert(face, True).Shape())
+    surface, _ = face_to_surface(face)
+    shift = np.array([1e-4, -2e-4, 3e-4])
+    moved = BSplineSurface(surface.poles + shift, surface.u_knots, surface.v_knots,
+                           surface.u_degree, surface.v_degree)
+    rebuilt = surface_to_face(moved, face)
+    old, new = vertices_of(face), vertices_of(rebuilt)
+    np.testing.assert_allclose([_xyz(BRep_Tool.Pnt_s(v)) for v in new],
+                               [_xyz(BRep_Tool.Pnt_s(v)) + shift for v in old], atol=1e-12)
+    np.testing.assert_array_equal(tolerances(new), tolerances(old))
+    assert np.all(vertex_reaches(rebuilt) <= 1e-12)
+    assert BRepCheck_Analyzer(rebuilt).IsValid()
+
+
+def _xyz(point):
+    return np.array([point.X(), point.Y(), point.Z()])
