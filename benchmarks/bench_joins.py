@@ -10,7 +10,8 @@
    parameters (41 x 41 per patch), curvature sign changes along 16 lines across joins.
 2. Whole models faired with joins held (``joins="smooth"``, the default) against each
    face alone (``joins="free"``): time, faces faired, poles, every join's gap and
-   normal angle measured by projection both ways (``ShapeFairResult.joins``), and the
+   normal angle measured by projection both ways (``ShapeFairResult.joins``), the edges
+   and vertices whose tolerance rose above the source's, and the
    curvature sign changes along curves across the smooth joins, source and faired
    (:func:`crossing_sign_changes`).
 
@@ -23,7 +24,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from cq_fairing.core.examples import patch_grid
 from cq_fairing.core.joins import JointPatch, fair_patches
@@ -54,8 +60,30 @@ def run(name, tol, joins):
     return (f"| {name} | {tol:g} | {joins} | {seconds:.2f} | {result.n_faired} | {poles} | "
             f"{s['held']}/{s['joins']} | {s['max_gap_opened']:.2g} | "
             f"{s['max_angle_excess']:.3f} | {worst / tol:.2f} | {result.valid} | "
+            f"{raised_tolerances(shape, result.shape)} | "
             f"{crossing_sign_changes(shape, crossing)} -> "
             f"{crossing_sign_changes(result.shape, crossing)} |")
+
+
+def raised_tolerances(source, faired):
+    """``"e / v (largest rise)"``: how many edges and vertices of ``faired`` have a larger
+    tolerance than the same sub-shape of ``source`` (the faired shape is a copy: its
+    edges and vertices come in the same order)."""
+    counts, largest = [], 0.0
+    for kind, tolerance in ((TopAbs_EDGE, lambda x: BRep_Tool.Tolerance_s(TopoDS.Edge_s(x))),
+                            (TopAbs_VERTEX,
+                             lambda x: BRep_Tool.Tolerance_s(TopoDS.Vertex_s(x)))):
+        before, after = (_tolerances(shape, kind, tolerance) for shape in (source, faired))
+        rise = after - before
+        counts.append(int(np.count_nonzero(rise > 0)))
+        largest = max(largest, float(rise.max(initial=0.0)))
+    return f"{counts[0]} / {counts[1]}" + (f" ({largest:.2g})" if largest > 0 else "")
+
+
+def _tolerances(shape, kind, tolerance):
+    found = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, kind, found)
+    return np.array([tolerance(found.FindKey(i)) for i in range(1, found.Extent() + 1)])
 
 
 def crossing_sign_changes(shape, joins, samples=41):
@@ -228,8 +256,9 @@ def main():
     print()
     print("| model | tol | joins | s | faces faired | poles | joins held | largest gap "
           "opened | largest smooth-join angle excess (deg) | worst deviation / tol | valid | "
+          "edge / vertex tolerances raised (largest rise) | "
           "curvature sign changes across smooth joins, source -> faired |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, tol in CASES:
         for joins in ("smooth", "free"):
             print(run(name, tol, joins))
