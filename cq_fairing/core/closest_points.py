@@ -183,7 +183,7 @@ def _damped(trial, active, step, dist, halvings=HALVINGS):
 
 
 def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=None,
-                           bounds=None):
+                           bounds=None, start_distance=None):
     r"""Foot points on ``surface`` by damped, clamped 2x2 Newton iterations.
 
     Solves :math:`g = (S_u\cdot r,\ S_v\cdot r) = 0`, :math:`r = S(u, v) - P`, with the
@@ -194,7 +194,9 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     move the foot point by less than ``STEP_FLOOR`` times the surface's size (as
     :func:`closest_points_curve`).  ``bounds`` ``((u0, u1), (v0, v1))`` inside the
     domain restricts the foot points to that parameter box (a face's UV box); default
-    the whole domain.
+    the whole domain.  ``start_distance`` gives the distances at the starts where a
+    caller knows them already (a probe's same-parameter distances; NaN where not known,
+    which are evaluated): the start's evaluation is then skipped there.
 
     Returns
     -------
@@ -205,7 +207,7 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     (ulo, uhi), (vlo, vhi) = surface.domain if bounds is None else bounds
     uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
                    np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
-    dist = _distance(_derivatives_in_domain(surface, uv[:, 0], uv[:, 1], 0)[(0, 0)], points)
+    dist = _start_distance(surface, points, uv, start_distance)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
     size = surface.size
@@ -233,6 +235,17 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
         uv[active[moved]], dist[active[moved]] = new[moved], d_new[moved]
         active = active[moved]
     return uv[:, 0], uv[:, 1], dist
+
+
+def _start_distance(surface, points, uv, known=None):
+    """Distances of ``points`` from ``surface`` at parameters ``uv``, evaluated where
+    ``known`` (optional) is NaN and taken from it elsewhere."""
+    dist = np.full(len(points), np.nan) if known is None else np.array(known, dtype=float)
+    todo = np.flatnonzero(np.isnan(dist))
+    if todo.size:
+        dist[todo] = _distance(
+            _derivatives_in_domain(surface, uv[todo, 0], uv[todo, 1], 0)[(0, 0)], points[todo])
+    return dist
 
 
 class RestartSamples:

@@ -219,6 +219,7 @@ class SurfaceProbe:
         self._half_step = (0.5 * np.gradient(u), 0.5 * np.gradient(v))
         self._outside = None if self.region is None else ~_region_mask(self.region, u, v)
         self._feet = {}
+        self._prior_cells = None
         self._source_blocks = None
         self._collocations = {}
         self._strided = {}
@@ -242,7 +243,10 @@ class SurfaceProbe:
             return self._feet[key][i, j, 0], self._feet[key][i, j, 1]
         prior = self._prior
         if prior is not None and key in prior._feet:
-            return _bilinear(prior.u, prior.v, prior._feet[key], self.u[i], self.v[j])
+            if self._prior_cells is None:
+                self._prior_cells = (_cell(prior.u, self.u), _cell(prior.v, self.v))
+            (a, wa), (b, wb) = self._prior_cells
+            return _bilinear(prior._feet[key], (a[i], wa[i]), (b[j], wb[j]))
         return None
 
     def _adapt(self, faired):
@@ -260,8 +264,9 @@ class SurfaceProbe:
     def adopt_feet(self, other):
         """Start from the feet that ``other`` (a probe of the same source on another grid)
         found last, interpolated bilinearly at each sample when it is measured: a dense
-        check after a search on a coarser grid."""
-        self._prior = other
+        check after a search on a coarser grid.  ``other``'s grid is fixed (explicit
+        ``uv``): the cells of its grid that hold this grid's samples are found once."""
+        self._prior, self._prior_cells = other, None
 
     def bound(self, faired):
         """Faired points on the grid (a :class:`_LazyGrid` without ``hold_grid``) and the
@@ -318,16 +323,19 @@ class SurfaceProbe:
             return np.zeros(0)
         if self._outside is not None and self._outside.ravel()[flat_idx].any():
             return self._inside_only(faired, other, flat_idx, window, tol, verdict)
-        shape = self.points.shape[:2]
-        i, j = np.unravel_index(flat_idx, shape)
-        d_fs = self._one_way(faired, self.points, other, i, j, window, tol)
+        i, j = np.unravel_index(flat_idx, self.points.shape[:2])
+        source_points, faired_points = self.points[i, j], other[i, j]
+        same = _distance(faired_points, source_points)
+        d_fs = self._one_way(faired, self.points, other, i, j, source_points, same, window,
+                             tol)
         if not verdict:
             return np.maximum(d_fs, self._one_way(self.source, other, self.points, i, j,
-                                                  window, tol))
+                                                  faired_points, same, window, tol))
         back = d_fs <= tol
         if back.any():
             d_fs[back] = np.maximum(d_fs[back], self._one_way(
-                self.source, other, self.points, i[back], j[back], window, tol))
+                self.source, other, self.points, i[back], j[back], faired_points[back],
+                same[back], window, tol))
         return d_fs
 
     def _inside_only(self, faired, other, flat_idx, window, tol, verdict):
@@ -341,33 +349,43 @@ class SurfaceProbe:
                                               verdict)
         return distance
 
-    def _one_way(self, target, here, there, i, j, window, tol=None):
-        """Distance from ``here[i, j]`` to ``target`` (sampled as ``there`` on the grid).
+    def _one_way(self, target, here, there, i, j, p, same, window, tol=None):
+        """Distance from the points ``p = here[i, j]`` to ``target`` (sampled as ``there``
+        on the grid), whose same-parameter distances ``|there[i, j] - p|`` are ``same``.
 
         A sample whose same-parameter distance is within ``tol`` needs no search.  Newton
         starts from the same parameter, or from the last foot (:meth:`_last_feet`) where
         that lies more than half a sample spacing away (the candidate slides along the
         source); where the result stays above ``tol`` it starts again from the nearest
         ``there`` sample within ``window`` (with ``tol`` and ``window`` 0, it does not).
+
+        Without ``hold_grid`` the grid's points come from the evaluation Newton starts
+        with, so ``same`` is the distance at a start on the same parameter, bit for bit,
+        and Newton skips that evaluation.  A held grid is evaluated otherwise (a grid
+        product), which may round the last bit differently, and a search's later
+        candidates start from the feet this one leaves: Newton evaluates its starts.
         """
         key = "source" if target is self.source else "faired"
-        p = here[i, j]
         u0, v0 = self.u[i], self.v[j]
+        start = same.copy() if not self.hold_grid else np.full(same.size, np.nan)
         last = self._last_feet(key, i, j)
         if last is not None:
             lu, lv = last
             slid = (np.abs(lu - u0) > self._half_step[0][i]) | \
                 (np.abs(lv - v0) > self._half_step[1][j])
             u0, v0 = np.where(slid, lu, u0), np.where(slid, lv, v0)
+            start[slid] = np.nan
         if tol is None:
-            u0, v0, d = self._from_both_starts(target, here, there, p, i, j, u0, v0, window)
+            u0, v0, d = self._from_both_starts(target, here, there, p, i, j, u0, v0, start,
+                                               window)
             self._keep(key, i, j, u0, v0)
             return d
-        d = _distance(there[i, j], p)
+        d = same.copy()
         todo = np.flatnonzero(d > tol)
         if todo.size:
             u0[todo], v0[todo], d[todo] = closest_points_surface(
-                target, p[todo], u0[todo], v0[todo], stop_below=tol, bounds=self.bounds)
+                target, p[todo], u0[todo], v0[todo], stop_below=tol, bounds=self.bounds,
+                start_distance=start[todo])
             todo = todo[d[todo] > tol]
         if todo.size and window:
             wu, wv = _window_start(here, there, i[todo], j[todo], self.u, self.v, window)
@@ -379,18 +397,21 @@ class SurfaceProbe:
         self._keep(key, i, j, u0, v0)
         return d
 
-    def _from_both_starts(self, target, here, there, p, i, j, u0, v0, window):
-        """Feet and distances of ``p`` on ``target`` from both starts (``(u0, v0)`` and the
-        nearest ``there`` sample within ``window``), the smaller distance kept (the first
-        start's on ties).  One Newton run over both sets of starts: each point iterates
-        on its own, so the values are those of two runs (to rounding: the vector kernels
-        may round a point's last bit differently in another batch), in half the vector
-        operations' calls (which is what a few hundred points cost)."""
+    def _from_both_starts(self, target, here, there, p, i, j, u0, v0, start, window):
+        """Feet and distances of ``p`` on ``target`` from both starts (``(u0, v0)``, whose
+        distances ``start`` are known where not NaN, and the nearest ``there`` sample
+        within ``window``), the smaller distance kept (the first start's on ties).  One
+        Newton run over both sets of starts: each point iterates on its own, so the
+        values are those of two runs (to rounding: the vector kernels may round a point's
+        last bit differently in another batch), in half the vector operations' calls
+        (which is what a few hundred points cost)."""
         wu, wv = _window_start(here, there, i, j, self.u, self.v, window)
         n = p.shape[0]
         fu, fv, fd = closest_points_surface(target, np.concatenate([p, p]),
                                             np.concatenate([u0, wu]), np.concatenate([v0, wv]),
-                                            bounds=self.bounds)
+                                            bounds=self.bounds,
+                                            start_distance=np.concatenate(
+                                                [start, np.full(n, np.nan)]))
         pick = np.where(fd[n:] < fd[:n], np.arange(n, 2 * n), np.arange(n))
         return fu[pick], fv[pick], fd[pick]
 
@@ -619,10 +640,10 @@ def _check_method(method):
         )
 
 
-def _bilinear(x, y, values, xq, yq):
-    """Bilinear interpolation of a grid ``values`` (n_x, n_y, 2) sampled at increasing
-    ``x``, ``y``, at the points ``(xq, yq)`` (clamped to the grid): two arrays (q,)."""
-    (a, wa), (b, wb) = _cell(x, xq), _cell(y, yq)
+def _bilinear(values, cell_x, cell_y):
+    """Bilinear interpolation of a grid ``values`` (n_x, n_y, 2) at points given by their
+    cells ``(k, weight)`` along x and along y (:func:`_cell`): two arrays (q,)."""
+    (a, wa), (b, wb) = cell_x, cell_y
     wa, wb = wa[:, None], wb[:, None]
     out = ((1 - wa) * ((1 - wb) * values[a, b] + wb * values[a, b + 1])
            + wa * ((1 - wb) * values[a + 1, b] + wb * values[a + 1, b + 1]))
