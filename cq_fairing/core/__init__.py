@@ -37,6 +37,7 @@ weighted       span-weighted L2 projections
 fidelity       noise level and the discrepancy principle
 energy         Eck-Hadenfeld energy fairing
 joins          joint projection of patches meeting along borders: closed and smooth joins
+pinned_projection a face's projection with its joins pinned to its source at samples
 patch_grid     a regular grid of patches as one surface, and split back exactly
 robustness     conditioning reports and local frames
 examples       synthetic geometry with a noise-free truth

@@ -105,7 +105,7 @@ __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angl
            "pinning_patch", "side_parameters", "side_points", "turned_patches", "JoinTurns",
            "mirror_ratio", "UnionFind", "mean_normal", "shared_basis", "tied_in_order",
            "SIDES", "CONTINUITIES", "ANGLE_SLACK", "cross_curvatures",
-           "holds_curvature", "CURVATURE_SLACK"]
+           "holds_curvature", "CURVATURE_SLACK", "kkt_solve"]
 
 SIDES = ("u0", "u1", "v0", "v1")
 CONTINUITIES = ("G0", "G1", "G2")
@@ -834,7 +834,7 @@ def _solved_edges(edges, lines=()):
     (:math:`n\cdot(x_1 - x_0) = 0`), and the ``lines`` rows (:func:`_line_rows`) tying
     the end tangents of edges that cross at a vertex.  One system over the interior
     poles of all edges, :math:`\min \sum_e x_e^T G_e x_e - 2 x_e^T m_e`,
-    :math:`m_e = \langle\Phi|\Phi_S\rangle c_e`, under those rows (:func:`_kkt_solve`);
+    :math:`m_e = \langle\Phi|\Phi_S\rangle c_e`, under those rows (:func:`kkt_solve`);
     without rows each edge is solved on its own."""
     if not edges:
         return []
@@ -852,7 +852,7 @@ def _solved_edges(edges, lines=()):
     for line in lines:
         rows += _line_row(edges, offsets, dimension, line)
     if rows:
-        free = _kkt_solve(sp.kron(sp.block_diag([sp.csr_matrix(b) for b in blocks]),
+        free = kkt_solve(sp.kron(sp.block_diag([sp.csr_matrix(b) for b in blocks]),
                                   sp.identity(dimension)),
                           _row_matrix(rows, offset), np.concatenate([r.ravel() for r in rhs]),
                           np.array([value for _, value in rows]))
@@ -985,10 +985,10 @@ class _Patchwork:
         return sp.block_diag(blocks, format="csr"), np.concatenate(moments)
 
     def solve(self, c=None, d=None):
-        r"""The unknowns of the projection (:math:`C x = d` rows: :func:`_kkt_solve`)."""
+        r"""The unknowns of the projection (:math:`C x = d` rows: :func:`kkt_solve`)."""
         if c is None or not c.shape[0]:
             return spla.splu(self.normal).solve(self.rhs) if self.count else self.rhs
-        return _kkt_solve(self.normal, c, self.rhs, d)
+        return kkt_solve(self.normal, c, self.rhs, d)
 
     def surfaces(self, free):
         """Every patch's surface with the unknowns ``free`` (count, dimension); rational
@@ -1200,17 +1200,31 @@ def _condition_row(work, sides, weights, i):
     return entries, inner, known
 
 
-def _kkt_solve(a, c, b, d):
+def kkt_solve(a, c, b, d, steps=0):
     r"""Minimiser of :math:`x^T A x - 2 x^T b` under :math:`C x = d` (``b``, ``d``: one
     column per right-hand side): the regularised KKT system
-    :math:`\begin{bmatrix}A & sC^T\\ sC & -\varepsilon I\end{bmatrix}`; ``s`` scales
-    the rows to :math:`A`'s diagonal and :math:`\varepsilon = ` :data:`KKT_EPS` ``s``
-    lets dependent rows (where mirrored rows meet at a vertex) through."""
+    :math:`K_\varepsilon = \begin{bmatrix}A & sC^T\\ sC & -\varepsilon I\end{bmatrix}`;
+    ``s`` scales the rows to :math:`A`'s diagonal and :math:`\varepsilon = `
+    :data:`KKT_EPS` ``s`` lets dependent rows (where mirrored rows meet at a vertex)
+    through; rows that no :math:`x` meets all at once get their least-squares
+    compromise, at the weight :math:`s / \varepsilon` over the objective.  The rows then
+    hold to about :math:`\varepsilon` times the multipliers; each of ``steps`` refines the
+    solution against the unregularised system :math:`K_0` with the same factors,
+    :math:`z \leftarrow z + K_\varepsilon^{-1}(r - K_0 z)` (the proximal method of
+    multipliers: the residual of rows that can be met shrinks by about
+    :math:`\varepsilon` relative to the rows' scale each step)."""
     a = sp.csc_matrix(a)
     scale = float(a.diagonal().mean())
-    kkt = sp.bmat([[a, scale * c.T], [scale * c, -KKT_EPS * scale * sp.identity(c.shape[0])]],
-                  format="csc")
-    return spla.splu(kkt).solve(np.concatenate([b, scale * d]))[: a.shape[0]]
+    regularised = -KKT_EPS * scale * sp.identity(c.shape[0])
+    kkt = sp.bmat([[a, scale * c.T], [scale * c, regularised]], format="csc")
+    factors = spla.splu(kkt)
+    rhs = np.concatenate([b, scale * d])
+    solution = factors.solve(rhs)
+    for _ in range(steps):
+        unregularised = kkt @ solution - np.concatenate([
+            np.zeros_like(b), regularised @ solution[a.shape[0]:]])
+        solution += factors.solve(rhs - unregularised)
+    return solution[: a.shape[0]]
 
 
 # -- G1 at crossings: regular inner vertices -----------------------------------------------

@@ -23,8 +23,10 @@ with :func:`~cq_fairing.core.joins.fair_patches`:
 * faces that carry one and the same surface (one surface split into faces by its trims)
   are one patch, faired once for all of them;
 * a face with a join that runs across its surface (a trimmed face's inner edge), or a
-  periodic one, can be neither joined nor pinned: :func:`unholdable` names it, and the
-  caller keeps it before the projection.
+  periodic one, can be neither joined nor pinned by border rows: :func:`unholdable`
+  names it, and the caller keeps it before the projection, or projects it alone with
+  its joins pinned by samples (:mod:`~cq_fairing.core.pinned_projection`) and passes
+  it here as a kept face (no target).
 
 Each solved face is then checked against its own tolerance by the backend's two-sided
 measure (``check``).  A face over its tolerance gets its targets refined (every span
@@ -57,7 +59,8 @@ from .spaces import SplineSpace
 
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
-           "held_joins", "joint_targets", "locate_side", "SOURCE_GAP", "REFINEMENTS"]
+           "held_joins", "joint_targets", "locate_side", "refined_targets", "SOURCE_GAP",
+           "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 REFINEMENTS = 2    # span halvings of a face over its tolerance before it is kept
@@ -442,7 +445,7 @@ def _pins(sources, targets, joins, border, group, tolerances, excluded, continui
     return out
 
 
-def _targets(spaces, refined):
+def refined_targets(spaces, refined):
     """``spaces`` with each span halved ``refined`` times."""
     for _ in range(refined):
         spaces = tuple(_halved(s) for s in spaces)
@@ -484,7 +487,8 @@ def _solve(sources, targets, faces, kept, refined, border, group, pins, continui
     pinning patches after them; the joins of ``curved`` held in G2 where ``continuity``
     asks it)."""
     position = {face: k for k, face in enumerate(faces)}
-    patches = [JointPatch(sources[i], None if i in kept else _targets(targets[i], refined[i]))
+    patches = [JointPatch(sources[i],
+                          None if i in kept else refined_targets(targets[i], refined[i]))
                for i in faces]
     core_joins = {}
     for join in border:

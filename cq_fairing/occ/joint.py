@@ -10,8 +10,11 @@ pole by both faces' projection, G1 across the smooth ones, every other side of a
 a join pinned to its source), and the faces already at their coarsest are faired
 together by energy (:mod:`cq_fairing.occ.networks`).  With the energy method the
 networks take the faces faired alone too, faired again together by energy from their
-sources, and a face with joins that no network moved is kept.  This module supplies the
-OCCT side: the faces read as B-spline patches, each face's target, and OCCT's two-sided
+sources, and a face with joins that no network moved is kept.  A face with a join that
+runs across its surface (a trimmed face's inner edge) is projected first, alone, with
+every one of its joins pinned to its source (:mod:`cq_fairing.occ.pinned`); it then
+stands as a kept face for the others (or is kept, where the pins cannot hold).  This
+module supplies the OCCT side: the faces read as B-spline patches, each face's target, and OCCT's two-sided
 deviation of each solved face (:func:`~cq_fairing.occ.deviation.sample_face_deviation`);
 it installs the results and names, in each kept face's report, the joins that bind it.
 """
@@ -31,7 +34,6 @@ from ..core.joint_projection import (
     joint_targets,
     project_jointly,
     runs_reversed,
-    unholdable,
 )
 from ..core.network_fairing import UNMOVED
 from ..core.options import JOIN_CONTINUITY
@@ -39,6 +41,7 @@ from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
 from .grids import fair_grids
 from .networks import fair_networks
+from .pinned import pin_unholdable
 
 __all__ = ["fair_joined", "JointOutcome", "JoinReport"]
 
@@ -93,27 +96,31 @@ def fair_joined(job, adjacency, joins):
     """
     readable = _readable_faces(job, {s.face for j in adjacency.joins for s in j.sides
                                      if s.side is not None})
-    _keep_unholdable(job, adjacency, readable)
+    continuity = JOIN_CONTINUITY[joins]
+    pinned = pin_unholdable(job, adjacency, {**_readable_faces(job, _trimmed(adjacency)),
+                                             **readable}, continuity)
     border = border_joins(adjacency.joins, readable, job.tol)
     polynomial = {face: s for face, s in readable.items() if not s.is_rational}
-    grids = fair_grids(job, adjacency, polynomial, _between(border, polynomial),
+    loose = {face: s for face, s in polynomial.items() if face not in pinned}
+    grids = fair_grids(job, adjacency, loose, _between(border, loose),
                        runs_reversed, lambda tol: SOURCE_GAP * tol)
     gridded = {face for grid in grids for face in grid.faces}
     in_grids = _between(border, gridded)
     border = [j for j in border if not set(j.faces) & gridded]
-    continuity = JOIN_CONTINUITY[joins]
     if job.options["method"] == "energy":
         networks = _energy_networks(job, adjacency, polynomial, continuity, gridded)
         joint = JointProjection({}, {}, [], {})
     else:
-        joint = _project_jointly(job, adjacency, readable, border, continuity, gridded)
+        joint = _project_jointly(job, adjacency, readable, border, continuity, gridded,
+                                 pinned)
         networks = fair_networks(job, adjacency, polynomial, runs_reversed, continuity)
     moved = {face for network in networks for face in network.moved}
     in_networks = [j for network in networks for j in network.joins if set(j.faces) & moved]
     unchanged = {face for face, report in enumerate(job.reports)
                  if not report.faired and face not in moved}
-    return JointOutcome(in_grids + held_joins(joint, unchanged) + in_networks, grids,
-                        networks, [j for j in joint.curved if set(j.faces) <= set(joint.surfaces)])
+    return JointOutcome(in_grids + held_joins(joint, unchanged | pinned) + in_networks
+                        + _pinned_only(adjacency.joins, pinned, unchanged), grids, networks,
+                        [j for j in joint.curved if set(j.faces) <= set(joint.surfaces)])
 
 
 def _energy_networks(job, adjacency, polynomial, continuity, gridded):
@@ -142,11 +149,13 @@ def _between(joins, faces):
     return [j for j in joins if set(j.faces) <= set(faces)]
 
 
-def _project_jointly(job, adjacency, readable, border, continuity, gridded):
+def _project_jointly(job, adjacency, readable, border, continuity, gridded, pinned):
     """The core's joint projection of the faces faired alone, measured by OCCT; installs
-    the solved faces and keeps those it returns kept."""
+    the solved faces and keeps those it returns kept.  The faces of ``pinned`` stand as
+    kept faces: their joins are held at their sources (:mod:`cq_fairing.occ.pinned`)."""
     targets = joint_targets(readable, {face: report.surface for face, report
-                                       in enumerate(job.reports) if report.faired})
+                                       in enumerate(job.reports)
+                                       if report.faired and face not in pinned})
     measured = {}
 
     def check(face, surface):
@@ -164,15 +173,15 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded):
     return joint
 
 
-def _keep_unholdable(job, adjacency, readable):
-    """Keep each faired face with a join no fairing can hold
-    (:func:`~cq_fairing.core.joint_projection.unholdable`); its neighbours then close onto
-    it, as the source has them; ``joins="free"`` fairs it alone."""
-    moved = {face for face, report in enumerate(job.reports) if report.faired}
-    for face, neighbours in unholdable(adjacency.joins, readable, moved, job.tol).items():
-        job.reports[face] = job.kept(face, "unchanged", (
-            f"its joins with faces {[n + 1 for n in neighbours]} run across its surface, "
-            "where no fairing can hold them: kept as it was (joins='free' fairs it alone)"))
+def _trimmed(adjacency):
+    """The faces with a join that runs across their surface (``side`` ``None``)."""
+    return {s.face for j in adjacency.joins for s in j.sides if s.side is None}
+
+
+def _pinned_only(joins, pinned, unchanged):
+    """The joins with a face of ``pinned`` whose every face is pinned or unchanged: each
+    side is its source along the join (the joint projection reports the others)."""
+    return [j for j in joins if set(j.faces) & pinned and set(j.faces) <= pinned | unchanged]
 
 
 def _readable_faces(job, indices):

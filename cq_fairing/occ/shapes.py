@@ -193,9 +193,11 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         (:func:`~cq_fairing.core.joins.holds_curvature`; faces at their coarsest,
         faired by energy, keep G1).
         ``"free"`` fairs each face alone (its joins may open by up to about ``2 tol``,
-        held to ``max_gap`` by re-fairing).  Joins elsewhere (a trimmed face's inner
-        edge, part of a side, a rational or analytic neighbour) are faired as with
-        ``"free"``, and so are all faces with explicit ``n``.
+        held to ``max_gap`` by re-fairing).  A face with a join that runs across its
+        surface (a trimmed face's inner edge) is faired with every one of its joins
+        pinned to its source (:mod:`cq_fairing.occ.pinned`: within 1e-7 of the model's
+        size and 0.05 degrees), or kept as it was where no target smaller than its
+        source's holds them.  All faces with explicit ``n`` are faired as with ``"free"``.
         :attr:`ShapeFairResult.joins` measures every join either way.
     angle_tol : float, optional
         Degrees: a join whose source normals differ by less along its whole length is
