@@ -37,6 +37,7 @@ from ..core.joint_projection import (
 )
 from ..core.network_fairing import UNMOVED
 from ..core.options import JOIN_CONTINUITY
+from ..core.pinned_faces import held_by_pins
 from ..errors import FairingError
 from .convert import face_to_surface, is_occt_error
 from .grids import fair_grids
@@ -119,7 +120,7 @@ def fair_joined(job, adjacency, joins):
     unchanged = {face for face, report in enumerate(job.reports)
                  if not report.faired and face not in moved}
     return JointOutcome(in_grids + held_joins(joint, unchanged | pinned) + in_networks
-                        + _pinned_only(adjacency.joins, pinned, unchanged), grids, networks,
+                        + held_by_pins(adjacency.joins, pinned, unchanged), grids, networks,
                         [j for j in joint.curved if set(j.faces) <= set(joint.surfaces)])
 
 
@@ -176,12 +177,6 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded, pinn
 def _trimmed(adjacency):
     """The faces with a join that runs across their surface (``side`` ``None``)."""
     return {s.face for j in adjacency.joins for s in j.sides if s.side is None}
-
-
-def _pinned_only(joins, pinned, unchanged):
-    """The joins with a face of ``pinned`` whose every face is pinned or unchanged: each
-    side is its source along the join (the joint projection reports the others)."""
-    return [j for j in joins if set(j.faces) & pinned and set(j.faces) <= pinned | unchanged]
 
 
 def _readable_faces(job, indices):

@@ -6,10 +6,9 @@ Such a face is projected onto its own target (its tolerance search's spaces) wit
 one of its joins pinned to its source by equality rows at samples of the edge's p-curve
 on the face: the point, and the tangent plane across a smooth join
 (:func:`~cq_fairing.core.pinned_projection.pin_face`).  Its neighbours then meet it as
-they met its source, to within the residual measured between the samples: at most half
-:data:`~cq_fairing.core.pinned_projection.GAP` times the model's size and half
-:data:`~cq_fairing.core.joins.ANGLE_SLACK` degrees on each side of a join, so a join
-between two pinned faces stays within the whole budget.  The face is then checked by
+they met its source, to within the residual measured between the samples: each side of
+a join within its share of the budget, and which faces are tried, are the core's rule
+(:mod:`cq_fairing.core.pinned_faces`).  The face is then checked by
 OCCT against its tolerance (:meth:`~cq_fairing.occ.shapes._Job.measured`) as every
 solved face is.  A face that misses the budget after
 :data:`~cq_fairing.core.joint_projection.REFINEMENTS` span halvings, or its tolerance,
@@ -27,9 +26,9 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-from ..core.joins import ANGLE_SLACK
-from ..core.joint_projection import SOURCE_GAP, joint_targets, unholdable
-from ..core.pinned_projection import GAP, PinnedEdge, pin_face
+from ..core.joint_projection import joint_targets, unholdable
+from ..core.pinned_faces import attempt_pin, over_sentence, pinned_sentence, unpinned_sentence
+from ..core.pinned_projection import PinnedEdge
 
 __all__ = ["pin_unholdable"]
 
@@ -59,30 +58,24 @@ def pin_unholdable(job, adjacency, sources, continuity):
     moved = {face for face, report in enumerate(job.reports) if report.faired}
     found = unholdable(adjacency.joins, sources, moved, job.tol)
     targets = joint_targets(sources, {face: job.reports[face].surface for face in found})
-    gap = 0.5 * GAP * adjacency.size
     pinned, curves = set(), _Curves(job.source)
     for face, neighbours in found.items():
         joins = adjacency.joins_of(face)
         edges = curves.edges(job.originals[face], face, joins, continuity)
-        if job.options["method"] == "energy" or face not in targets or edges is None:
-            _keep(job, face, neighbours)
+        target = None if job.options["method"] == "energy" else targets.get(face)
+        attempt = attempt_pin(sources.get(face), target, edges, joins, adjacency.size,
+                              job.tol[face])
+        if not attempt.met:
+            _keep(job, face, neighbours, attempt)
             continue
-        wide = max(join.source_gap for join in joins)
-        if wide > SOURCE_GAP * job.tol[face]:
-            _keep(job, face, neighbours, wide=wide)
-            continue
-        outcome = pin_face(sources[face], targets[face], edges, gap, 0.5 * ANGLE_SLACK)
-        if not outcome.met:
-            _keep(job, face, neighbours, outcome)
-            continue
+        outcome = attempt.outcome
         measured = job.measured(face, outcome.surface)
         if measured[2]["max"] > job.tol[face]:
             _keep_over(job, face, measured[2]["max"], outcome.refined, neighbours)
             continue
         job.faired(face, measured, (
             f"faired with its joins (with faces {[n + 1 for n in neighbours]}) pinned to "
-            f"its source: they open {outcome.gap:.2g} and turn {outcome.angle:.2g} deg at "
-            f"most on its side"), sources[face].shape)
+            f"its source: {pinned_sentence(outcome)}"), sources[face].shape)
         pinned.add(face)
     return pinned
 
@@ -119,21 +112,10 @@ def _sampler(curve, first, last):
     return uv
 
 
-def _keep(job, face, neighbours, outcome=None, wide=None):
-    """Keep a face whose joins run across its surface; with the pinned projection's
-    ``outcome``, say how far it missed; with ``wide``, how far a join is open."""
-    joins = f"its joins with faces {[n + 1 for n in neighbours]} run across its surface"
-    if wide is not None:
-        why = (f"{joins}, and one is {wide:.2g} open in the source: a neighbour that far "
-               "meets the face off its edge, where pins cannot hold it")
-    elif outcome is None:
-        why = f"{joins}, where no fairing can hold them"
-    elif outcome.surface is None:
-        why = f"{joins}; pinned to its source there it needs a net as large as its source's"
-    else:
-        why = (f"{joins}; pinned to its source there it would still open "
-               f"{outcome.gap:.2g} or turn {outcome.angle:.2g} deg after "
-               f"{outcome.refined} refinements")
+def _keep(job, face, neighbours, attempt):
+    """Keep a face whose joins run across its surface, saying why ``attempt``
+    (:func:`~cq_fairing.core.pinned_faces.attempt_pin`) did not pin it."""
+    why = unpinned_sentence(f"faces {[n + 1 for n in neighbours]}", attempt)
     job.reports[face] = job.kept(face, "unchanged", (
         f"{why}: kept as it was (joins='free' fairs it alone)"))
 
@@ -141,7 +123,5 @@ def _keep(job, face, neighbours, outcome=None, wide=None):
 def _keep_over(job, face, deviation, refined, neighbours):
     """Keep a face that its pinned joins hold over its tolerance."""
     job.reports[face] = job.kept(face, "tolerance-not-met", (
-        f"with its joins pinned to its source the face stays {deviation:.3g} from its "
-        f"source, over tol={job.tol[face]:g}, after {refined} refinements; kept as it "
-        f"was, and its neighbours close onto it (joins with faces "
-        f"{[n + 1 for n in neighbours]})"))
+        f"{over_sentence(deviation, job.tol[face], refined)}; kept as it was, and its "
+        f"neighbours close onto it (joins with faces {[n + 1 for n in neighbours]})"))

@@ -62,6 +62,7 @@ from cq_fairing.core.joint_projection import (
 )
 from cq_fairing.core.network_fairing import UNMOVED, fair_networks
 from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
+from cq_fairing.core.pinned_faces import held_by_pins
 
 from . import analysis, conversion
 
@@ -102,6 +103,11 @@ class FaceJoins:
     analytic : dict
         ``{face: Part.Face}``: the neighbours whose surface is not a B-spline (measured
         through Part).
+    edges : list of Part.Edge
+        The edges the joins' sides name (:attr:`JoinSide.edge` indexes them).
+    size : float
+        The largest bounding-box diagonal of the faces: the scale of the joins'
+        distances.
     """
 
     joins: list
@@ -112,6 +118,8 @@ class FaceJoins:
     signs: dict
     non_manifold: int = 0
     analytic: dict = field(default_factory=dict)
+    edges: list = field(default_factory=list)
+    size: float = 1.0
 
 
 def _shared_edges(faces):
@@ -212,7 +220,9 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
     signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(every)}
     analytic = {i: f for i, f in enumerate(every) if i not in sources}
     drafts, uvs, non_manifold = [], [], 0
-    for edge_index, (edge, owners) in enumerate(_shared_edges(every)):
+    shared = _shared_edges(every)
+    edges = [edge for edge, _ in shared]
+    for edge_index, (edge, owners) in enumerate(shared):
         if min(owners) >= len(faces):
             continue
         if len(owners) > 2:
@@ -225,13 +235,14 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
         uvs.append(tuple(_inside(_uv(every[i], edge, params), boxes[i]) if i in sources
                          else _uv(every[i], edge, params) for i in owners))
     found = FaceJoins([Join(sides, "smooth", 0.0, 0.0) for sides in drafts], uvs, sources,
-                      readable, boxes, signs, non_manifold, analytic)
+                      readable, boxes, signs, non_manifold, analytic, edges, size)
     joins = []
     for sides, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
         angle = float(angles.max())
         joins.append(Join(sides, "smooth" if angle < angle_tolerance else "crease",
                           float(gaps.max()), angle, angles))
-    return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold, analytic)
+    return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold, analytic,
+                     edges, size)
 
 
 def _angles(n0, n1):
@@ -329,7 +340,8 @@ def _between(joins, faces):
     return [j for j in joins if set(j.faces) <= set(faces)]
 
 
-def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", method="wavelet"):
+def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", method="wavelet",
+               pinned=frozenset()):
     """Fair the faces of ``found`` together so that their joins stay closed (and, with
     ``joins="smooth"``, smooth), as the OCP layer does: the patch grids that form whole
     parts of the shape as one surface each (:func:`~cq_fairing.core.grid_fairing.fair_grids`),
@@ -362,6 +374,10 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", meth
         sources, as networks, and a face with joins that no network moved is kept
         (:data:`UNMOVED_BY_NETWORKS`): a joint projection would replace its energy
         fairing by a projection.
+    pinned : set of int
+        The faces already faired with their joins pinned to their sources
+        (:mod:`fairing_wb.pinned`): no grid takes them, and they stand as faces kept
+        (their neighbours' sides along them are held at their sources).
 
     Returns
     -------
@@ -370,8 +386,8 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", meth
     continuity = JOIN_CONTINUITY[joins]
     border = border_joins(found.joins, found.readable, tolerances)
     polynomial = {face: s for face, s in found.readable.items() if not s.is_rational}
-    grids = fair_grids(polynomial, found.joins, _between(border, polynomial), tolerances,
-                       check)
+    loose = {face: s for face, s in polynomial.items() if face not in pinned}
+    grids = fair_grids(loose, found.joins, _between(border, loose), tolerances, check)
     pieces = {face: s for grid in grids for face, s in grid.surfaces.items()}
     in_grids = _between(border, pieces)
     border = [j for j in border if not set(j.faces) & set(pieces)]
@@ -397,8 +413,9 @@ def hold_joins(found, faired, unchanged, tolerances, check, joins="smooth", meth
     kept.update({face: TURNED for face in projection.turned if face not in moved})
     still = {face for face in found.boxes
              if face not in surfaces and (face not in faired or face in kept)}
-    return HeldJoins(surfaces, kept, in_grids + held_joins(projection, still) + in_networks,
-                     grids, networks)
+    held = (in_grids + held_joins(projection, still) + in_networks
+            + held_by_pins(found.joins, set(pinned), still - set(pinned)))
+    return HeldJoins(surfaces, kept, held, grids, networks)
 
 
 def _outside_networks(found, alone, networks):

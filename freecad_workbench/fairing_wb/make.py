@@ -31,6 +31,7 @@ from cq_fairing.core.joint_projection import unholdable
 from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
+    JOIN_CONTINUITY,
     MEASURES,  # "geometric" first: the default
     check_applies,
 )
@@ -39,6 +40,7 @@ from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
 from .joins import JOINS, HeldJoins, JoinReport, check_joins, find_joins, hold_joins, measure_joins
+from .pinned import pin_faces
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "neighbour_faces", "fair_shapes", "error_sentence",
@@ -692,10 +694,13 @@ def _joined(named, results, settings, joins, angle_tolerance, neighbours):
 
 def _hold(found, elements, alone, tolerance, joins, method):
     """The faces faired ``alone`` faired again together (:func:`joins.hold_joins`):
-    ``(results, HeldJoins)``.  A face solved there is measured by :func:`face_deviation`
+    ``(results, HeldJoins)``.  A face with a join across its surface
+    (:func:`~cq_fairing.core.joint_projection.unholdable`) is first projected alone with
+    its joins pinned to its source (:func:`fairing_wb.pinned.pin_faces`), and then
+    stands for the others as a face kept; one the pins cannot hold is kept, with the
+    command line's reason.  A face solved is measured by :func:`face_deviation`
     and must stay within ``tolerance``; a face kept as it was says why: its joins hold
-    it over the tolerance, its pinned sides leave it nothing to fair, it has a join no
-    fairing can hold (:func:`~cq_fairing.core.joint_projection.unholdable`), or it was
+    it over the tolerance, its pinned sides leave it nothing to fair, or it was
     already at its coarsest (:func:`_nothing_faired`) and no network moved it (with the
     network's reason where one kept it:
     :func:`~cq_fairing.core.network_fairing.kept_sentence`).
@@ -704,25 +709,27 @@ def _hold(found, elements, alone, tolerance, joins, method):
     faired = list(alone)
     moved = {i for i, r in enumerate(alone) if r.surface is not None}
     stuck = unholdable(found.joins, found.readable, moved, moved)
-    for i, neighbours in stuck.items():
-        faired[i] = _kept_by_joins(elements[i], [elements[n][0] for n in neighbours],
-                                   tolerance)
-    coarsest = {i for i in moved - set(stuck)
-                if _nothing_faired(found.sources[i], alone[i].surface, method)}
     measured = {}
 
     def check(face, surface):
         measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
         return measured[face]
 
+    pins = pin_faces(found, elements, stuck, {i: alone[i].surface for i in stuck}, tolerance,
+                     JOIN_CONTINUITY[joins], method, check)
+    for i in stuck:
+        faired[i] = (_installed(alone[i], elements[i], pins.surfaces[i], measured[i],
+                                f"{elements[i][0]} {pins.notes[i]}")
+                     if i in pins.surfaces else _kept_as_is(elements[i], pins.notes[i]))
+    coarsest = {i for i in moved - set(stuck)
+                if _nothing_faired(found.sources[i], alone[i].surface, method)}
     outcome = hold_joins(found, {i: r.surface for i, r in enumerate(faired)
-                                 if r.surface is not None and i not in coarsest},
-                         coarsest | set(stuck), dict.fromkeys(range(len(alone)), tolerance),
-                         check, joins, method)
+                                 if r.surface is not None and i not in coarsest | set(stuck)},
+                         coarsest | (set(stuck) - set(pins.surfaces)),
+                         dict.fromkeys(range(len(alone)), tolerance), check, joins, method,
+                         pinned=set(pins.surfaces))
     for i, surface in outcome.surfaces.items():
-        shape = conversion.face_on_surface(conversion.part_surface(surface), elements[i][1])
-        faired[i] = replace(alone[i], shape=shape, poles_after=tuple(surface.shape),
-                            max_deviation=measured[i], note="", surface=surface)
+        faired[i] = _installed(alone[i], elements[i], surface, measured[i])
     for i, deviation in outcome.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
     for i in coarsest - set(outcome.surfaces):
@@ -733,6 +740,14 @@ def _hold(found, elements, alone, tolerance, joins, method):
             faired[i] = _kept_as_is(elements[i], kept_sentence(
                 reason, lambda face: elements[face][0]) + alone)
     return faired, outcome
+
+
+def _installed(result, element, surface, deviation, note=""):
+    """``result`` (the face ``element`` faired alone) with ``surface`` solved with its
+    joins held, at ``deviation``, under the face's trim."""
+    shape = conversion.face_on_surface(conversion.part_surface(surface), element[1])
+    return replace(result, shape=shape, poles_after=tuple(surface.shape),
+                   max_deviation=deviation, note=note, surface=surface)
 
 
 def _nothing_faired(source, surface, method):
@@ -748,16 +763,12 @@ def _kept_by_joins(element, why, tolerance):
     """:class:`FairedShape` of a face kept as it is for its joins: ``why`` is the
     deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
     all positive), ``None`` where its pinned joins leave it no net smaller than its
-    source's, the reason itself (``joins.TURNED``), or the names of the neighbours whose
-    joins run across its surface."""
+    source's, or the reason itself (``joins.TURNED``)."""
     if why is None:
         text = "its joins, held where the source has them, leave no net smaller than the " \
                "source's"
     elif isinstance(why, str):
         text = why
-    elif isinstance(why, list):
-        text = (f"its joins with {', '.join(why)} run across its surface, where no "
-                "fairing can hold them (Joins=free fairs it alone)")
     elif np.isfinite(why):
         text = (f"with its joins held closed it stays {why:.4g} mm from its source, over "
                 f"{tolerance:.4g} mm; its neighbours close onto it")

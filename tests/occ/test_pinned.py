@@ -9,6 +9,8 @@ from cq_fairing.core.pinned_projection import GAP
 from cq_fairing.occ.shapes import fair_shape
 
 TRIMMED = (242, 264, 274)    # impeller faces (0-based) with a join across their surface
+# their pinned nets (u, v); tests/freecad/app/test_pinned.py holds the workbench to them
+PINNED_POLES = {242: (5, 4), 264: (5, 4), 274: (4, 3)}
 
 
 @pytest.fixture(scope="module")
@@ -30,6 +32,7 @@ def test_trimmed_faces_are_faired_with_their_joins_pinned(impeller_runs):
         report = result.faces[index]
         assert report.faired and "pinned to its source" in report.message
         assert report.max_deviation <= 0.2
+        assert tuple(report.poles_after) == PINNED_POLES[index]
         assert report.poles_after[0] * report.poles_after[1] < \
             report.poles_before[0] * report.poles_before[1]
     rows = [r for r in result.joins.rows() if {f - 1 for f in r["faces"]} & set(TRIMMED)]
