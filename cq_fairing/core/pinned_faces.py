@@ -22,8 +22,8 @@ from .joins import ANGLE_SLACK
 from .joint_projection import SOURCE_GAP
 from .pinned_projection import GAP, pin_face
 
-__all__ = ["PinAttempt", "pin_budget", "attempt_pin", "pinned_sentence", "unpinned_sentence",
-           "over_sentence", "held_by_pins"]
+__all__ = ["PinAttempt", "pin_budget", "pinned_sides", "attempt_pin", "pinned_sentence",
+           "unpinned_sentence", "over_sentence", "held_by_pins"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +52,15 @@ def pin_budget(size):
     """``(gap, angle)``: one side's share of a join's budget in a model of ``size``
     (half of ``GAP * size``, half of ``ANGLE_SLACK`` degrees)."""
     return 0.5 * GAP * size, 0.5 * ANGLE_SLACK
+
+
+def pinned_sides(joins, face, continuity):
+    """``[(side, smooth)]``: the sides of ``joins`` on ``face``, each with whether its
+    tangent plane is pinned too (a smooth join, unless ``continuity`` is ``"G0"``); the
+    backend turns each side into a :class:`~cq_fairing.core.pinned_projection.PinnedEdge`
+    from its edge's p-curve on the face."""
+    return [(side, continuity != "G0" and join.kind == "smooth")
+            for join in joins for side in join.sides if side.face == face]
 
 
 def attempt_pin(source, target, edges, joins, size, tolerance):

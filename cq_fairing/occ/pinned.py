@@ -27,7 +27,13 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from ..core.joint_projection import joint_targets, unholdable
-from ..core.pinned_faces import attempt_pin, over_sentence, pinned_sentence, unpinned_sentence
+from ..core.pinned_faces import (
+    attempt_pin,
+    over_sentence,
+    pinned_sentence,
+    pinned_sides,
+    unpinned_sentence,
+)
 from ..core.pinned_projection import PinnedEdge
 
 __all__ = ["pin_unholdable"]
@@ -91,17 +97,13 @@ class _Curves:
         """A :class:`~cq_fairing.core.pinned_projection.PinnedEdge` per side of ``joins``
         on face ``index``; ``None`` when one has no p-curve on the face."""
         out = []
-        for join in joins:
-            smooth = continuity != "G0" and join.kind == "smooth"
-            for side in join.sides:
-                if side.face != index:
-                    continue
-                edge = TopoDS.Edge_s(self.edge_map.FindKey(side.edge).Oriented(TopAbs_FORWARD))
-                curve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-                if curve is None:
-                    return None
-                first, last = BRep_Tool.Range_s(edge, face)
-                out.append(PinnedEdge(_sampler(curve, first, last), smooth))
+        for side, smooth in pinned_sides(joins, index, continuity):
+            edge = TopoDS.Edge_s(self.edge_map.FindKey(side.edge).Oriented(TopAbs_FORWARD))
+            curve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+            if curve is None:
+                return None
+            first, last = BRep_Tool.Range_s(edge, face)
+            out.append(PinnedEdge(_sampler(curve, first, last), smooth))
         return out
 
 

@@ -23,6 +23,7 @@ from cq_fairing.core.pinned_faces import (
     attempt_pin,
     over_sentence,
     pinned_sentence,
+    pinned_sides,
     unpinned_sentence,
 )
 from cq_fairing.core.pinned_projection import PinnedEdge
@@ -104,15 +105,11 @@ def _edges(found, face, index, joins, continuity):
     """A :class:`~cq_fairing.core.pinned_projection.PinnedEdge` per side of ``joins`` on
     face ``index`` (``face``, a Part.Face); ``None`` when one has no p-curve on it."""
     out = []
-    for join in joins:
-        smooth = continuity != "G0" and join.kind == "smooth"
-        for side in join.sides:
-            if side.face != index:
-                continue
-            pcurve = face.curveOnSurface(found.edges[side.edge])
-            if pcurve is None:
-                return None
-            out.append(PinnedEdge(_sampler(*pcurve), smooth))
+    for side, smooth in pinned_sides(joins, index, continuity):
+        pcurve = face.curveOnSurface(found.edges[side.edge])
+        if pcurve is None:
+            return None
+        out.append(PinnedEdge(_sampler(*pcurve), smooth))
     return out
 
 
