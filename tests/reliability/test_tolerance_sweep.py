@@ -101,9 +101,9 @@ def test_unreadable_input_exits_3_and_writes_nothing(tmp_path):
 def test_an_output_that_fails_its_own_validation_exits_6_and_writes_nothing(tmp_path):
     """An explicit 4 x 4 target on the ring (one span per closed direction, below the
     coarsest net a tolerance search returns) folds the tube through itself at its seam
-    corner; the STEP file reads back as a self-intersecting wire.  Nothing is written,
-    one line says why, exit 6 (not 3: the input was fine)."""
-    out = tmp_path / "ring.step"
+    corner; the BREP file reads back as a shape ``BRepCheck_Analyzer`` rejects.  Nothing
+    is written, one line says why, exit 6 (not 3: the input was fine)."""
+    out = tmp_path / "ring.brep"
     proc = run_cli("fair", data_path("ring_nurbs.brep"), "-o", out, "--target", "4", "4")
     assert proc.returncode == 6, proc.stderr
     line = _one_error_line(proc)
