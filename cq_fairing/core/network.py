@@ -42,10 +42,11 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   coordinates together).  Around an odd number of patches the rows that close the
   cycle would determine the twist poles; held, they make the patches wavier across
   their joins, so they are left out there too.
-* **Open vertices.**  Where the kept patches' corners do not meet in the source (farther
-  apart than :data:`SPREAD` times the network's size), the other patches' corners there
-  keep their source points (:func:`_split_vertices`): closed onto one kept corner, a
-  patch would open its join to the other.
+* **Open vertices.**  Where the kept patches' corners do not meet in the source to
+  round-off (farther apart than :data:`SPREAD` times the network's size), the other
+  patches' corners there keep their source points (:func:`_split_vertices`): closed onto
+  one kept corner, a patch would open its join to the other by their distance, and the
+  edge between them would need a larger tolerance than the source's.
 
 The borders move with the patches: the energy runs across the joins.  The patches that
 share no unknown (joined only through kept patches) are independent parts of the
@@ -87,7 +88,8 @@ RHS_BLOCK = 8        # right-hand sides per triangular solve (:func:`_solved`)
 LAMBDA_RANGE = (1e-8, 1e4)
 BISECTIONS = 10
 KNOT_TOLERANCE = 1e-9
-SPREAD = 1e-7       # x the network's size: kept corners farther apart leave their vertex open
+SPREAD = 1e-9       # x the network's size (round-off): kept corners farther apart leave
+                    # their vertex open
 STRAIGHT = 0.1      # relative residual of a source's rows at a vertex for its lines to stay
 
 
