@@ -95,11 +95,11 @@ def fair_joined(job, adjacency, joins):
     -------
     JointOutcome
     """
-    readable = _readable_faces(job, {s.face for j in adjacency.joins for s in j.sides
-                                     if s.side is not None})
+    sided = {s.face for j in adjacency.joins for s in j.sides if s.side is not None}
+    read = _readable_faces(job, sided | _trimmed(adjacency))   # each face read once
+    readable = {face: s for face, s in read.items() if face in sided}
     continuity = JOIN_CONTINUITY[joins]
-    pinned = pin_unholdable(job, adjacency, {**_readable_faces(job, _trimmed(adjacency)),
-                                             **readable}, continuity)
+    pinned = pin_unholdable(job, adjacency, read, continuity)
     border = border_joins(adjacency.joins, readable, job.tol)
     polynomial = {face: s for face, s in readable.items() if not s.is_rational}
     loose = {face: s for face, s in polynomial.items() if face not in pinned}
