@@ -42,8 +42,8 @@ PROPERTIES = (
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Joins", "Fairing",
-     "Several faces of one shape: smooth (joins held closed, and smooth where the source "
-     "is), closed (joins held closed) or free (each face alone; joins may open)", False),
+     "Faces of a shape with neighbours or with each other: smooth (joins held closed, and "
+     "smooth where the source is), closed (joins held closed) or free (each face alone; joins may open)", False),
     ("App::PropertyAngle", "AngleTolerance", "Fairing",
      "A join whose source normals differ by less than this all along it is smooth, "
      "else a crease", False),

@@ -610,9 +610,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     (:func:`_not_for_energy`).  ``settings`` and ``face_settings`` as in
     :func:`fair_elements`.
 
-    Several faces of one shape are faired alone first; in tolerance mode and with
-    ``joins`` other than ``"free"`` they are then faired again together along the edges
-    they share (:func:`fairing_wb.joins.hold_joins`, as ``cq-fairing fair`` does): the
+    Several faces of one shape, or one face with neighbours, are faired alone first; in
+    tolerance mode and with ``joins`` other than ``"free"`` they are then faired again
+    together along the edges they share (:func:`fairing_wb.joins.hold_joins`, as ``cq-fairing fair`` does): the
     patch grids that form whole parts of the shape as one surface each, the other faces
     projected together, and the faces already at their coarsest together by energy;
     closed to round-off, and smooth across the joins that were smooth in the source.
@@ -672,7 +672,7 @@ def _joined(named, results, settings, joins, angle_tolerance, neighbours):
     :class:`FairedShapes`."""
     tolerance = settings["tolerance"]
     faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
-    if len(faces) < 2:
+    if not faces or (len(faces) == 1 and not neighbours):
         return FairedShapes(results)
     start = time.perf_counter()
     elements = [named[k] for k in faces] + neighbours

@@ -173,8 +173,9 @@ class FairSurfacePanel:
         self.measure.addItems(list(make.MEASURES))
         self.joins = _row(layout, "Joins:", QtWidgets.QComboBox(), "fairing_joins")
         self.joins.addItems(list(make.JOINS))
-        self.joins.setToolTip("Several faces of one shape: smooth (joins held closed, and "
-                              "smooth where the source is), closed, or free (each face alone)")
+        self.joins.setToolTip("Joins with the other faces of the shape: smooth (held "
+                              "closed, and smooth where the source is), closed, or free "
+                              "(each face alone)")
         self.preview = _row(layout, "", QtWidgets.QPushButton("Preview"), "fairing_preview")
         self.preview.clicked.connect(self.on_preview)
         self.progress = _row(layout, "", QtWidgets.QProgressBar(), "fairing_progress")

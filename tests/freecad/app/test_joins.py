@@ -163,6 +163,27 @@ def test_joins_with_faces_not_selected_stay_as_the_source_has_them(fuselage):
     assert smooth.joins.summary()["max_gap"] <= 1e-9 * size
 
 
+def test_one_face_selected_keeps_its_joins_with_the_others(doc, fuselage):
+    """One face of eight, as ``cq-fairing fair fuselage.brep --faces 5``: its joins with
+    its four neighbours are held where the source has them, by default; Joins=free
+    fairs it alone and opens them."""
+    source = fuselage.Shape
+    size = source.BoundBox.DiagonalLength
+    smooth = make.make_fairing((fuselage, ["Face5"]), tolerance=TOL)
+    free = make.make_fairing((fuselage, ["Face5"]), tolerance=TOL, joins="free",
+                             name="Free")
+    doc.recompute()
+    for obj in (smooth, free):
+        assert obj.isValid() and obj.Status.startswith("OK"), obj.Status
+        assert 0 < obj.MaxDeviation.Value <= TOL
+        assert fixtures.sample_distance(obj.Shape.Faces[0], source.Faces[4]) <= TOL
+    held = _to_neighbours(source, [4], [smooth.Shape.Faces[0]])
+    assert sorted(other for other, _, _ in held) == [0, 5, 5, 7]  # two edges with Face6
+    assert all(after <= before + 1e-9 * size for _, before, after in held), held
+    opened = _to_neighbours(source, [4], [free.Shape.Faces[0]])
+    assert max(after for _, _, after in opened) > 1e-3
+    assert "; joins: " in smooth.Status and " held closed" in smooth.Status
+
 def test_joins_with_analytic_neighbours_are_measured_through_part(doc):
     """Linkrods Face18 and Face20 are trimmed along a cylinder (Face2): those joins run
     across their surfaces, so Joins=smooth keeps both faces and every join, with the

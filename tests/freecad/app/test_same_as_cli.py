@@ -70,7 +70,8 @@ def test_tolerance_mode_gives_the_command_lines_net(doc, case):
     size = _size(reference["source"])
     assert before.poles.shape == reference["source"].shape
     assert np.abs(before.poles - reference["source"]).max() <= ROUND_OFF * size
-    obj = make.make_fairing((source, [sub]), tolerance=tol, **options)
+    # fair_face fairs the face alone: Joins free, as a fuselage face has neighbours
+    obj = make.make_fairing((source, [sub]), tolerance=tol, joins="free", **options)
     doc.recompute()
     assert obj.Search == "local" and obj.isValid(), obj.Status
     after = conversion.surface_from_face(obj.Shape.Faces[0])
@@ -79,7 +80,8 @@ def test_tolerance_mode_gives_the_command_lines_net(doc, case):
                           (after.v_knots, reference["v_knots"])):
         assert np.abs(knots - stored).max() <= ROUND_OFF * np.ptp(stored)
     assert np.abs(after.poles - reference["poles"]).max() <= ROUND_OFF * size
-    assert obj.Status == _status(sub, reference, tol)
+    # the part on the face itself (a face with neighbours also has its joins measured)
+    assert obj.Status.split("; joins: ")[0] == _status(sub, reference, tol)
     if reference["status"] == "faired":
         assert obj.MaxDeviation.Value == pytest.approx(float(reference["max_deviation"]),
                                                        rel=1e-6)
