@@ -50,6 +50,7 @@ from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 from scipy.spatial import cKDTree
 
+from ..core.free_edges import COINCIDENCE, EDGE_PROBES, match_free_edges, probe_length
 from ..core.joint_projection import Join, JoinSide, locate_side
 from ..errors import InvalidInputError
 from .convert import as_shape, indexed_faces
@@ -57,9 +58,6 @@ from .convert import as_shape, indexed_faces
 __all__ = ["JoinSide", "Join", "JoinMeasure", "Adjacency", "find_joins", "measure_joins"]
 
 SIDES = ("u0", "u1", "v0", "v1")
-COINCIDENCE = 1e-4        # default coincidence, relative to the bounding-box diagonal
-EDGE_SHARE = 1e-2         # ... and at most this share of the shorter edge's length
-EDGE_PROBES = 5           # samples per free edge when matching loose boundaries
 NEWTON_STEPS = 12         # Gauss-Newton iterations of a projection onto a surface
 NEWTON_STOP = 1e-12       # step (relative to the model size) that ends a projection
 HALVINGS = 8              # step halvings before a projection is taken as converged
@@ -600,8 +598,9 @@ def find_joins(shape, *, angle_tol=1.0, coincidence=None, samples=24):
     *Loose boundaries.*  Free edges (used by one face) are matched geometrically, as
     sewing would pair them but without changing anything: two edges of different faces
     whose start and end points coincide (in the same or in reverse order) within the
-    coincidence distance (at most :data:`EDGE_SHARE` of the shorter edge's length, or
-    the edges' tolerance), and whose :data:`EDGE_PROBES` samples lie within it of each
+    coincidence distance (at most :data:`~cq_fairing.core.free_edges.EDGE_SHARE` of the
+    shorter edge's length, or the edges' tolerance), and whose
+    :data:`~cq_fairing.core.free_edges.EDGE_PROBES` samples lie within it of each
     other (at the same fractions of the parameter range, or else by projection onto the
     other edge's 3-D curve), form a join with ``shared=False``.  Each edge is matched
     once, the closest candidate first.  Partial overlaps (one long edge against two
@@ -662,7 +661,7 @@ class _FreeEdge:
         self.points = np.array([adaptor.Value(float(t)).Coord()
                                 for t in np.linspace(first, last, EDGE_PROBES)])
         self.tolerance = BRep_Tool.Tolerance_s(self.edge)
-        self.length = float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
+        self.length = probe_length(self.points)
 
     def distance_along(self, other):
         """Largest distance from this edge's probes to ``other``'s 3-D curve (inf when
@@ -681,48 +680,18 @@ class _FreeEdge:
 
 
 def _match_free_edges(model, free, coincidence):
-    """Pairs ``((face, edge), (face, edge), opposed)`` of coincident free edges."""
+    """Pairs ``((face, edge), (face, edge), opposed)`` of coincident free edges
+    (:func:`~cq_fairing.core.free_edges.match_free_edges`, the probes' distance to the
+    other edge's curve by :meth:`_FreeEdge.distance_along`)."""
     if len(free) < 2:
         return []
     edges = [_FreeEdge(model, index) for index in free]
-    ends = np.array([np.concatenate([e.points[0], e.points[-1]]) for e in edges])
-    swapped = np.concatenate([ends[:, 3:], ends[:, :3]], axis=1)
-    radius = max(coincidence, max(e.tolerance for e in edges))
-    tree = cKDTree(ends)
-    candidates = []
-    for opposed, queries in ((False, ends), (True, swapped)):
-        for i, near in enumerate(tree.query_ball_point(queries, np.sqrt(2.0) * radius)):
-            for j in near:
-                if i < j and edges[i].face != edges[j].face:
-                    distance = _coincident(edges[i], edges[j], opposed, coincidence)
-                    if distance is not None:
-                        candidates.append((distance, i, j, opposed))
-    taken, pairs = set(), []
-    for _distance, i, j, opposed in sorted(set(candidates)):
-        if i in taken or j in taken:
-            continue
-        taken.update((i, j))
-        a, b = edges[i], edges[j]
-        pairs.append(((a.face, a.index), (b.face, b.index), opposed))
-    return pairs
-
-
-def _coincident(a, b, opposed, coincidence):
-    """Largest probe distance of two free edges when they coincide, else ``None``: within
-    the coincidence distance, but no more than :data:`EDGE_SHARE` of the shorter edge
-    (small faces of a large model are not joined across gaps of their own size), or
-    within the edges' tolerances."""
-    limit = max(min(coincidence, EDGE_SHARE * min(a.length, b.length)), a.tolerance,
-                b.tolerance)
-    other = b.points[::-1] if opposed else b.points
-    ends = max(np.linalg.norm(a.points[0] - other[0]), np.linalg.norm(a.points[-1] - other[-1]))
-    if ends > limit:
-        return None
-    direct = float(np.linalg.norm(a.points - other, axis=1).max())
-    if direct <= limit:
-        return direct
-    projected = max(ends, a.distance_along(b), b.distance_along(a))
-    return projected if projected <= limit else None
+    matched = match_free_edges([e.face for e in edges], [e.points for e in edges],
+                               [e.tolerance for e in edges], [e.length for e in edges],
+                               coincidence,
+                               lambda i, j: edges[i].distance_along(edges[j]))
+    return [((edges[i].face, edges[i].index), (edges[j].face, edges[j].index), opposed)
+            for i, j, opposed in matched]
 
 
 def _point_contacts(model, joins, coincidence):

@@ -1,10 +1,22 @@
 r"""Joins among the faces of one Part shape: read, held closed and smooth, measured.
 
-A *join* is an edge shared by exactly two faces of one object's shape, at least one of
-them being faired: the faces of one shape share their edge objects
-(``Part.Shape.isSame``), so the joins are read from the faces alone (an edge of three or
-more faces is non-manifold and not joined; a degenerated edge or a seam is no join).
-The faces not faired that share an edge with a faired one, its *neighbours*, take part
+A *join* is a boundary along which two faces of one object's shape meet, at least one
+of them being faired, read from the faces alone, as ``cq-fairing fair`` reads them
+(:func:`cq_fairing.occ.adjacency.find_joins`):
+
+* an edge shared by exactly two faces: the faces of one shape share their edge objects
+  (``Part.Shape.isSame``); an edge of three or more faces is non-manifold and not
+  joined, a degenerated edge or a seam is no join;
+* two free edges (each used by one face, once), one of each of two loose faces (a
+  compound of unsewn faces, an IGES file's), whose end points and probes coincide
+  within the coincidence distance (by default 1e-4 of the faces' bounding-box
+  diagonal, raised to the edges' tolerances), matched by the core
+  (:func:`~cq_fairing.core.free_edges.match_free_edges`), the probes' distance to the
+  other edge measured by Part (``distToShape``): a join with ``shared`` ``False``,
+  each side on its own edge, ``opposed`` where the edges run opposite ways.  Partial
+  overlaps (a T-junction of loose faces) are not matched.
+
+The faces not faired that meet a faired one along a join, its *neighbours*, take part
 as fixed faces: they keep their joins as the source has them.  Each side of a join is
 located on its face (:func:`find_joins`, the
 :class:`~cq_fairing.core.joint_projection.JoinSide` of the core): the border of the
@@ -12,18 +24,21 @@ surface's parameter rectangle its p-curve runs along, its border parameters at t
 edge's ends, and whether it covers the whole side (no border on a surface that is not a
 B-spline: a plane, a cylinder).
 
-A join is measured at ``samples`` edge parameters :math:`t_k`, the midpoints of equal
-sub-ranges of the edge (the ends, a vertex where several faces may meet at a collapsed
-border, are left out: the normal is undefined there): the point
+A join is measured at ``samples`` fractions :math:`s_k` of side 0's edge range, the
+midpoints of equal sub-ranges (the ends, a vertex where several faces may meet at a
+collapsed border, are left out: the normal is undefined there), and at the same
+fractions of side 1's edge (:math:`1 - s_k` when ``opposed``; a shared edge is both
+sides' edge): at the edge parameter :math:`t_k` of :math:`s_k`, the point
 :math:`P_k = S_0(c_0(t_k))` of face 0 is projected onto face 1's surface inside its
 parameter box, seeded at face 1's p-curve, giving :math:`Q_k`; the gap is
 :math:`|P_k - Q_k|` and the angle is that between the unit normals
 :math:`\pm S_u \times S_v / |S_u \times S_v|` (turned on a reversed face) at
 :math:`P_k` and :math:`Q_k`.  The same is done from face 1 onto face 0, and each sample
-keeps the larger gap and angle.  A neighbour whose surface is not a B-spline is
-evaluated and projected onto by FreeCAD's Part (``Surface.value``, ``Surface.normal``,
-``Surface.parameter``).  A join whose largest source angle is below the angle
-tolerance is *smooth*, else a *crease*.
+keeps the larger gap and angle; two loose faces may disagree in orientation, so their
+angle :math:`\alpha` is folded to :math:`\min(\alpha, 180^\circ - \alpha)`.  A
+neighbour whose surface is not a B-spline is evaluated and projected onto by FreeCAD's
+Part (``Surface.value``, ``Surface.normal``, ``Surface.parameter``).  A join whose
+largest source angle is below the angle tolerance is *smooth*, else a *crease*.
 
 Holding the joins is the core's work, in the three steps the OCP layer takes
 (:func:`cq_fairing.occ.joint.fair_joined`): :func:`hold_joins` gives it the faces read
@@ -46,6 +61,7 @@ import numpy as np
 import Part
 
 import cq_fairing as cf
+from cq_fairing.core.free_edges import COINCIDENCE, EDGE_PROBES, match_free_edges, probe_length
 from cq_fairing.core.grid_fairing import fair_grids
 from cq_fairing.core.join_summary import summarize, summary_line
 from cq_fairing.core.joins import ANGLE_SLACK
@@ -67,7 +83,8 @@ from cq_fairing.core.pinned_faces import held_by_pins
 from . import analysis, conversion
 
 __all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins",
-           "JoinReport", "find_joins", "measure_joins", "hold_joins", "check_joins"]
+           "JoinReport", "find_joins", "loose_neighbours", "measure_joins", "hold_joins",
+           "check_joins"]
 
 SAMPLES = 24              # points measured along each join
 TURNED = (f"with its joins held its smooth joins would turn more than the source's angle "
@@ -86,8 +103,8 @@ class FaceJoins:
         Face indices are positions in the list of faces, then of the neighbours.
     samples : list of tuple of numpy.ndarray
         Per join, the ``(n, 2)`` parameters of the measured points on side 0's and on
-        side 1's face (the faired faces keep their parameter domains, so the same
-        parameters measure them).
+        side 1's face, each on its own edge (:func:`_tracks`; the faired faces keep
+        their parameter domains, so the same parameters measure them).
     sources : dict
         ``{face: BSplineSurface}``: every B-spline face's source surface (every faired
         face, the B-spline neighbours).
@@ -137,6 +154,83 @@ def _shared_edges(faces):
             elif index not in entry[1]:
                 entry[1].append(index)
     return [entry for bucket in by_hash.values() for entry in bucket]
+
+
+def _seams(face):
+    """The edges ``face``'s wires use twice (the seams of a periodic surface)."""
+    seen, twice = {}, []
+    for edge in (e for wire in face.Wires for e in wire.SubShapes):
+        bucket = seen.setdefault(edge.hashCode(), [])
+        if any(e.isSame(edge) for e in bucket):
+            twice.append(edge)
+        else:
+            bucket.append(edge)
+    return twice
+
+
+def _free_edges(faces, shared):
+    """Positions in ``shared`` (:func:`_shared_edges` of ``faces``) of the free edges:
+    used by one face, once (no seam)."""
+    seams = {}
+    free = []
+    for k, (edge, owners) in enumerate(shared):
+        if len(owners) != 1:
+            continue
+        if owners[0] not in seams:
+            seams[owners[0]] = _seams(faces[owners[0]])
+        if not any(edge.isSame(seam) for seam in seams[owners[0]]):
+            free.append(k)
+    return free
+
+
+def _coincidence(faces):
+    """:data:`~cq_fairing.core.free_edges.COINCIDENCE` times the diagonal of the
+    bounding box of ``faces``."""
+    box = FreeCAD.BoundBox()
+    for face in faces:
+        box.add(face.BoundBox)
+    return COINCIDENCE * (box.DiagonalLength or 1.0)
+
+
+def _loose_pairs(faces, shared, coincidence):
+    """``[(a, b, opposed)]``: positions in ``shared`` (:func:`_shared_edges` of
+    ``faces``) of free edges of different faces that are one boundary
+    (:func:`~cq_fairing.core.free_edges.match_free_edges`: their
+    :data:`~cq_fairing.core.free_edges.EDGE_PROBES` points, uniform in each edge's
+    parameter, within ``coincidence`` or the edges' tolerances, at the same fractions
+    or else by Part's distance from one edge's probes to the other edge);
+    ``opposed``: the edges run in opposite directions."""
+    free = _free_edges(faces, shared)
+    if len(free) < 2:
+        return []
+    edges = [shared[k][0] for k in free]
+    probes = [np.array([_xyz(edge.valueAt(float(t))) for t in
+                        np.linspace(*edge.ParameterRange, EDGE_PROBES)]) for edge in edges]
+
+    def along(i, j):
+        return max(edges[j].distToShape(Part.Vertex(FreeCAD.Vector(*map(float, p))))[0]
+                   for p in probes[i][1:-1])
+
+    matched = match_free_edges([shared[k][1][0] for k in free], probes,
+                               [edge.Tolerance for edge in edges],
+                               [probe_length(p) for p in probes], coincidence, along)
+    return [(free[i], free[j], opposed) for i, j, opposed in matched]
+
+
+def loose_neighbours(faces, chosen):
+    """The faces of ``faces`` (one shape's), not among ``chosen`` (indices), with a free
+    edge that is one boundary with a free edge of a face of ``chosen``
+    (:func:`_loose_pairs`, at the coincidence of all ``faces``): a loose face's
+    neighbours."""
+    if not chosen:
+        return set()
+    shared = _shared_edges(faces)
+    near = set()
+    for a, b, _ in _loose_pairs(faces, shared, _coincidence(faces)):
+        first, second = shared[a][1][0], shared[b][1][0]
+        near.update(other for face, other in ((first, second), (second, first))
+                    if face in chosen)
+    return near - set(chosen)
 
 
 def _uv(face, edge, params):
@@ -196,7 +290,8 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
     Parameters
     ----------
     faces : list of Part.Face
-        Faces of one object's shape (they share their edges).
+        Faces of one object's shape: they share their edges, or are loose faces whose
+        free edges coincide.
     angle_tolerance : float
         Degrees: a join whose source normals differ by less all along is smooth.
     samples : int
@@ -204,7 +299,9 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
     neighbours : sequence of Part.Face
         Faces of the same shape not faired, any surface: their joins with ``faces`` are
         read (they are faces ``len(faces)``, ``len(faces) + 1``, ...), not those among
-        themselves.
+        themselves.  Their free edges and those of ``faces`` are matched
+        (:func:`_loose_pairs`) within :data:`~cq_fairing.core.free_edges.COINCIDENCE`
+        times the diagonal of the bounding box of ``faces`` and ``neighbours``.
 
     Returns
     -------
@@ -219,30 +316,50 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
              for i, f in enumerate(every)}
     signs = {i: -1.0 if f.Orientation == "Reversed" else 1.0 for i, f in enumerate(every)}
     analytic = {i: f for i, f in enumerate(every) if i not in sources}
-    drafts, uvs, non_manifold = [], [], 0
     shared = _shared_edges(every)
     edges = [edge for edge, _ in shared]
-    for edge_index, (edge, owners) in enumerate(shared):
+    pairs, non_manifold = [], 0
+    for edge_index, (_, owners) in enumerate(shared):
         if min(owners) >= len(faces):
             continue
-        if len(owners) > 2:
-            non_manifold += 1
-        if len(owners) != 2:
-            continue
-        first, last = edge.ParameterRange
-        params = first + (np.arange(samples) + 0.5) / samples * (last - first)
-        drafts.append(tuple(_join_side(every[i], i, edge, edge_index, size) for i in owners))
-        uvs.append(tuple(_inside(_uv(every[i], edge, params), boxes[i]) if i in sources
-                         else _uv(every[i], edge, params) for i in owners))
-    found = FaceJoins([Join(sides, "smooth", 0.0, 0.0) for sides in drafts], uvs, sources,
-                      readable, boxes, signs, non_manifold, analytic, edges, size)
+        non_manifold += len(owners) > 2
+        if len(owners) == 2:
+            pairs.append((tuple((face, edge_index) for face in owners), True, False))
+    for a, b, opposed in _loose_pairs(every, shared, _coincidence(every)):
+        sides = ((shared[a][1][0], a), (shared[b][1][0], b))
+        if min(face for face, _ in sides) < len(faces):
+            pairs.append((sides, False, opposed))
+    tracks = [_tracks(every, edges, sides, opposed, sources, boxes, samples, size)
+              for sides, _, opposed in pairs]
+    drafts = [Join(sides, "smooth", 0.0, 0.0, None, shared_edge, opposed)
+              for (sides, _), (_, shared_edge, opposed) in zip(tracks, pairs)]
+    uvs = [uv for _, uv in tracks]
+    found = FaceJoins(drafts, uvs, sources, readable, boxes, signs, non_manifold, analytic,
+                      edges, size)
     joins = []
-    for sides, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
+    for draft, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
         angle = float(angles.max())
-        joins.append(Join(sides, "smooth" if angle < angle_tolerance else "crease",
-                          float(gaps.max()), angle, angles))
+        joins.append(Join(draft.sides, "smooth" if angle < angle_tolerance else "crease",
+                          float(gaps.max()), angle, angles, draft.shared, draft.opposed))
     return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold, analytic,
                      edges, size)
+
+
+def _tracks(every, edges, sides, opposed, sources, boxes, samples, size):
+    """The :class:`JoinSide` of each of ``sides`` (``(face, edge index)`` pairs) and the
+    ``(samples, 2)`` parameters of its measured points: the midpoints of equal
+    sub-ranges of side 0's edge, and the same fractions of side 1's edge (from its end
+    when ``opposed``: loose faces' edges may run opposite ways), on its face's p-curve,
+    kept inside a B-spline face's box (:func:`_inside`)."""
+    fractions = (np.arange(samples) + 0.5) / samples
+    located, uvs = [], []
+    for (face, k), turned in zip(sides, (False, opposed)):
+        first, last = edges[k].ParameterRange
+        params = first + (1.0 - fractions if turned else fractions) * (last - first)
+        uv = _uv(every[face], edges[k], params)
+        located.append(_join_side(every[face], face, edges[k], k, size))
+        uvs.append(_inside(uv, boxes[face]) if face in sources else uv)
+    return tuple(located), tuple(uvs)
 
 
 def _angles(n0, n1):
@@ -286,10 +403,11 @@ def _one_way(found, sides, uvs, surfaces):
 
 
 def measure_joins(found, surfaces):
-    """Per join of ``found``, the gaps and the normal angles (degrees) at its samples
+    r"""Per join of ``found``, the gaps and the normal angles (degrees) at its samples
     with the faces' surfaces ``surfaces`` (``{face: BSplineSurface}``, the sources or
     faired surfaces on the same parameter domains; a face of ``found.analytic`` through
-    Part).
+    Part).  Loose faces (a join not on a shared edge) may disagree in orientation: their
+    angle :math:`\alpha` is folded to :math:`\min(\alpha, 180^\circ - \alpha)`.
 
     Returns
     -------
@@ -301,7 +419,8 @@ def measure_joins(found, surfaces):
         faces = join.faces
         there = _one_way(found, faces, uvs, surfaces)
         back = _one_way(found, faces[::-1], uvs[::-1], surfaces)
-        out.append((np.maximum(there[0], back[0]), np.maximum(there[1], back[1])))
+        angles = [a if join.shared else np.minimum(a, 180.0 - a) for a in (there[1], back[1])]
+        out.append((np.maximum(there[0], back[0]), np.maximum(*angles)))
     return out
 
 

@@ -39,7 +39,16 @@ from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: 
 from cq_fairing.core.plans import largest_resolved_scale
 
 from . import analysis, conversion
-from .joins import JOINS, HeldJoins, JoinReport, check_joins, find_joins, hold_joins, measure_joins
+from .joins import (
+    JOINS,
+    HeldJoins,
+    JoinReport,
+    check_joins,
+    find_joins,
+    hold_joins,
+    loose_neighbours,
+    measure_joins,
+)
 from .pinned import pin_faces
 
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
@@ -582,12 +591,13 @@ def named_elements(obj, subs):
 
 def neighbour_faces(obj, subs):
     """``[(sub, Part.Face)]``: the faces of ``obj``'s shape, any surface, that share a
-    non-degenerated edge with a face of ``subs`` and are not among ``subs``, in the
-    shape's order; read in the thread that owns the document, as
-    :func:`named_elements`."""
+    non-degenerated edge with a face of ``subs``, or have a free edge that is one
+    boundary with one of its free edges (loose faces, :func:`joins.loose_neighbours`),
+    and are not among ``subs``, in the shape's order; read in the thread that owns the
+    document, as :func:`named_elements`."""
     faces = obj.Shape.Faces
     chosen = {int(sub[len("Face"):]) - 1 for sub in subs if sub.startswith("Face")}
-    near = set()
+    near = loose_neighbours(faces, chosen)
     for index in chosen:
         for edge in faces[index].Edges:
             if edge.Degenerated:
@@ -612,10 +622,10 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
 
     Several faces of one shape, or one face with neighbours, are faired alone first; in
     tolerance mode and with ``joins`` other than ``"free"`` they are then faired again
-    together along the edges they share (:func:`fairing_wb.joins.hold_joins`, as ``cq-fairing fair`` does): the
-    patch grids that form whole parts of the shape as one surface each, the other faces
-    projected together, and the faces already at their coarsest together by energy;
-    closed to round-off, and smooth across the joins that were smooth in the source.
+    together along the edges they share (:func:`fairing_wb.joins.hold_joins`, as
+    ``cq-fairing fair`` does): the patch grids that form whole parts of the shape as one
+    surface each, the other faces projected together, and the faces already at their
+    coarsest together by energy; closed to round-off, and smooth across the joins that were smooth in the source.
     Their joins are measured either way.  The ``neighbours``, faces of the same shape
     not faired, take part as fixed faces: a faired face's join with one stays as the
     source has it.
@@ -633,7 +643,7 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
         Degrees: a join whose source normals differ by less all along it is smooth,
         else a crease (kept a crease).
     neighbours : sequence of (str, Part.Face)
-        The faces of the shape that share an edge with a face of ``named`` and are not
+        The faces of the shape that meet a face of ``named`` along a join and are not
         faired (:func:`neighbour_faces`); none: only the joins among ``named``.
 
     Returns

@@ -2,10 +2,11 @@
 to its source (fairing_wb.pinned), as ``cq-fairing fair`` does: the impeller's three
 trimmed faces and the faces they meet, inside FreeCAD.
 
-The workbench reads joins from the edges the faces of one shape share.  The impeller
-file is a compound of loose faces, so the subset is glued first by Part's general fuse
-(fuzzy 1e-3 mm, below the tolerance): the faces keep their surfaces, and the edges where
-they meet become shared."""
+The impeller file is a compound of loose faces.  Here the subset is glued first by
+Part's general fuse (fuzzy 1e-3 mm, below the tolerance): the faces keep their
+surfaces, and the edges where they meet become shared
+(tests/freecad/app/test_loose_faces.py fairs the same faces unglued, their free edges
+matched)."""
 
 import pytest
 
