@@ -1,12 +1,20 @@
-"""The workbench's Preview work on the noisy 50 x 80 fixture, timed inside FreeCAD.
+"""The workbench's Preview work on the noisy 50 x 80 fixture, and whole models, timed
+inside FreeCAD.
 
 ``make.fair_face`` is what the Fair Surface panel's Preview runs (fairing, the two-sided
 check and the figures): best of ``--rounds`` warm runs per setting, against the issue's
 0.5 s Preview target.  The GUI script (``.ci/freecad_tests.sh``) also clicks Preview and
 prints its wall time as ``timing:`` lines.
 
+With ``--models``, Fair Surface on every face of each bundled model (``make.fair_elements``,
+what the Fairing feature runs, at the tolerances of ``benchmarks/bench_joins.py``), joins
+held (the default) and each face alone: wall time, faces faired, the joins held, the
+largest gap they open and the largest angle they add over the source's (the workbench's
+own join measure, :class:`fairing_wb.joins.JoinReport`).
+
     freecadcmd benchmarks/bench_workbench.py           # default: 3 rounds
     FAIRING_ROUNDS=5 freecadcmd benchmarks/bench_workbench.py
+    FAIRING_MODELS=1 freecadcmd benchmarks/bench_workbench.py   # the models table
 """
 
 import os
@@ -19,6 +27,8 @@ for path in (REPO, REPO / "freecad_workbench", REPO / "tests" / "freecad"):
     sys.path.insert(0, str(path))
 
 import fixtures  # noqa: E402
+import FreeCAD  # noqa: E402
+import Part  # noqa: E402
 from fairing_wb import make  # noqa: E402
 
 TARGET = 0.5   # seconds, the Preview target
@@ -38,7 +48,39 @@ def best_of(rounds, face, options):
     return min(times), result
 
 
+MODELS = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01), ("shell_patches.brep", 0.083),
+          ("linkrods.step", 0.01), ("impeller.igs", 0.2))
+SETTINGS_OF_THE_FEATURE = {"target": None, "method": "wavelet", "search": "local",
+                           "measure": "geometric", "objective": "compact"}
+
+
+def models():
+    """One row per model and ``Joins`` setting (module notes)."""
+    print("| model | tol | Joins | s | faces faired | joins held | largest gap opened | "
+          "largest angle added (deg) |")
+    print("|---|---|---|---|---|---|---|---|")
+    doc = FreeCAD.newDocument("Models")
+    for name, tol in MODELS:
+        obj = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / name)), "Model")
+        subs = [f"Face{k + 1}" for k in range(len(obj.Shape.Faces))]
+        for joins in ("smooth", "free"):
+            start = time.perf_counter()
+            results = make.fair_elements(obj, subs, {**SETTINGS_OF_THE_FEATURE,
+                                                     "tolerance": tol},
+                                         {"boundary": "free", "borders": "auto"}, joins=joins)
+            seconds = time.perf_counter() - start
+            s = results.joins.summary()
+            faired = sum(r.max_deviation > 0 for r in results)   # a kept face has 0
+            print(f"| {name} | {tol:g} | {joins} | {seconds:.2f} | {faired} / {len(subs)} | "
+                  f"{s['held']} / {s['joins']} | {s['max_gap_opened']:.2g} | "
+                  f"{s['max_angle_excess']:.3f} |", flush=True)
+    FreeCAD.closeDocument(doc.Name)
+
+
 def main():
+    if os.environ.get("FAIRING_MODELS"):
+        models()
+        return
     rounds = int(os.environ.get("FAIRING_ROUNDS", "3"))
     surface, _ = fixtures.noisy_blade_surface(50, 80)
     face = surface.toShape().Faces[0]

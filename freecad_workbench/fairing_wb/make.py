@@ -103,8 +103,8 @@ class FairedShape:
 
 class FairedShapes(list):
     """The :class:`FairedShape` of each element, in order (a list), and ``joins``: the
-    :class:`~fairing_wb.joins.JoinReport` of the faces faired together (``None`` with
-    fewer than two faces)."""
+    :class:`~fairing_wb.joins.JoinReport` of the faces faired together (``None`` for one
+    face without neighbours)."""
 
     def __init__(self, results, joins=None):
         super().__init__(results)
@@ -867,8 +867,8 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
     objective, borders : str
         Of the adaptive method, see :func:`fair_face`.
     joins : {"smooth", "closed", "free"}
-        How several faces of the source stay together along the edges they share, see
-        :func:`fair_shapes`.
+        How several faces of the source, or one face and its neighbours, stay together
+        along the edges they share, see :func:`fair_shapes`.
     angle_tolerance : float
         Degrees: the smooth/crease threshold of the joins.
 

@@ -292,8 +292,9 @@ def check_real_models(doc):
           and find("FairingLevelsPanel").findChild(QtWidgets.QLabel, "fairing_error").text() == "")
     press_task_cancel()  # removes the level preview
     pump()
-    panel_ok(impeller, ["Face84"], "Impeller Face84 tolerance 0.05", lambda: find(
-        "fairing_tolerance").setProperty("rawValue", 0.05), "13 x 12 ->")
+    panel_ok(impeller, ["Face84"], "Impeller Face84 alone, tolerance 0.05", lambda: (
+        find("fairing_tolerance").setProperty("rawValue", 0.05),
+        find("fairing_joins").setCurrentText("free")), "13 x 12 ->")
     panel_ok(blade, ["Face1", "Face2"], "Blade Face1+Face2 target 12 x 100",
              lambda: (find("fairing_mode").setCurrentIndex(1), find("fairing_target_u").setValue(12),
                       find("fairing_target_v").setValue(100)), "-> 12 x 100")
