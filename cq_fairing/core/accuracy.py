@@ -49,10 +49,14 @@ u_{lo})/32 \rfloor` first, then by one around the best): for each it tests the l
 smallest passing :math:`n_v` (assuming :math:`e` grows as :math:`n_v` shrinks at fixed
 :math:`n_u`); the walk stops when even :math:`n_v = 1` could not improve (not
 :math:`v_{lo}`: between non-nested spaces a smaller :math:`n_u` can pass where the
-source's :math:`n_u` fails).  The answer is measured within ``tol`` and scanned like the
-curve case in both directions.  A closed direction (end rows that coincide) counts scales
-below :func:`~cq_fairing.core.geometry.fewest_spans` as inadmissible, so the coarsest
-answer still closes as a valid face.  ``"linear"`` and ``"polyfit"`` apply the seed's
+source's :math:`n_u` fails).  For the same reason it also walks the :math:`n_u` below
+:math:`u_{lo}` at which fewer v-spans than the source's could beat the best, and the
+walk is repeated while the best improves (a smaller best admits fewer v-spans at each
+:math:`n_u`: a net found later can make an :math:`n_u` tried earlier pass).  The answer
+is measured within ``tol`` and scanned like the curve case in both directions.  A closed
+direction (end rows that coincide) counts scales below
+:func:`~cq_fairing.core.geometry.fewest_spans` as inadmissible, so the coarsest answer
+still closes as a valid face.  ``"linear"`` and ``"polyfit"`` apply the seed's
 methods along the equal-ratio diagonal :math:`(n_u, n_v) \approx s\,(n_{u,\max},
 n_{v,\max})`.
 
@@ -533,11 +537,28 @@ def _guaranteed_surface(err, U, V, pu, pv, tol, window=SCAN_WINDOW):
     v_lo = _guaranteed(v_err, V, tol, window)
     best = _diagonal_start(err, (u_lo, v_lo), (U, V), tol)
     step = max(1, (U - u_lo) // 32)
-    best = _walk(err, range(u_lo, U + 1, step), best, V, pu, pv, tol)
-    if step > 1:
-        near = range(max(u_lo, best[0] - step + 1), min(U, best[0] + step - 1) + 1)
-        best = _walk(err, near, best, V, pu, pv, tol)
-    return _scan_surface(err, best, tol, window)
+    while True:   # again while the best improves: each n_u then admits fewer v-spans
+        found = _walk(err, range(u_lo, U + 1, step), best, V, pu, pv, tol)
+        below = _below(found, u_lo, V, pu, pv)
+        found = _walk(err, range(below, u_lo), found, V, pu, pv, tol)
+        if step > 1:
+            near = range(max(below, found[0] - step + 1), min(U, found[0] + step - 1) + 1)
+            found = _walk(err, near, found, V, pu, pv, tol)
+        if found == best:
+            return _scan_surface(err, best, tol, window)
+        best = found
+
+
+def _below(best, u_lo, V, pu, pv):
+    """The smallest ``n_u`` below ``u_lo`` worth walking: those at which a net with
+    fewer v-spans than the source's could beat ``best``.  ``u_lo`` is the fewest u-spans
+    passing with v at the source; between non-nested spaces a smaller ``n_u`` can pass
+    with fewer v-spans although it fails with all of them (a 7 x 9 net: ``(1, 6)``
+    misses tol, ``(1, 5)`` passes, 32 poles against the 35 of ``(2, 4)``).  Below the
+    returned ``n_u`` only ``n_v >= V`` could beat ``best``: those nets are the u-line
+    that fixed ``u_lo``."""
+    total = (best[0] + pu) * (best[1] + pv)
+    return max(1, min(u_lo, -(-total // (V + pv)) - pu))
 
 
 def _walk(err, nus, best, V, pu, pv, tol):
