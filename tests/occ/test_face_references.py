@@ -32,8 +32,10 @@ def test_stored_net_is_fair_faces(case):
     assert stored["message"] == now["message"]
     assert np.array_equal(stored["source"], now["source"])
     assert stored["poles"].shape == now["poles"].shape
-    assert np.abs(stored["u_knots"] - now["u_knots"]).max() <= 1e-12
-    assert np.abs(stored["v_knots"] - now["v_knots"]).max() <= 1e-12
+    # the adaptive method's knots come out of an iterative placement: numpy/scipy builds
+    # place them up to ~1e-11 apart (the FreeCAD comparison allows 1e-9 for the same reason)
+    for axis in ("u_knots", "v_knots"):
+        assert np.abs(stored[axis] - now[axis]).max() <= 1e-9 * np.ptp(stored[axis])
     assert np.abs(stored["poles"] - now["poles"]).max() <= 1e-9 * size
     assert float(stored["max_deviation"]) == pytest.approx(float(now["max_deviation"]),
                                                            rel=1e-6)
