@@ -2,15 +2,15 @@
 inside FreeCAD.
 
 ``make.fair_face`` is what the Fair Surface panel's Preview runs (fairing, the two-sided
-check and the figures): best of ``--rounds`` warm runs per setting, against the issue's
+check and the figures): best of ``FAIRING_ROUNDS`` (3) warm runs per setting, against the
 0.5 s Preview target.  The GUI script (``.ci/freecad_tests.sh``) also clicks Preview and
 prints its wall time as ``timing:`` lines.
 
-With ``--models``, Fair Surface on every face of each bundled model (``make.fair_elements``,
-what the Fairing feature runs, at the tolerances of ``benchmarks/bench_joins.py``), joins
-held (the default) and each face alone: wall time, faces faired, the joins held, the
-largest gap they open and the largest angle they add over the source's (the workbench's
-own join measure, :class:`fairing_wb.joins.JoinReport`).
+With ``FAIRING_MODELS=1``, Fair Surface on every B-spline face of each bundled model
+(``make.fair_elements``, what the Fairing feature runs, at the tolerances of
+``benchmarks/bench_joins.py``), joins held (the default) and each face alone: wall time,
+faces faired, the joins held, the largest gap they open and the largest angle they add
+over the source's (the workbench's own join measure, :class:`fairing_wb.joins.JoinReport`).
 
     freecadcmd benchmarks/bench_workbench.py           # default: 3 rounds
     FAIRING_ROUNDS=5 freecadcmd benchmarks/bench_workbench.py
@@ -62,7 +62,8 @@ def models():
     doc = FreeCAD.newDocument("Models")
     for name, tol in MODELS:
         obj = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / name)), "Model")
-        subs = [f"Face{k + 1}" for k in range(len(obj.Shape.Faces))]
+        subs = [f"Face{k + 1}" for k, face in enumerate(obj.Shape.Faces)   # as the feature
+                if isinstance(face.Surface, Part.BSplineSurface)]             # on an object
         for joins in ("smooth", "free"):
             start = time.perf_counter()
             results = make.fair_elements(obj, subs, {**SETTINGS_OF_THE_FEATURE,

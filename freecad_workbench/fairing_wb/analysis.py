@@ -20,6 +20,7 @@ from cq_fairing.core.closest_points import (
     closest_points_surface,
     closest_points_surface_restarted,
 )
+from cq_fairing.core.evaluation import surface_derivatives
 from cq_fairing.core.fairness import grid_curvatures
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
@@ -47,29 +48,6 @@ def parametric_deviation(source, faired, uv_range, count=40):
     return float(np.sqrt((diff ** 2).sum(axis=2)).max())
 
 
-def _contract(rows, basis_v, d):
-    """``sum_k rows[q, k, :] * basis_v[q, k]`` with a sparse ``basis_v`` (q, k_v)."""
-    rows = rows.reshape(rows.shape[0], -1, d)
-    return np.column_stack([np.asarray(basis_v.multiply(rows[:, :, i]).sum(axis=1)).ravel()
-                            for i in range(d)])
-
-
-def _point_and_tangents(surface, u, v):
-    """Point, d/du and d/dv at scattered parameters ``(u_q, v_q)``, each (q, 3)."""
-    net = surface.poles if surface.weights is None else surface.homogeneous()
-    ku, kv, d = net.shape
-    flat = net.reshape(ku, kv * d)
-    rows0 = surface.u_space.collocation(u, 0) @ flat
-    rows1 = surface.u_space.collocation(u, 1) @ flat
-    bv0, bv1 = (surface.v_space.collocation(v, n).tocsr() for n in (0, 1))
-    s, su, sv = _contract(rows0, bv0, d), _contract(rows1, bv0, d), _contract(rows0, bv1, d)
-    if surface.weights is None:
-        return s, su, sv
-    w, wu, wv = s[:, -1:], su[:, -1:], sv[:, -1:]
-    point = s[:, :-1] / w
-    return point, (su[:, :-1] - point * wu) / w, (sv[:, :-1] - point * wv) / w
-
-
 def foot_points(surface, points, u, v, uv_range):
     """Closest points on ``surface`` inside ``uv_range`` from start parameters ``u, v``,
     and the unit normals there."""
@@ -82,8 +60,8 @@ def points_and_normals(surface, u, v):
     r"""Points and unit normals :math:`S_u \times S_v / |S_u \times S_v|` of ``surface``
     at scattered parameters ``(u_q, v_q)``, each (q, 3) (a zero normal where
     :math:`S_u \times S_v = 0`)."""
-    s, su, sv = _point_and_tangents(surface, np.asarray(u, float), np.asarray(v, float))
-    n = np.cross(su, sv)
+    d = surface_derivatives(surface, u, v, 1)
+    s, n = d[(0, 0)], np.cross(d[(1, 0)], d[(0, 1)])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     return s, n
 

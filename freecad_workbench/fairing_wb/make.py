@@ -443,7 +443,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
             f"source, more than the tolerance {tolerance:.4g} mm; use boundary 'free' or a "
             "larger tolerance.", tolerance=tolerance, best_deviation=deviation)
-    shape = conversion.face_on_surface(conversion.part_surface(faired), face, rectangle)
+    if tolerance is not None and outcome.status == "unchanged":
+        shape = face.copy()   # nothing to fair: the source face itself, not a rebuild
+    else:
+        shape = conversion.face_on_surface(conversion.part_surface(faired), face, rectangle)
     return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
                        time.perf_counter() - start, note, faired)
 
@@ -616,8 +619,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     counts.  In tolerance mode a face with no coarser net within the tolerance is kept as
     it is (:func:`_kept`), with the reason, as ``cq-fairing fair`` keeps it: one face or
     several, the others are faired.  So is a B-spline face the energy method refuses (a
-    rational one, one with a degree-1 direction), with the core's reason
-    (:func:`_not_for_energy`).  ``settings`` and ``face_settings`` as in
+    rational one, one with a degree-1 direction), with the core's reason, and, among
+    several faces, one whose result cannot be built (:func:`_unsupported`).  A face with
+    nothing to fair is the source face itself.  ``settings`` and ``face_settings`` as in
     :func:`fair_elements`.
 
     Several faces of one shape, or one face with neighbours, are faired alone first; in
@@ -667,7 +671,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             except cf.ToleranceNotMetError as error:
                 results.append(_kept(element, sub, error))
             except cf.UnsupportedGeometryError as error:
-                results.append(_not_for_energy(element, sub, error, settings["method"]))
+                results.append(_unsupported(element, sub, error, settings["method"],
+                                            len(named) > 1))
         else:
             own = None if target is None else target[0]
             results.append(fair_edge(element, **{**settings, "target": own}))
@@ -803,12 +808,14 @@ def _kept(face, sub, error):
                                     f"(best found {error.best_deviation:.4g} mm)")
 
 
-def _not_for_energy(face, sub, error, method):
-    """:class:`FairedShape` of a B-spline face the energy method refuses (``error``: its
-    weights, a degree-1 direction), left as it is with the core's reason, as
-    ``cq-fairing fair`` leaves it; any other ``error`` (a face that is no B-spline, a
-    refusal of another method) is raised again."""
-    if method != "energy" or not isinstance(face.Surface, Part.BSplineSurface):
+def _unsupported(face, sub, error, method, several):
+    """:class:`FairedShape` of a B-spline face that cannot be faired as asked (``error``):
+    one the energy method refuses (its weights, a degree-1 direction), or, among several
+    faces, one whose result cannot be built (a trim that does not rebuild), left as it is
+    with the reason, as ``cq-fairing fair`` leaves it; any other ``error`` (a face that is
+    no B-spline, a single face) is raised again."""
+    if not isinstance(face.Surface, Part.BSplineSurface) or not (method == "energy"
+                                                                  or several):
         raise error
     return _kept_as_is((sub, face), " ".join(str(error).split()))
 

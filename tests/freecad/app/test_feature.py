@@ -333,6 +333,23 @@ def test_tolerance_zero_survives_save_and_reopen(doc, noisy, tmp_path):
         assert reopened.getObject("Fairing").Tolerance.Value == 0.0
 
 
+def test_a_face_with_nothing_to_fair_is_the_source_face(doc):
+    """shell_patches Face28: one bicubic span with a collapsed border (a degenerated
+    edge), unclamped knots; its net is already the coarsest, so the face kept is the
+    source face itself (rebuilding it on its converted surface gave no valid face)."""
+    shape = Part.read(str(fixtures.REAL / "shell_patches.brep"))
+    source = shape.Faces[27]
+    assert any(edge.Degenerated for edge in source.Edges)
+    result = make.fair_face(source, tolerance=0.083)
+    assert result.note.startswith("kept unchanged: the finest admissible target")
+    assert result.max_deviation == 0.0 and result.shape.isValid()
+    kept, surface = result.shape.Surface, source.Surface
+    assert kept.getUKnots() == surface.getUKnots() == [-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0]
+    assert kept.getPoles() == surface.getPoles()
+    assert len(result.shape.Edges) == len(source.Edges)
+    assert result.shape.Area == pytest.approx(source.Area, rel=1e-12)
+
+
 @pytest.mark.parametrize("sub", ["Face84", "Face155"])
 def test_trimmed_impeller_face_fairs_within_tolerance(doc, sub):
     """IGES trims whose edges meet within 0.15 mm were rebuilt with 1e-7 and failed
