@@ -32,7 +32,7 @@ powers within :math:`[-1, 1]`.
 This module imports numpy only.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from math import factorial
 
@@ -41,6 +41,11 @@ import numpy as np
 from .spaces import basis_functions, find_spans, require_in_domain
 
 __all__ = ["SpanTaylor", "TaylorSurface"]
+
+CHUNK = 4096          # points evaluated at a time: their temporaries stay in the cache
+
+
+LOOKUP_BELOW = 2048   # fewer parameters than this are located by a plain binary search
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,6 +63,8 @@ class SpanTaylor:
         Index of the first basis function that is non-zero on each span.
     coefficients : ndarray, shape (m, p + 1, p + 1)
         :math:`T_{a,i,k}` for the ``p + 1`` basis functions ``first[a] + i``.
+    lookup : SpanLookup
+        Finds the span of a parameter (:meth:`locate_in_domain`).
     """
 
     space: object
@@ -66,6 +73,8 @@ class SpanTaylor:
     halves: np.ndarray
     first: np.ndarray
     coefficients: np.ndarray
+    lookup: "SpanLookup"
+    _inverse_powers: dict = field(default_factory=dict, repr=False)
 
     @classmethod
     def of(cls, space):
@@ -78,7 +87,7 @@ class SpanTaylor:
         k = np.arange(p + 1)
         scale = halves[:, None] ** k / np.array([factorial(j) for j in k], dtype=float)
         coefficients = derivatives.transpose(1, 2, 0) * scale[:, None, :]
-        return cls(space, b, centres, halves, spans - p, coefficients)
+        return cls(space, b, centres, halves, spans - p, coefficients, SpanLookup(b))
 
     def locate(self, x):
         """Span index and local parameter ``r`` in [-1, 1] of each ``x`` (right end closed).
@@ -94,7 +103,7 @@ class SpanTaylor:
     def locate_in_domain(self, x):
         """As :meth:`locate`, for parameters already known to lie in the domain (the
         clamped iterates of a Newton loop): no check."""
-        a = np.searchsorted(self.breaks[1:-1], x, side="right")   # interior breaks: no clip
+        a = self.lookup(x)
         return a, (x - self.centres[a]) / self.halves[a]
 
     def powers(self, a, r, order):
@@ -103,35 +112,80 @@ class SpanTaylor:
         Returns
         -------
         ndarray, shape (q, order + 1, p + 1)
-            Entry ``[:, d, k]`` holds :math:`\frac{k!}{(k-d)!} r^{k-d} / h_a^d` (zero for
-            ``k < d``).
+            Entry ``[:, d, k]`` holds :math:`(r^{k-d} \frac{k!}{(k-d)!})\, h_a^{-d}`,
+            multiplied in that order (zero for ``k < d``; row 0 is :math:`r^k` itself).
         """
-        exponents, falling = _falling_table(self.space.degree, order)
         p = self.space.degree
-        plain = np.empty((p + 1, r.size))
+        values = np.zeros((order + 1, p + 1, r.size))
+        plain = values[0]
         plain[0] = 1.0
         for k in range(1, p + 1):   # a row at a time: a twentieth of an accumulate's time
             np.multiply(plain[k - 1], r, out=plain[k])
         if order == 0:
             return plain.T[:, None, :]
-        # the powers of 1 / h per span, gathered: one power per span instead of per point
-        inverse = ((1.0 / self.halves)[:, None] ** np.arange(order + 1))[a]
-        values = plain[exponents]                      # (order + 1, p + 1, q)
-        values *= falling[:, :, None]
-        values *= inverse.T[:, None, :]
+        falling = _falling_table(p, order)
+        inverse = self._inverse_power_table(order)[a]     # (q, order + 1)
+        for d in range(1, min(order, p) + 1):
+            terms = values[d, d:]
+            np.multiply(plain[:p + 1 - d], falling[d, d:, None], out=terms)
+            terms *= inverse[:, d]
         return values.transpose(2, 0, 1)
+
+    def _inverse_power_table(self, order):
+        """:math:`h_a^{-d}` for ``d = 0..order``, shape (m, order + 1), made once per order."""
+        if order not in self._inverse_powers:
+            self._inverse_powers[order] = (1.0 / self.halves)[:, None] ** np.arange(order + 1)
+        return self._inverse_powers[order]
+
+
+class SpanLookup:
+    """The span index of parameters among breakpoints ``breaks``, the same as
+    ``np.searchsorted(breaks[1:-1], x, side="right")`` (a breakpoint belongs to the span
+    on its right, the right end to the last span, NaN to the last span) in about half
+    its time on the thousands of scattered parameters of a Newton step.
+
+    The domain is cut into ``per_span`` equal cells per span, each knowing the span at
+    its left end.  A parameter takes its cell's span, moved one span right if it lies
+    past that span's end; the few still outside their span (a cell holding several
+    breakpoints, rounding at a cell's edge, NaN) are searched.  Fewer than
+    ``LOOKUP_BELOW`` parameters are searched at once.
+    """
+
+    def __init__(self, breaks, per_span=4):
+        interior = breaks[1:-1]
+        self.interior = interior
+        self.cells = per_span * (breaks.size - 1)
+        self.start = breaks[0]
+        width = breaks[-1] - breaks[0]
+        self.scale = self.cells / width
+        edges = breaks[0] + np.arange(self.cells) * (width / self.cells)
+        self.span_at = np.searchsorted(interior, edges, side="right")
+        # span a runs over [low[a], high[a]), open at the domain's ends; the entry past
+        # the last span catches a parameter moved beyond it (x = inf), searched then
+        self.low = np.concatenate([[-np.inf], interior, [np.inf]])
+        self.high = np.concatenate([interior, [np.inf, np.inf]])
+
+    def __call__(self, x):
+        if x.size < LOOKUP_BELOW:
+            return np.searchsorted(self.interior, x, side="right")
+        t = (x - self.start) * self.scale
+        np.fmin(t, self.cells - 1, out=t)    # fmin, fmax: NaN goes to a cell too
+        np.fmax(t, 0.0, out=t)
+        a = self.span_at.take(t.astype(np.intp))
+        a += x >= self.high.take(a)
+        outside = (x < self.low.take(a)) | ~(x < self.high.take(a))
+        if outside.any():
+            a[outside] = np.searchsorted(self.interior, x[outside], side="right")
+        return a
 
 
 @cache
 def _falling_table(degree, order):
-    """Exponents ``max(k - d, 0)`` and falling factorials ``k! / (k - d)!`` (zero for
-    ``k < d``), shape (order + 1, degree + 1): the ``d``-th derivative of ``r^k`` is
-    ``falling[d, k] * r ** exponents[d, k]``."""
-    k = np.arange(degree + 1)
-    d = np.arange(order + 1)[:, None]
-    falling = np.array([[factorial(j) // factorial(j - e) if j >= e else 0 for j in k]
-                        for e in range(order + 1)], dtype=float)
-    return np.maximum(k - d, 0), falling
+    """Falling factorials ``k! / (k - d)!`` (zero for ``k < d``), shape
+    (order + 1, degree + 1): the ``d``-th derivative of ``r^k`` is
+    ``falling[d, k] * r ** (k - d)``."""
+    return np.array([[factorial(k) // factorial(k - d) if k >= d else 0
+                      for k in range(degree + 1)] for d in range(order + 1)], dtype=float)
 
 
 class TaylorSurface:
@@ -167,6 +221,8 @@ class TaylorSurface:
             along_u.reshape(m_u, p_u + 1, self.n_v, -1).transpose(0, 2, 1, 3))  # (a, j, k, D)
         self._along_u = along_u.reshape(m_u * self.n_v, p_u + 1, -1)
         self._by_pair = None
+        self._by_dim = coefficients.shape[-1]
+        self._chunk = CHUNK
         m_v, p_v, dim = self.v.centres.size, v_space.degree, along_u.shape[-1]
         if m_u * m_v * (p_u + 1) * (p_v + 1) * dim <= full_limit:
             iv = self.v.first[:, None] + np.arange(p_v + 1)
@@ -203,12 +259,31 @@ class TaylorSurface:
     def derivatives_in_domain(self, u, v, order):
         r"""As :meth:`derivatives`, for parameters known to lie in the domain (no check).
 
-        Two batched matrix products per call, whatever the order: with
+        Two batched matrix products per point, whatever the order: with
         :math:`V_{q,j,l} = \partial_v^j s^l` and :math:`U_{q,i,k} = \partial_u^i r^k`,
         :math:`\partial_u^i \partial_v^j S = \sum_k U_{q,i,k} \sum_l V_{q,j,l}
         A_{a_q,b_q,k,l}` (a Newton step evaluates a few hundred points, and there the
-        number of numpy calls, not the arithmetic, sets the time).
+        number of numpy calls, not the arithmetic, sets the time).  Many points are
+        evaluated ``CHUNK`` at a time: the gathered coefficients and products of a chunk
+        stay in the cache, and each point's value is the same bit for bit (each product
+        is one BLAS call per point, with the same operand layout whatever the chunk).
         """
+        q = u.size
+        if q <= self._chunk:
+            table = np.ascontiguousarray(self._table(u, v, order))
+        else:
+            table = np.empty((q, order + 1, order + 1, self._by_dim))
+            edges = list(range(0, q, self._chunk)) + [q]
+            if edges[-1] - edges[-2] == 1:   # no point alone: its row of powers would
+                del edges[-2]                 # be contiguous, a BLAS path that rounds apart
+            for first, last in zip(edges[:-1], edges[1:]):
+                table[first:last] = self._table(u[first:last], v[first:last], order)
+        return {(i, j): table[:, i, j]
+                for i in range(order + 1) for j in range(order + 1 - i)}
+
+    def _table(self, u, v, order):
+        r"""The partial derivatives :math:`\partial_u^i \partial_v^j S` for ``i, j <= order``
+        at ``q`` points, shape (q, i, j, D) (possibly a non-contiguous view)."""
         a, r = self.u.locate_in_domain(u)
         b, s = self.v.locate_in_domain(v)
         pu, pv = self.u.powers(a, r, order), self.v.powers(b, s, order)
@@ -221,9 +296,12 @@ class TaylorSurface:
             taylor_v = self.v.coefficients.take(b, axis=0)                     # (q, n, l)
             weights = np.matmul(pv, taylor_v.transpose(0, 2, 1))              # (q, j, n)
         q, n, k, dim = local.shape
-        rows = np.matmul(weights, local.reshape(q, n, k * dim))               # (q, j, k D)
-        rows = rows.reshape(q, order + 1, k, dim).transpose(0, 2, 1, 3)
-        table = np.matmul(pu, rows.reshape(q, k, (order + 1) * dim))          # (q, i, j D)
-        table = table.reshape(q, order + 1, order + 1, dim)
-        return {(i, j): table[:, i, j]
-                for i in range(order + 1) for j in range(order + 1 - i)}
+        local = local.reshape(q, n, k * dim)
+        if order == 0:
+            rows = np.matmul(weights, local)                                   # (q, 1, k D)
+            return np.matmul(pu, rows.reshape(q, k, dim))[:, None]
+        # the rows transposed, (q, k D, j): k leads, and the second product takes them
+        # without a copy (each entry is the same sum of the same products)
+        rows = np.matmul(local.transpose(0, 2, 1), weights.transpose(0, 2, 1))
+        table = np.matmul(pu, rows.reshape(q, k, dim * (order + 1)))           # (q, i, D j)
+        return table.reshape(q, order + 1, dim, order + 1).transpose(0, 1, 3, 2)

@@ -10,7 +10,7 @@ import cq_fairing as cf
 from cq_fairing.core.geometry import BSplineSurface
 from cq_fairing.core.measures import surface_derivatives
 from cq_fairing.core.spaces import SplineSpace
-from cq_fairing.core.taylor import SpanTaylor, TaylorSurface
+from cq_fairing.core.taylor import LOOKUP_BELOW, SpanTaylor, TaylorSurface
 from cq_fairing.errors import InvalidInputError
 
 from .naive import random_clamped_knots
@@ -125,3 +125,40 @@ def test_every_parameter_falls_in_the_span_to_its_right():
     a, r = form.locate(np.array([0.0, 0.1, 0.2, 0.5, 0.7, 0.99, 1.0]))
     assert a.tolist() == [0, 0, 1, 1, 2, 2, 2]
     assert np.allclose(r[[0, 2, 4, 6]], [-1, -1, -1, 1])
+
+
+@pytest.mark.parametrize("full_limit", [0, 4_000_000])
+def test_evaluation_in_chunks_is_the_same_bit_for_bit(full_limit):
+    """Points evaluated a few at a time (a last chunk of one point joins the one before)
+    give exactly the values of one batch: a Newton run's results do not depend on how
+    many points it iterates."""
+    rng = np.random.default_rng(11)
+    tu, tv = random_knots(rng, 9, 3), random_knots(rng, 8, 3)
+    surface = BSplineSurface(rng.normal(0.0, 30.0, (9, 8, 3)), tu, tv, 3, 3)
+    form = TaylorSurface(surface.u_space, surface.v_space, surface.poles, full_limit=full_limit)
+    for q in (301, 302, 303):
+        u, v = rng.uniform(-3, 4, q), rng.uniform(-3, 4, q)
+        for order in (0, 1, 2):
+            form._chunk = q
+            whole = form.derivatives_in_domain(u, v, order)
+            form._chunk = 3
+            chunked = form.derivatives_in_domain(u, v, order)
+            for key, value in whole.items():
+                assert np.array_equal(chunked[key], value), (q, order, key)
+                assert chunked[key].strides == value.strides
+
+
+def test_span_lookup_is_the_binary_search():
+    """The cell lookup finds the span ``searchsorted`` finds, on breakpoints, next to
+    them, at and beyond the ends, at NaN and infinities, and at scattered parameters."""
+    rng = np.random.default_rng(5)
+    for degree in (1, 3, 5):
+        knots = random_knots(rng, 40, degree)
+        knots[degree + 5:degree + 9] = np.linspace(0.1, 0.1001, 4)   # breakpoints close together
+        form = SpanTaylor.of(SplineSpace.from_knots(np.sort(knots), degree))
+        b = form.breaks
+        x = np.concatenate([rng.uniform(-3, 4, LOOKUP_BELOW), b, np.nextafter(b, -np.inf),
+                            np.nextafter(b, np.inf), [np.nan, -np.inf, np.inf]])
+        rng.shuffle(x)
+        assert x.size >= LOOKUP_BELOW
+        assert np.array_equal(form.lookup(x), np.searchsorted(b[1:-1], x, side="right"))
