@@ -15,6 +15,8 @@ import Part
 
 import cq_fairing as cf
 
+from . import trim
+
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
            "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask",
            "face_region", "is_uv_rectangle", "periodic_directions"]
@@ -125,9 +127,9 @@ def face_region(face, rectangle=None):
 
 
 def _on_face(face, u, v):
-    """OCCT's answer for every grid sample: ``face.isPartOfDomain(u_i, v_j)``."""
-    return np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u],
-                    dtype=bool).reshape(len(u), len(v))
+    """OCCT's answer for every grid sample, ``face.isPartOfDomain(u_i, v_j)``, asked only
+    where the trim's polygon cannot give it (:func:`fairing_wb.trim.on_face`)."""
+    return trim.on_face(face, u, v)
 
 
 def part_surface(surface):
