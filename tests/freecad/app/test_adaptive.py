@@ -42,14 +42,6 @@ def faired(face):
         return {name: make.fair_face(face, tolerance=TOL, **kw) for name, kw in settings.items()}
 
 
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("AdaptiveTest")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
-
 
 @pytest.fixture
 def noisy(doc, face):

@@ -11,7 +11,6 @@ cylinder and torus next to linkrods' trimmed B-spline faces.
 import numpy as np
 import pytest
 
-import FreeCAD
 import Part
 import cq_fairing as cf
 from fairing_wb import feature, joins, make
@@ -23,14 +22,6 @@ SETTINGS = {"tolerance": TOL, "target": None, "method": "wavelet", "search": "li
             "measure": "parametric", "objective": "compact"}
 FACE_SETTINGS = {"boundary": "free", "borders": "auto"}
 
-
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("JoinsTest")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
 
 
 @pytest.fixture

@@ -40,14 +40,6 @@ IMPELLER = dict(tolerance=0.2, target=None, method="wavelet", search="local",
                 measure="geometric", objective="compact")
 
 
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("LooseFaces")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
-
 
 @pytest.fixture
 def grid(doc):

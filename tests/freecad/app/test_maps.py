@@ -11,14 +11,6 @@ from fairing_wb import analysis, conversion, deviation_map, make
 import fixtures
 
 
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("MapTest")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
-
 
 @pytest.fixture
 def fairing(doc):

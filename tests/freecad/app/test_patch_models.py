@@ -10,7 +10,6 @@ independently of the workbench's measure.
 """
 
 import numpy as np
-import pytest
 
 import FreeCAD
 import Part
@@ -30,14 +29,6 @@ FACE_SETTINGS = {"boundary": "free", "borders": "auto"}
 # search and measure belong to the wavelet method: energy takes their defaults
 ENERGY = dict(SETTINGS, method="energy", search=make.SEARCHES[0], measure=make.MEASURES[0])
 
-
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("PatchModels")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
 
 
 def _part_face(surface):

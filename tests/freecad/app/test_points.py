@@ -11,14 +11,6 @@ from fairing_wb import points
 import fixtures
 
 
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("PointsTest")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
-
 
 def _write(path, xyz):
     np.savetxt(path, xyz, fmt="%.9f")

@@ -14,7 +14,6 @@ with the local search.
 import numpy as np
 import pytest
 
-import FreeCAD
 import Part
 import cq_fairing as cf
 from cq_fairing.core.options import DEFAULTS, FACE_SEARCHES, MEASURES
@@ -32,14 +31,6 @@ FUSELAGE = face_references.FUSELAGE[0]
 # apart on the two builds (uniform knots agree exactly).
 ROUND_OFF = 1e-9
 
-
-@pytest.fixture
-def doc():
-    document = FreeCAD.newDocument("SameAsCli")
-    name = document.Name
-    yield document
-    if name in FreeCAD.listDocuments():
-        FreeCAD.closeDocument(name)
 
 
 def _source(doc, case):
