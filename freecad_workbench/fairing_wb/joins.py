@@ -80,7 +80,7 @@ from cq_fairing.core.network_fairing import UNMOVED, fair_networks
 from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
 from cq_fairing.core.pinned_faces import held_by_pins
 
-from . import analysis, conversion
+from . import analysis, conversion, trim
 
 __all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins",
            "JoinReport", "find_joins", "loose_neighbours", "measure_joins", "hold_joins",
@@ -156,29 +156,17 @@ def _shared_edges(faces):
     return [entry for bucket in by_hash.values() for entry in bucket]
 
 
-def _seams(face):
-    """The edges ``face``'s wires use twice (the seams of a periodic surface)."""
-    seen, twice = {}, []
-    for edge in (e for wire in face.Wires for e in wire.SubShapes):
-        bucket = seen.setdefault(edge.hashCode(), [])
-        if any(e.isSame(edge) for e in bucket):
-            twice.append(edge)
-        else:
-            bucket.append(edge)
-    return twice
-
-
 def _free_edges(faces, shared):
     """Positions in ``shared`` (:func:`_shared_edges` of ``faces``) of the free edges:
     used by one face, once (no seam)."""
-    seams = {}
+    face_seams = {}
     free = []
     for k, (edge, owners) in enumerate(shared):
         if len(owners) != 1:
             continue
-        if owners[0] not in seams:
-            seams[owners[0]] = _seams(faces[owners[0]])
-        if not any(edge.isSame(seam) for seam in seams[owners[0]]):
+        if owners[0] not in face_seams:
+            face_seams[owners[0]] = trim.seams(faces[owners[0]])
+        if not any(edge.isSame(seam) for seam in face_seams[owners[0]]):
             free.append(k)
     return free
 
@@ -221,8 +209,8 @@ def loose_neighbours(faces, chosen):
     """The faces of ``faces`` (one shape's), not among ``chosen`` (indices), with a free
     edge that is one boundary with a free edge of a face of ``chosen``
     (:func:`_loose_pairs`, at the coincidence of all ``faces``): a loose face's
-    neighbours."""
-    if not chosen:
+    neighbours (none when every face is chosen: no matching then)."""
+    if not chosen or len(set(chosen)) == len(faces):
         return set()
     shared = _shared_edges(faces)
     near = set()

@@ -25,7 +25,7 @@ sample: its p-curves need not lie in one period of the grid.
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["on_face", "SAMPLES"]
+__all__ = ["on_face", "seams", "SAMPLES"]
 
 SAMPLES = 257          # p-curve samples per edge (the polygon's vertices)
 BAND_FACTOR = 4.0      # the band around the polygon, in chord deviations
@@ -46,6 +46,19 @@ def on_face(face, u, v):
     return inside
 
 
+def seams(face):
+    """The edges ``face``'s wires use twice (the seams of a periodic surface;
+    ``face.Edges`` lists each once)."""
+    seen, twice = {}, []
+    for edge in (e for wire in face.Wires for e in wire.SubShapes):
+        bucket = seen.setdefault(edge.hashCode(), [])
+        if any(e.isSame(edge) for e in bucket):
+            twice.append(edge)
+        else:
+            bucket.append(edge)
+    return twice
+
+
 def _asked(face, u, v, which):
     """OCCT's answer at the grid samples ``which`` (False elsewhere)."""
     out = np.zeros((len(u), len(v)), bool)
@@ -60,11 +73,10 @@ def _polygon(face):
     surface = face.Surface
     if surface.isUPeriodic() or surface.isVPeriodic():
         return None
-    edges = face.Edges
-    if any(a.isSame(b) for k, a in enumerate(edges) for b in edges[k + 1:]):
-        return None   # a seam
+    if seams(face):
+        return None
     segments, deviation = [], 0.0
-    for edge in edges:
+    for edge in face.Edges:
         found = face.curveOnSurface(edge)
         if found is None:
             if edge.Degenerated:
