@@ -112,9 +112,9 @@ class NetworkResult:
         Mirrored-row constraints imposed (with the C2 rows across cuts).
     kept : set of int
         The patches that kept their surfaces: those asked for, those the joins would
-        hold out of their tolerance even without energy, and those on a smooth join that
-        would turn more than the source's even held (they then constrain their
-        neighbours instead).
+        hold out of their tolerance even without energy, and one patch of each smooth
+        join that would turn more than the source's even held (:func:`_covering`; it
+        then constrains its neighbours instead, and the join is checked again).
     reasons : dict
         Why the network kept each patch it was not asked to keep: ``("tolerance", d)``,
         the joins alone hold it ``d`` from its source (the same-parameter distance on
@@ -232,13 +232,32 @@ class PatchNetwork:
                 continue
             if not turned:
                 break
-            # their joins would turn more than the source's even held: keep them
-            for k in sorted(turned):
-                for patch in {self.joins[k].a, self.joins[k].b} & moved:
-                    turned_by.setdefault(patch, []).append(k)
+            # these joins would turn more than the source's even held: keep one patch
+            # of each, and let the other close onto it (checked again)
+            for patch, joins in _covering(self.joins, turned, moved).items():
+                turned_by.setdefault(patch, []).extend(joins)
             kept |= set(turned_by)
         turned_reasons = {p: ("turned", joins) for p, joins in turned_by.items()}
         return replace(result, reasons={**turned_reasons, **result.reasons})
+
+
+def _covering(joins, turned, moved):
+    """``{patch: [join, ...]}``: patches of ``moved`` that cover the ``turned`` joins
+    (indices into ``joins``), one per join, greedily: the patch on most of the joins not
+    covered yet first (the lower index on a tie).  Kept, each holds its neighbours'
+    side of the joins it covers, which then close onto it; keeping both patches of every
+    turned join would keep, round after round, the neighbours of the neighbours."""
+    open_ = set(turned)
+    out = {}
+    while open_:
+        on = {}
+        for k in sorted(open_):
+            for patch in {joins[k].a, joins[k].b} & moved:
+                on.setdefault(patch, []).append(k)
+        patch = max(sorted(on), key=lambda p: len(on[p]))
+        out[patch] = on[patch]
+        open_ -= set(on[patch])
+    return out
 
 
 def _smoothest(network, tols, kept, held=None):
