@@ -1068,11 +1068,9 @@ def _kept_rows(surface, side, unit, flip, lifted, rows):
     space = surface.v_space if side[0] == "u" else surface.u_space
     net = _net(surface, lifted) if side[0] == "u" else np.swapaxes(_net(surface, lifted), 0, 1)
     gram = BandedSPD(gram_matrix(unit))
-    out = []
-    for r in rows:
-        row_space, row = _unit_curve(space, net[r], flip)
-        out.append(gram.solve(gram_matrix(unit, row_space) @ row))
-    return np.array(out)
+    curves = [_unit_curve(space, net[r], flip) for r in rows]
+    cross = gram_matrix(unit, curves[0][0])   # every row is on the same space
+    return np.array([gram.solve(cross @ row) for _, row in curves])
 
 
 def _cross_vectors(work, surfaces, side_rows):

@@ -241,25 +241,28 @@ def border_joins(joins, sources, tolerances):
     (:func:`join_tolerance`) of each other.  A wider source gap is the source's, and
     borders that run along one curve with different parametrizations would pull each
     other's faces off their sources: those joins are pinned instead."""
+    known = {}   # basis values per space and samples, shared by the joins' faces
     return [j for j in joins if is_border_join(j)
             and all(s.face in sources for s in j.sides)
-            and _parametric_gap(j, sources) <= SOURCE_GAP * join_tolerance(j, tolerances)]
+            and _parametric_gap(j, sources, known) <= SOURCE_GAP * join_tolerance(j, tolerances)]
 
 
-def _parametric_gap(join, sources, samples=33):
+def _parametric_gap(join, sources, known=None):
     """Largest distance between the two faces' borders at equal normalised parameters
-    (reversed where they run opposite ways: :func:`border_gap`)."""
+    (reversed where they run opposite ways: :func:`border_gap`, with ``known``)."""
     a, b = join.sides
     return border_gap(sources[a.face], a.side, sources[b.face], b.side, runs_reversed(join),
-                      samples)
+                      known=known)
 
 
-def border_gap(first, side_first, second, side_second, reversed_, samples=33):
+def border_gap(first, side_first, second, side_second, reversed_, samples=33, known=None):
     """Largest distance between ``side_first`` of the surface ``first`` and
     ``side_second`` of ``second`` at ``samples`` equal normalised parameters along them
-    (``reversed_``: the second's run the other way)."""
+    (``reversed_``: the second's run the other way); ``known``: a dict that keeps the
+    basis values at the samples per space for the next call
+    (:func:`~cq_fairing.core.joins.side_points`)."""
     t = np.linspace(0.0, 1.0, samples)
-    points = [side_points(surface, side, ts)
+    points = [side_points(surface, side, ts, known)
               for surface, side, ts in ((first, side_first, t),
                                         (second, side_second, 1.0 - t if reversed_ else t))]
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())

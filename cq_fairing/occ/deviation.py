@@ -43,6 +43,8 @@ The signed distance takes the sign of :math:`(q_i - p_i)\cdot n_0(u_i, v_i)` wit
 orientation applied).
 """
 
+import math
+
 import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -114,7 +116,7 @@ PROJECTIONS = ("local", "global")
 
 
 def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
-                          projection="local"):
+                          projection="local", surfaces=None):
     """Distances from the original face to the faired one on dense UV samples.
 
     Parameters
@@ -138,6 +140,10 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
         stays the largest (:func:`_refine_largest`).  Every distance returned is the
         length to an actual point of the faired surface, so it is never below the true
         distance: a tolerance verified with ``"local"`` holds.
+    surfaces : (BSplineSurface, BSplineSurface), optional
+        The core surfaces of both faces if already at hand (the faired one as built into
+        ``faired_face``; OCCT's judge checks that they agree with the faces); read from
+        the faces by default.
 
     Returns
     -------
@@ -158,7 +164,7 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
             f"projection must be one of {PROJECTIONS}, got {projection!r}."
         )
     grid = face_uv_grid(original_face, density, classify=face_info(original_face).trimmed)
-    return deviation_on_grid(original_face, faired_face, grid, projection)
+    return deviation_on_grid(original_face, faired_face, grid, projection, surfaces=surfaces)
 
 
 def reference_samples(face, *grids, surface=None):
@@ -350,7 +356,8 @@ def _judge(target_face, source_face, uv, feet, points, distance, projected, size
         by more than ``SAME_GEOMETRY`` times ``size``.
     """
     surface = BRep_Tool.Surface_s(target_face)
-    adaptor, source = GeomAdaptor_Surface(surface), BRepAdaptor_Surface(source_face)
+    judge_one = _JudgeOne(GeomAdaptor_Surface(surface), BRepAdaptor_Surface(source_face),
+                          SAME_GEOMETRY * max(size, 1e-300))
     borders = _Borders(surface)
     order = np.argsort(distance)[::-1]
     judged = np.zeros(distance.size, dtype=bool)
@@ -360,9 +367,9 @@ def _judge(target_face, source_face, uv, feet, points, distance, projected, size
                 distance[judged].max(initial=0.0):
             block = order[walked:walked + JUDGED_BLOCK]
             walked += block.size
-            for k in block:
-                _judge_one(adaptor, source, k, uv, feet, points, distance, projected,
-                           SAME_GEOMETRY * max(size, 1e-300))
+            for k, at, foot, point in zip(block.tolist(), uv[block].tolist(),
+                                          feet[block].tolist(), points[block].tolist()):
+                distance[k], projected[k] = judge_one(at, foot, point, distance[k])
             judged[block] = True
         index = np.flatnonzero(judged)
         d, q = distance[index], projected[index]
@@ -372,22 +379,28 @@ def _judge(target_face, source_face, uv, feet, points, distance, projected, size
             break
 
 
-def _judge_one(adaptor, source, k, uv, feet, points, distance, projected, agree):
-    """OCCT's distance of sample ``k`` (see :func:`_judge`), in place."""
-    p = source.Value(float(uv[k, 0]), float(uv[k, 1]))
-    if np.linalg.norm([p.X() - points[k, 0], p.Y() - points[k, 1], p.Z() - points[k, 2]]) \
-            > agree:
-        raise _NotTheSameGeometry
-    s, t = float(feet[k, 0]), float(feet[k, 1])
-    q = adaptor.Value(s, t)
-    if abs(p.Distance(q) - distance[k]) > agree:
-        raise _NotTheSameGeometry
-    local = Extrema_GenLocateExtPS(adaptor)
-    local.Perform(p, s, t)
-    if local.IsDone() and p.Distance(local.Point().Value()) < p.Distance(q):
-        q = local.Point().Value()
-    distance[k] = p.Distance(q)
-    projected[k] = (q.X(), q.Y(), q.Z())
+class _JudgeOne:
+    """OCCT's distance of one sample (see :func:`_judge`): ``adaptor`` the target
+    surface's, ``source`` the source face's, ``agree`` the largest difference from the
+    core's points allowed."""
+
+    def __init__(self, adaptor, source, agree):
+        self.adaptor, self.source, self.agree = adaptor, source, agree
+        self.local = Extrema_GenLocateExtPS(adaptor)
+
+    def __call__(self, uv, foot, point, batched):
+        """``(distance, nearest point)`` of the source's point at ``uv`` (the core's
+        ``point``, at ``batched`` from the core's ``foot`` parameters)."""
+        p = self.source.Value(*uv)
+        if math.dist((p.X(), p.Y(), p.Z()), point) > self.agree:
+            raise _NotTheSameGeometry
+        q = self.adaptor.Value(*foot)
+        if abs(p.Distance(q) - batched) > self.agree:
+            raise _NotTheSameGeometry
+        self.local.Perform(p, *foot)
+        if self.local.IsDone() and p.Distance(self.local.Point().Value()) < p.Distance(q):
+            q = self.local.Point().Value()
+        return p.Distance(q), (q.X(), q.Y(), q.Z())
 
 
 def _distances_to(face, points, uv, same_parameter, parametric, use_global):

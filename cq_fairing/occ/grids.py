@@ -39,7 +39,7 @@ def fair_grids(job, adjacency, readable, joins, reversed_, merge_gap):
     measured = {}
 
     def check(face, surface):
-        measured[face] = job.measured(face, surface)
+        measured[face] = job.measured(face, surface, readable[face])
         return measured[face][2]["max"]
 
     grids = fair_core_grids(readable, adjacency.joins, joins, job.tol, check,

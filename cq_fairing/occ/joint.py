@@ -160,7 +160,7 @@ def _project_jointly(job, adjacency, readable, border, continuity, gridded, pinn
     measured = {}
 
     def check(face, surface):
-        measured[face] = job.measured(face, surface)
+        measured[face] = job.measured(face, surface, readable[face])
         return measured[face][2]["max"]
 
     joint = project_jointly(readable, targets, adjacency.joins, border, job.tol, check,

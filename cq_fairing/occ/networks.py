@@ -41,7 +41,7 @@ def fair_networks(job, adjacency, readable, reversed_, continuity, refaired=froz
     measured = {}
 
     def check(face, surface):
-        measured[face] = job.measured(face, surface)
+        measured[face] = job.measured(face, surface, readable[face])
         return measured[face][2]["max"]
 
     networks = fair_core_networks(readable, movable, adjacency.joins, job.tol,

@@ -75,7 +75,7 @@ def pin_unholdable(job, adjacency, sources, continuity):
             _keep(job, face, neighbours, attempt)
             continue
         outcome = attempt.outcome
-        measured = job.measured(face, outcome.surface)
+        measured = job.measured(face, outcome.surface, sources.get(face))
         if measured[2]["max"] > job.tol[face]:
             _keep_over(job, face, measured[2]["max"], outcome.refined, neighbours)
             continue

@@ -387,11 +387,15 @@ class _Job:
             if leader != index:
                 report(index, self._placed(self.reports[leader], index))
 
-    def measured(self, index, surface):
+    def measured(self, index, surface, source=None):
         """``(face, surface, deviation)``: ``surface`` under face ``index``'s trim, measured
-        both ways by OCCT against the original face."""
+        both ways by OCCT against the original face; ``source``: the original face's core
+        surface if already read (``face_to_surface``), so that neither face is read
+        again."""
         face = surface_to_face(surface, self.originals[index])
-        return face, surface, sample_face_deviation(self.originals[index], face)
+        surfaces = None if source is None else (source, surface)
+        return face, surface, sample_face_deviation(self.originals[index], face,
+                                                    surfaces=surfaces)
 
     def faired(self, index, measured, message, poles_before):
         """Replace face ``index``'s report by a faired one from :meth:`measured`."""

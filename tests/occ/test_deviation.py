@@ -150,6 +150,22 @@ def test_batched_distances_agree_with_a_naive_dense_search(real, label):
     assert np.all(samples["distance"] >= nearest - spacing)
 
 
+def test_surfaces_at_hand_measure_as_the_faces_read_again(real):
+    """The core surfaces passed in (the source's, and the faired one as built into the
+    face) give the samples and distances that reading both faces again gives, bit for
+    bit."""
+    from cq_fairing.occ import face_to_surface
+
+    name, pick, tol = REAL_FACES["testtoler strip"]
+    face, report = _real_faired(real, name, pick, tol)
+    read = sample_face_deviation(face, report.face, density=20)
+    given = sample_face_deviation(face, report.face, density=20,
+                                  surfaces=(face_to_surface(face)[0], report.surface))
+    for key in ("points", "faired_points", "normals", "distance", "distance_back", "signed"):
+        np.testing.assert_array_equal(given[key], read[key])
+    assert given["max"] == read["max"] > 0.0
+
+
 def test_core_surfaces_that_are_not_the_faces_fall_back_to_occt(real):
     """Surfaces that are not the faces' own (shifted by 1e-3) are caught by OCCT's judge:
     every sample is then measured by OCCT alone (its points, Newton projections and
