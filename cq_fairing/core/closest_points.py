@@ -12,7 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .evaluation import _derivatives_in_domain, curve_derivatives, sample_parameters
-from .spaces import find_spans
+from .spaces import clamp, find_spans
 
 STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size: converged
 
@@ -49,7 +49,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
     """
     points = np.asarray(points, dtype=float)
     lo, hi = curve.domain
-    t = np.clip(np.asarray(u0, dtype=float).copy(), lo, hi)
+    t = clamp(np.asarray(u0, dtype=float), lo, hi)
     dist = _distance(curve_derivatives(curve, t, 0)[0], points)
     active = np.arange(t.size)
     size = curve.size
@@ -70,7 +70,7 @@ def closest_points_curve(curve, points, u0, iterations=30, stop_below=None):
             break
 
         def trial(idx, s):
-            new = np.clip(t[idx] + s, lo, hi)
+            new = clamp(t[idx] + s, lo, hi)
             return new, _distance(curve_derivatives(curve, new, 0)[0], points[idx])
 
         new, d_new = _damped(trial, active, step, dist)
@@ -205,8 +205,8 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
     """
     points = np.asarray(points, dtype=float)
     (ulo, uhi), (vlo, vhi) = surface.domain if bounds is None else bounds
-    uv = np.stack([np.clip(np.asarray(u0, dtype=float), ulo, uhi),
-                   np.clip(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
+    uv = np.stack([clamp(np.asarray(u0, dtype=float), ulo, uhi),
+                   clamp(np.asarray(v0, dtype=float), vlo, vhi)], axis=1)
     dist = _start_distance(surface, points, uv, start_distance)
     active = np.arange(dist.size)
     scale = max(uhi - ulo, vhi - vlo)
@@ -225,8 +225,8 @@ def closest_points_surface(surface, points, u0, v0, iterations=30, stop_below=No
 
         def trial(idx, st):
             new = uv[idx] + st
-            new[:, 0] = np.clip(new[:, 0], ulo, uhi)
-            new[:, 1] = np.clip(new[:, 1], vlo, vhi)
+            new[:, 0] = clamp(new[:, 0], ulo, uhi)
+            new[:, 1] = clamp(new[:, 1], vlo, vhi)
             pts = _derivatives_in_domain(surface, new[:, 0], new[:, 1], 0)[(0, 0)]
             return new, _distance(pts, points[idx])
 
@@ -337,7 +337,7 @@ def _newton_step(s, r, uv, bounds):
     step = np.stack([-(hc * g1 - hb * g2) / det, -(ha * g2 - hb * g1) / det], axis=1)
     step = _border_step(step, uv, (g1, g2), (ha, hc), bounds)
     limit = 1e3 * max(high - low for low, high in bounds)
-    s0, s1 = np.clip(step[:, 0], -limit, limit), np.clip(step[:, 1], -limit, limit)
+    s0, s1 = clamp(step[:, 0], -limit, limit), clamp(step[:, 1], -limit, limit)
     moves = a * s0 ** 2 + 2 * b * s0 * s1 + c * s1 ** 2
     return step, moves
 

@@ -14,6 +14,7 @@ from ..errors import InvalidInputError
 from .closest_points import _closest_from_starts, _distance, closest_points_surface, distance_floor
 from .evaluation import _derivatives_in_domain, curve_derivatives, sample_parameters, within_box
 from .geometry import grid_product
+from .spaces import clamp
 
 DEVIATIONS = ("geometric", "parametric")
 
@@ -664,8 +665,8 @@ def _window_start(here, there, i, j, u, v, window=2):
     first of equals in row-major window order), all neighbours read in one indexing."""
     nu, nv = here.shape[:2]
     offsets = np.arange(-window, window + 1)
-    ii = np.clip(i[:, None, None] + offsets[None, :, None], 0, nu - 1)
-    jj = np.clip(j[:, None, None] + offsets[None, None, :], 0, nv - 1)
+    ii = clamp(i[:, None, None] + offsets[None, :, None], 0, nu - 1)
+    jj = clamp(j[:, None, None] + offsets[None, None, :], 0, nv - 1)
     ii, jj = (x.reshape(i.size, -1) for x in np.broadcast_arrays(ii, jj))
     near = _at(there, ii.ravel(), jj.ravel()).reshape(ii.shape + (-1,))
     k = np.argmin(np.linalg.norm(near - _at(here, i, j)[:, None, :], axis=2), axis=1)

@@ -238,6 +238,7 @@ class SurfaceSampler:
     def __init__(self, grid, surface):
         self.grid = grid
         self.u, self.v, self.inside = grid
+        self._everywhere = bool(np.all(self.inside))
         self._cache = {}
         self.reference = self.evaluate(surface)
 
@@ -250,8 +251,14 @@ class SurfaceSampler:
     def evaluate(self, surface):
         net = surface.homogeneous() if surface.is_rational else surface.poles
         mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
-        grid = _on_grid(mu, mv, net)[self.inside]
+        grid = self._on_face(_on_grid(mu, mv, net))
         return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
+
+    def _on_face(self, grid):
+        """The samples of ``grid`` (n_u, n_v, d) on the face, (q, d) in row-major order:
+        the whole grid, reshaped, where every sample is on the face (the mask would select
+        the same array at three times the cost)."""
+        return grid.reshape(-1, grid.shape[-1]) if self._everywhere else grid[self.inside]
 
     def parametric(self, faired):
         """Largest ``|S_f(u, v) - S(u, v)|``: an upper bound of the true distance."""
@@ -268,9 +275,10 @@ class SurfaceSampler:
         mu, mv = self._matrix(faired.u_space, self.u), self._matrix(faired.v_space, self.v)
         du = self._matrix(faired.u_space, self.u, 1)
         dv = self._matrix(faired.v_space, self.v, 1)
-        h = _on_grid(mu, mv, net)[self.inside]
-        hu = _on_grid(du, mv, net)[self.inside]
-        hv = _on_grid(mu, dv, net)[self.inside]
+        along_u = _rows(mu, net).swapaxes(0, 1)         # S and S_v share it
+        h = self._on_face(_across(mv, along_u))
+        hu = self._on_face(_on_grid(du, mv, net))
+        hv = self._on_face(_across(dv, along_u))
         if faired.is_rational:  # quotient rule: S = X / w, S_u = (X_u - w_u S) / w
             w = h[:, -1:]
             points = h[:, :-1] / w
@@ -281,8 +289,10 @@ class SurfaceSampler:
         normal = np.cross(su, sv)
         length = np.linalg.norm(normal, axis=1)
         offset = self.reference - points
-        dist = np.linalg.norm(offset, axis=1)
         ok = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+        if ok.all():   # a tangent plane at every sample
+            return float((np.abs(np.einsum("ij,ij->i", offset, normal)) / length).max())
+        dist = np.linalg.norm(offset, axis=1)
         dist[ok] = np.abs(np.einsum("ij,ij->i", offset[ok], normal[ok])) / length[ok]
         return float(dist.max())
 
@@ -292,7 +302,11 @@ def _on_grid(mu, mv, net):
     (n_u, n_v, d), from sparse collocation matrices ``mu`` (n_u, k_u) and ``mv``
     (n_v, k_v) and the net ``P`` (k_u, k_v, d): two sparse products, each on one thread.
     """
-    along_u = _rows(mu, net).swapaxes(0, 1)           # (k_v, n_u, d)
+    return _across(mv, _rows(mu, net).swapaxes(0, 1))
+
+
+def _across(mv, along_u):
+    """The grid (n_u, n_v, d) from the net contracted along u, ``along_u`` (k_v, n_u, d)."""
     return _rows(mv, along_u).swapaxes(0, 1)
 
 

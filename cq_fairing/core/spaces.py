@@ -14,7 +14,7 @@ This module imports numpy only.
 """
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -39,7 +39,9 @@ def real_array(values, name):
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(numeric) from exc
 
-__all__ = ["SplineSpace", "basis_functions", "find_spans", "require_in_domain"]
+QUASI_UNIFORM_SPACES = 1024   # quasi-uniform spaces kept (:meth:`SplineSpace.quasi_uniform`)
+
+__all__ = ["SplineSpace", "basis_functions", "find_spans", "require_in_domain", "clamp"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,10 +139,7 @@ class SplineSpace:
         """
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise InvalidTargetError(f"scale n must be an integer >= 1, got {n!r}.")
-        lo, hi = float(domain[0]), float(domain[1])
-        inner = np.linspace(lo, hi, int(n) + 1)
-        t = np.concatenate([np.full(degree, lo), inner, np.full(degree, hi)])
-        return cls(int(degree), t)
+        return _quasi_uniform(int(n), int(degree), float(domain[0]), float(domain[1]))
 
     # -- basic facts ----------------------------------------------------------------
     @property
@@ -217,10 +216,11 @@ class SplineSpace:
         values = basis_functions(self, x, spans, nu)[nu]
         p = self.degree
         cols = spans[:, None] - p + np.arange(p + 1)[None, :]
-        rows = np.repeat(np.arange(x.size), p + 1)
+        # row j holds the p + 1 functions from spans[j] - p on, in increasing order: the
+        # CSR arrays directly (what the triplet form sorts into, zeros kept, without the sort)
         return sp.csr_matrix(
-            (values.ravel(), (rows, cols.ravel())), shape=(x.size, self.dimension)
-        )
+            (values.ravel(), cols.ravel(), np.arange(0, (x.size + 1) * (p + 1), p + 1)),
+            shape=(x.size, self.dimension))
 
     def basis_values(self, x, order=0):
         """Dense values ``B[nu, j, i] = N_i^{(nu)}(x_j)`` of every basis function and its
@@ -263,6 +263,16 @@ class SplineSpace:
         return np.einsum("qj,qj...->q...", values, gathered)
 
 
+@lru_cache(maxsize=QUASI_UNIFORM_SPACES)
+def _quasi_uniform(n, degree, lo, hi):
+    """:meth:`SplineSpace.quasi_uniform`, one space per scale, degree and domain (its
+    knots read-only): a tolerance search asks for the same targets again and again, and
+    their breakpoints, keys and Taylor forms are then made once."""
+    t = np.concatenate([np.full(degree, lo), np.linspace(lo, hi, n + 1), np.full(degree, hi)])
+    t.flags.writeable = False
+    return SplineSpace(degree, t)
+
+
 def find_spans(space, x):
     """Index ``mu`` with ``t_mu <= x < t_{mu+1}`` for each parameter (right end closed).
 
@@ -277,7 +287,14 @@ def find_spans(space, x):
     """
     require_in_domain(space, x)
     spans = np.searchsorted(space.knots, x, side="right") - 1
-    return np.clip(spans, space.degree, space.dimension - 1)
+    return clamp(spans, space.degree, space.dimension - 1)
+
+
+def clamp(x, lo, hi):
+    r"""``np.clip(x, lo, hi)``, :math:`\min(\max(x, lo), hi)` elementwise (NaN stays NaN),
+    without its argument handling, which under numpy 1.x costs more than the work on
+    the few hundred parameters of a Newton step."""
+    return np.minimum(np.maximum(x, lo), hi)
 
 
 def require_in_domain(space, x):

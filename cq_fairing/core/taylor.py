@@ -48,6 +48,10 @@ CHUNK = 4096          # points evaluated at a time: their temporaries stay in th
 LOOKUP_BELOW = 2048   # fewer parameters than this are located by a plain binary search
 
 
+SPAN_FORMS = 128      # Taylor forms of spaces kept (:meth:`SpanTaylor.of`)
+_SPAN_FORMS = {}
+
+
 @dataclass(frozen=True, eq=False)
 class SpanTaylor:
     """Taylor coefficients of a space's basis functions on each non-empty span.
@@ -78,6 +82,17 @@ class SpanTaylor:
 
     @classmethod
     def of(cls, space):
+        """The Taylor form of ``space``, built once per degree and knots (at most
+        ``SPAN_FORMS`` kept): the candidates of a tolerance search share their spaces."""
+        key = space.key
+        if key not in _SPAN_FORMS:
+            if len(_SPAN_FORMS) >= SPAN_FORMS:
+                _SPAN_FORMS.clear()
+            _SPAN_FORMS[key] = cls._built(space)
+        return _SPAN_FORMS[key]
+
+    @classmethod
+    def _built(cls, space):
         """Build the Taylor form of ``space`` from its derivatives at the span centres."""
         p = space.degree
         b = space.breakpoints

@@ -179,13 +179,37 @@ def part_curve(curve):
 
 def is_uv_rectangle(face):
     """True when the face is its surface restricted to ``face.ParameterRange``: one
-    wire, and the area of that restriction within 1e-6 of the face's (OCCT integrates
-    both areas, a few milliseconds each on a 50 x 80 net)."""
+    wire that runs along the sides of that box (:func:`_along_box_sides`), or else one
+    wire and the area of that restriction within 1e-6 of the face's (OCCT integrates
+    both areas, 14 ms on a 50 x 80 net, where the sides take 0.1 ms)."""
     if len(face.Wires) != 1:
         return False
+    if _along_box_sides(face):
+        return True
     u0, u1, v0, v1 = face.ParameterRange
     area = face.Area
     return abs(face.Surface.toShape(u0, u1, v0, v1).Area - area) <= 1e-6 * max(area, 1e-300)
+
+
+def _along_box_sides(face):
+    """True when the p-curve of every edge of ``face`` is a straight line whose two ends
+    lie on one side of the face's UV box (``face.ParameterRange``, within 1e-9 of the
+    box's size): then the line runs along that side, and a face with one such wire is
+    the whole box."""
+    u0, u1, v0, v1 = face.ParameterRange
+    near = 1e-9 * max(u1 - u0, v1 - v0)
+    sides = (("x", u0), ("x", u1), ("y", v0), ("y", v1))
+    for edge in face.Edges:
+        found = face.curveOnSurface(edge)
+        if not found or not isinstance(found[0], (Part.Geom2d.Line2d,
+                                                   Part.Geom2d.Line2dSegment)):
+            return False
+        curve, first, last = found
+        ends = [curve.value(first), curve.value(last)]
+        if not any(all(abs(getattr(end, axis) - at) <= near for end in ends)
+                   for axis, at in sides):
+            return False
+    return True
 
 
 def _rectangle(face, rectangle):

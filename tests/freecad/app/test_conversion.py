@@ -115,3 +115,48 @@ def test_impeller_trims_rebuild_on_their_own_surface():
         assert rebuilt.Area == pytest.approx(face.Area, rel=1e-3), number
         outline = sum(e.Length for e in face.Edges)  # the fixer may merge or drop tiny edges
         assert sum(e.Length for e in rebuilt.Edges) == pytest.approx(outline, rel=1e-3), number
+
+
+def _restriction_area_matches(face):
+    """The area measure of a UV-box face: the surface restricted to the face's
+    parameter box has the face's area (within 1e-6)."""
+    u0, u1, v0, v1 = face.ParameterRange
+    area = face.Area
+    return abs(face.Surface.toShape(u0, u1, v0, v1).Area - area) <= 1e-6 * area
+
+
+@pytest.mark.parametrize("name", ["impeller.igs", "testtoler.brep", "linkrods.step",
+                                  "shell_patches.brep"])
+def test_faces_along_their_box_sides_are_uv_boxes_by_area(name):
+    """A face whose p-curves run along the sides of its UV box is recognised without
+    OCCT's area integrals; each such face also passes the area measure, and the model's
+    other B-spline faces are answered by that measure."""
+    faces = [f for f in Part.read(str(fixtures.REAL / name)).Faces
+             if isinstance(f.Surface, Part.BSplineSurface) and len(f.Wires) == 1]
+    along = [f for f in faces if conversion._along_box_sides(f)]
+    for face in along:
+        assert _restriction_area_matches(face)
+    for face in faces:
+        assert conversion.is_uv_rectangle(face) == (face in along
+                                                    or _restriction_area_matches(face))
+
+
+def test_a_face_cut_inside_its_box_is_not_a_uv_box():
+    """A triangle and a disc cut out of the fixture's surface in parameter space: their
+    p-curves leave the sides of their UV boxes, and they are not UV boxes."""
+    surface, _ = fixtures.noisy_blade_surface(20, 30)
+    whole = surface.toShape()
+    (u0, u1, v0, v1) = whole.ParameterRange
+    points = [FreeCAD.Base.Vector2d(u0, v0), FreeCAD.Base.Vector2d(u1, v0),
+              FreeCAD.Base.Vector2d(u0, v1)]
+    edges = [Part.Geom2d.Line2dSegment(a, b).toShape(surface)
+             for a, b in zip(points, points[1:] + points[:1])]
+    triangle = Part.Face(surface, Part.Wire(edges))
+    disc = Part.Face(surface, Part.Wire(Part.Geom2d.Circle2d(
+        FreeCAD.Base.Vector2d(0.5 * (u0 + u1), 0.5 * (v0 + v1)),
+        0.25 * min(u1 - u0, v1 - v0)).toShape(surface)))
+    for face in (triangle, disc):
+        face.validate()
+        assert not conversion._along_box_sides(face)
+        assert not conversion.is_uv_rectangle(face)
+    assert conversion._along_box_sides(whole) and conversion.is_uv_rectangle(whole)
