@@ -50,7 +50,7 @@ export FAIRING_ADDON_URL
 
 status=0
 echo "== headless: freecadcmd + pytest tests/freecad/app"
-timeout 900 freecadcmd -c "import sys, pytest; sys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', '--junitxml=$ARTIFACTS/app.xml', 'tests/freecad/app']))" \
+timeout 1800 freecadcmd -c "import sys, pytest; sys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', '--junitxml=$ARTIFACTS/app.xml', 'tests/freecad/app']))" \
     </dev/null >"$ARTIFACTS/app_tests.log" 2>&1
 app_rc=$?
 grep -E "^(FAILED|ERROR)" "$ARTIFACTS/app_tests.log" | tail -n 30

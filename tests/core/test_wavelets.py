@@ -95,25 +95,20 @@ def test_rank_deficient_pairs_are_refused_with_a_clear_error():
 
 
 @pytest.mark.parametrize("m, n", [(1000, 997), (2000, 1990), (300, 290), (200, 150)])
-def test_near_m_wavelets_are_exact_full_rank_and_fast(m, n):
+def test_near_m_wavelets_are_exact_and_full_rank(m, n):
     """n close to m: global null vectors from banded projections (no dense SVD of E).
 
     Checked against a dense reference: the columns span the null space of E (rank
     m - n of Q, and of [Q | N] with N from a dense SVD), E Q = 0 to rounding, and the
-    decomposition reconstructs to rounding.  V_1000 -> V_997 took seconds with the dense
-    SVD; here the whole step, details included, must stay well under one second.
+    decomposition reconstructs to rounding.  Its speed is measured by
+    ``benchmarks/bench_core.py`` (``near_m_rows``).
     """
-    import time
-
     import scipy.linalg as la
 
     import cq_fairing as cf
 
     poles = np.random.default_rng(m).normal(size=(m + 3, 3))
-    start = time.perf_counter()
     result = cf.fair_curve(poles, n)
-    _ = result.details
-    elapsed = time.perf_counter() - start
     E, Q = _pair(m, n)
     assert np.abs(E @ Q).max() <= 1e-12 * np.abs(E).max()
     assert np.linalg.matrix_rank(Q) == m - n
@@ -121,4 +116,3 @@ def test_near_m_wavelets_are_exact_full_rank_and_fast(m, n):
         null = la.null_space(E.toarray())
         assert np.linalg.matrix_rank(np.hstack([Q, null]), tol=1e-8) == m - n
     assert np.abs(result.reconstruct() - poles).max() <= 1e-12 * np.abs(poles).max()
-    assert elapsed < 1.0
