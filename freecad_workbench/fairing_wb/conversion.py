@@ -9,6 +9,8 @@ than refused.  Rational geometry keeps its weights
 :class:`cq_fairing.UnsupportedGeometryError`: fairing applies to freeform B-splines.
 """
 
+import functools
+
 import FreeCAD
 import numpy as np
 import Part
@@ -18,8 +20,8 @@ import cq_fairing as cf
 from . import trim
 
 __all__ = ["surface_from_face", "part_surface", "curve_from_edge", "part_curve",
-           "face_on_surface", "face_on_edges", "full_knots", "uv_range", "inside_mask",
-           "face_region", "is_uv_rectangle", "periodic_directions"]
+           "face_on_surface", "face_on_edges", "full_knots", "uv_range", "FaceDomain",
+           "is_uv_rectangle", "periodic_directions"]
 
 
 def full_knots(knots, mults):
@@ -107,29 +109,41 @@ def periodic_directions(face):
                                              ("v", surface.isVPeriodic())) if periodic)
 
 
-def inside_mask(face, u, v, rectangle=None):
-    """``(len(u), len(v))`` booleans: which grid parameters ``(u_i, v_j)`` lie on ``face``
-    (inside its trim or on it, OCCT's ``isPartOfDomain``); all true, without asking OCCT
-    sample by sample, for a face trimmed to its UV box (or untrimmed).  ``rectangle``:
-    :func:`is_uv_rectangle` of ``face`` where already known."""
-    if _rectangle(face, rectangle):
-        return np.ones((len(u), len(v)), dtype=bool)
-    return _on_face(face, u, v)
+class FaceDomain:
+    """The part of its surface's parameter plane that ``face`` covers, read from OCCT once
+    for all the grids sampled on it: whether it is the face's UV box
+    (:attr:`rectangle`), and otherwise its trim (:class:`fairing_wb.trim.Trim`) and the
+    mask of each grid asked (a face's searches and checks ask the same grids again)."""
 
+    def __init__(self, face):
+        self.face = face
+        self._trim = trim.Trim(face)
+        self._masks = {}
 
-def face_region(face, rectangle=None):
-    """The core's ``region(u, v)`` of ``face`` (:func:`inside_mask` of any grid), or
-    ``None`` for a face trimmed to its UV box (or untrimmed), which its UV box, the
-    core's ``window``, bounds.  ``rectangle`` as for :func:`inside_mask`."""
-    if _rectangle(face, rectangle):
-        return None
-    return lambda u, v: _on_face(face, u, v)
+    @functools.cached_property
+    def rectangle(self):
+        """:func:`is_uv_rectangle` of the face."""
+        return is_uv_rectangle(self.face)
 
+    def inside(self, u, v):
+        """``(len(u), len(v))`` booleans: which grid parameters ``(u_i, v_j)`` lie on the
+        face (inside its trim or on it, OCCT's ``isPartOfDomain``,
+        :func:`fairing_wb.trim.on_face`); all true, without asking OCCT sample by sample,
+        for a face trimmed to its UV box (or untrimmed).  A copy: the caller may change
+        it."""
+        u, v = np.asarray(u, float), np.asarray(v, float)
+        if self.rectangle:
+            return np.ones((len(u), len(v)), dtype=bool)
+        key = (u.tobytes(), v.tobytes())
+        if key not in self._masks:
+            self._masks[key] = self._trim.on_face(u, v)
+        return self._masks[key].copy()
 
-def _on_face(face, u, v):
-    """OCCT's answer for every grid sample, ``face.isPartOfDomain(u_i, v_j)``, asked only
-    where the trim's polygon cannot give it (:func:`fairing_wb.trim.on_face`)."""
-    return trim.on_face(face, u, v)
+    def region(self):
+        """The core's ``region(u, v)`` of the face (:meth:`inside` of any grid), or
+        ``None`` for a face trimmed to its UV box (or untrimmed), which its UV box, the
+        core's ``window``, bounds."""
+        return None if self.rectangle else self.inside
 
 
 def part_surface(surface):
@@ -212,11 +226,6 @@ def _along_box_sides(face):
     return True
 
 
-def _rectangle(face, rectangle):
-    """``rectangle`` where given, else :func:`is_uv_rectangle` of ``face``."""
-    return is_uv_rectangle(face) if rectangle is None else rectangle
-
-
 def _wire_on_surface(face, wire, surface):
     """``wire`` of ``face`` rebuilt on ``surface`` from its p-curves.
 
@@ -238,7 +247,7 @@ def _tolerance(shape):
     return max([shape.Tolerance] + [v.Tolerance for v in shape.Vertexes])
 
 
-def face_on_surface(surface, face, rectangle=None):
+def face_on_surface(surface, face, domain=None):
     """A face on the new ``Part`` surface bounded like ``face`` in parameter space.
 
     Untrimmed faces and faces trimmed to a parameter rectangle (e.g. the two halves of the
@@ -247,7 +256,7 @@ def face_on_surface(surface, face, rectangle=None):
     source's edge tolerances; a face that is still not valid is repaired by OCCT's shape
     fixer (wire order and orientation, edges shorter than the tolerance) within the
     source face's largest tolerance.  The result has ``face``'s orientation.
-    ``rectangle``: :func:`is_uv_rectangle` of ``face`` where already known.
+    ``domain``: the :class:`FaceDomain` of ``face`` where already read.
 
     Raises
     ------
@@ -255,7 +264,7 @@ def face_on_surface(surface, face, rectangle=None):
         If the trimmed face cannot be rebuilt into a valid face.
     """
     u0, u1, v0, v1 = face.ParameterRange
-    if _rectangle(face, rectangle):
+    if (FaceDomain(face) if domain is None else domain).rectangle:
         return _oriented_like(surface.toShape(u0, u1, v0, v1), face)
     try:
         wires = [_wire_on_surface(face, wire, surface) for wire in face.Wires]

@@ -81,7 +81,8 @@ def _face_samples(obj, source_face, faired_face, count):
     source = conversion.surface_from_face(source_face)
     faired = conversion.surface_from_face(faired_face)
     uv_range = conversion.uv_range(source_face, source)
-    inside = conversion.inside_mask(source_face, *analysis.sample_parameters(uv_range, count))
+    inside = conversion.FaceDomain(source_face).inside(
+        *analysis.sample_parameters(uv_range, count))
     if obj.Kind == "Deviation":
         return (*analysis.two_sided_deviation(source, faired, uv_range, count), inside)
     surface = faired if obj.Which == "Faired" else source

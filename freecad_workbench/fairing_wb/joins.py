@@ -75,6 +75,7 @@ from cq_fairing.core.joint_projection import (
     joint_targets,
     locate_side,
     project_jointly,
+    surface_key,
 )
 from cq_fairing.core.network_fairing import UNMOVED, fair_networks
 from cq_fairing.core.options import JOIN_CONTINUITY, JOINS, check_joins
@@ -83,7 +84,7 @@ from cq_fairing.core.pinned_faces import held_by_pins
 from . import analysis, conversion, trim
 
 __all__ = ["JOINS", "SAMPLES", "TURNED", "UNMOVED_BY_NETWORKS", "FaceJoins", "HeldJoins",
-           "JoinReport", "find_joins", "loose_neighbours", "measure_joins", "hold_joins",
+           "JoinReport", "find_joins", "face_neighbours", "measure_joins", "hold_joins",
            "check_joins"]
 
 SAMPLES = 24              # points measured along each join
@@ -125,6 +126,8 @@ class FaceJoins:
     size : float
         The largest bounding-box diagonal of the faces: the scale of the joins'
         distances.
+    measures : list of (numpy.ndarray, numpy.ndarray)
+        Per join, its gaps and angles with the sources (:func:`measure_joins`).
     """
 
     joins: list
@@ -137,6 +140,7 @@ class FaceJoins:
     analytic: dict = field(default_factory=dict)
     edges: list = field(default_factory=list)
     size: float = 1.0
+    measures: list = field(default_factory=list)
 
 
 def _shared_edges(faces):
@@ -205,20 +209,22 @@ def _loose_pairs(faces, shared, coincidence):
     return [(free[i], free[j], opposed) for i, j, opposed in matched]
 
 
-def loose_neighbours(faces, chosen):
-    """The faces of ``faces`` (one shape's), not among ``chosen`` (indices), with a free
-    edge that is one boundary with a free edge of a face of ``chosen``
-    (:func:`_loose_pairs`, at the coincidence of all ``faces``): a loose face's
-    neighbours (none when every face is chosen: no matching then)."""
-    if not chosen or len(set(chosen)) == len(faces):
+def face_neighbours(faces, chosen):
+    """The faces of ``faces`` (one shape's), not among ``chosen`` (indices), that share a
+    non-degenerated edge with a face of ``chosen`` (:func:`_shared_edges`: the same edge
+    object, ``Part.Shape.isSame``), or have a free edge that is one boundary with a free
+    edge of a face of ``chosen`` (:func:`_loose_pairs`, at the coincidence of all
+    ``faces``: a loose face's neighbours); none when every face is chosen."""
+    chosen = set(chosen)
+    if not chosen or len(chosen) == len(faces):
         return set()
     shared = _shared_edges(faces)
-    near = set()
+    near = {face for _, owners in shared if chosen.intersection(owners) for face in owners}
     for a, b, _ in _loose_pairs(faces, shared, _coincidence(faces)):
         first, second = shared[a][1][0], shared[b][1][0]
         near.update(other for face, other in ((first, second), (second, first))
                     if face in chosen)
-    return near - set(chosen)
+    return near - chosen
 
 
 def _uv(face, edge, params):
@@ -325,12 +331,13 @@ def find_joins(faces, angle_tolerance=1.0, samples=SAMPLES, neighbours=()):
     found = FaceJoins(drafts, uvs, sources, readable, boxes, signs, non_manifold, analytic,
                       edges, size)
     joins = []
-    for draft, (gaps, angles) in zip(drafts, measure_joins(found, sources)):
+    measures = measure_joins(found, sources)
+    for draft, (gaps, angles) in zip(drafts, measures):
         angle = float(angles.max())
         joins.append(Join(draft.sides, "smooth" if angle < angle_tolerance else "crease",
                           float(gaps.max()), angle, angles, draft.shared, draft.opposed))
     return FaceJoins(joins, uvs, sources, readable, boxes, signs, non_manifold, analytic,
-                     edges, size)
+                     edges, size, measures)
 
 
 def _tracks(every, edges, sides, opposed, sources, boxes, samples, size):
@@ -381,13 +388,40 @@ def _feet(found, surfaces, face, points, uv):
     return _part_points_and_normals(surface, np.array(feet, dtype=float))
 
 
-def _one_way(found, sides, uvs, surfaces):
-    """Gaps and angles from side ``a``'s points to side ``b``'s face (module doc)."""
-    (a, b), (uv_a, uv_b) = sides, uvs
-    points, normals = _points_and_normals(found, surfaces, a, uv_a)
-    feet, across = _feet(found, surfaces, b, points, uv_b)
-    angles = _angles(found.signs[a] * normals, found.signs[b] * across)
-    return np.linalg.norm(points - feet, axis=1), angles
+def _by_face(faces, evaluate, *rows):
+    """``evaluate(face, *stacked)`` once per face of ``faces`` over the rows (the sample
+    arrays of ``rows``, one per entry of ``faces``) of every entry on that face, split
+    back: per entry, the tuple of its rows of each result.  Each sample is evaluated on
+    its own (the core's evaluation gives each point the same value in any batch of two
+    or more), so it has the values it would have entry by entry; one call per face
+    instead of one per join side saves the per-call cost of the batched evaluation."""
+    out = [None] * len(faces)
+    entries = {}
+    for k, face in enumerate(faces):
+        entries.setdefault(face, []).append(k)
+    for face, ks in entries.items():
+        results = evaluate(face, *(np.concatenate([r[k] for k in ks]) for r in rows))
+        ends = np.cumsum([len(rows[0][k]) for k in ks])[:-1]
+        for k, *parts in zip(ks, *(np.split(r, ends) for r in results)):
+            out[k] = parts
+    return out
+
+
+def _one_way(found, legs, surfaces):
+    """Per leg ``((a, b), (uv_a, uv_b))``, the gaps and angles from side ``a``'s points to
+    side ``b``'s face (module doc), each face evaluated once (:func:`_by_face`).  The
+    projections stay leg by leg: the Newton iterations of a batch are not independent
+    of the batch to the last bit (projected per face, one angle of linkrods' joins
+    differs by 3e-9 degrees)."""
+    starts = [a for (a, _), _ in legs]
+    on_a = _by_face(starts, lambda face, uv: _points_and_normals(found, surfaces, face, uv),
+                    [uv_a for _, (uv_a, _) in legs])
+    out = []
+    for a, ((_, b), (_, uv_b)), (points, normals) in zip(starts, legs, on_a):
+        feet, across = _feet(found, surfaces, b, points, uv_b)
+        angles = _angles(found.signs[a] * normals, found.signs[b] * across)
+        out.append((np.linalg.norm(points - feet, axis=1), angles))
+    return out
 
 
 def measure_joins(found, surfaces):
@@ -397,19 +431,39 @@ def measure_joins(found, surfaces):
     Part).  Loose faces (a join not on a shared edge) may disagree in orientation: their
     angle :math:`\alpha` is folded to :math:`\min(\alpha, 180^\circ - \alpha)`.
 
+    A join whose faces both have their sources' surfaces (the same nets) keeps its
+    sources' measures, ``found.measures``, where :func:`find_joins` took them: measured
+    again, it would give them again.
+
     Returns
     -------
     list of (numpy.ndarray, numpy.ndarray)
         ``(gaps, angles)`` per join, sample by sample.
     """
-    out = []
-    for join, uvs in zip(found.joins, found.samples):
-        faces = join.faces
-        there = _one_way(found, faces, uvs, surfaces)
-        back = _one_way(found, faces[::-1], uvs[::-1], surfaces)
-        angles = [a if join.shared else np.minimum(a, 180.0 - a) for a in (there[1], back[1])]
-        out.append((np.maximum(there[0], back[0]), np.maximum(*angles)))
+    out = list(found.measures) or [None] * len(found.joins)
+    todo = [k for k, join in enumerate(found.joins)
+            if out[k] is None or any(_moved(found, surfaces, face) for face in join.faces)]
+    legs = []
+    for k in todo:
+        faces, uvs = found.joins[k].faces, found.samples[k]
+        legs += [(faces, uvs), (faces[::-1], uvs[::-1])]
+    ways = _one_way(found, legs, surfaces)
+    for k, there, back in zip(todo, ways[::2], ways[1::2]):
+        angles = [a if found.joins[k].shared else np.minimum(a, 180.0 - a)
+                  for a in (there[1], back[1])]
+        out[k] = (np.maximum(there[0], back[0]), np.maximum(*angles))
     return out
+
+
+def _moved(found, surfaces, face):
+    """True when ``face``'s surface in ``surfaces`` is not its source's net
+    (:func:`~cq_fairing.core.joint_projection.surface_key`); a face measured through
+    Part is its source."""
+    if face not in surfaces:
+        return False
+    source = found.sources.get(face)
+    return source is None or (surfaces[face] is not source
+                              and surface_key(surfaces[face]) != surface_key(source))
 
 
 @dataclass(frozen=True)

@@ -44,9 +44,9 @@ from .joins import (
     HeldJoins,
     JoinReport,
     check_joins,
+    face_neighbours,
     find_joins,
     hold_joins,
-    loose_neighbours,
     measure_joins,
 )
 from .pinned import pin_faces
@@ -312,7 +312,7 @@ def _target_net(source, target):
 
 
 def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
-                  method="wavelet", objective="compact", borders="auto", rectangle=None):
+                  method="wavelet", objective="compact", borders="auto", domain=None):
     r"""The tolerance search of ``face`` (whose net is ``source``) by ``method``: the
     core's :func:`~cq_fairing.core.face_search.search_face` with the attempts of
     :func:`~cq_fairing.core.face_search.face_attempts`, the search ``cq-fairing`` and
@@ -320,18 +320,18 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
 
     * the samples: a grid of :func:`~cq_fairing.core.face_search.sample_counts` over the
       face's UV box (``face.ParameterRange``, clipped to the surface's domain) with the
-      mask of those on the face (:func:`conversion.inside_mask`);
+      mask of those on the face (:meth:`conversion.FaceDomain.inside`);
     * the face for the core's searches: its UV box as their ``window``
       (:func:`~cq_fairing.core.face_search.uv_window`) and, for the adaptive method, the
-      samples on the face as its ``region`` (:func:`conversion.face_region`);
+      samples on the face as its ``region`` (:meth:`conversion.FaceDomain.region`);
     * the check: :class:`analysis.SampledDeviation`, two-sided, on the grid and the
       centres of its cells that lie on the face, with its cheap lower bound as the
       pre-filter;
     * the finisher: :func:`~cq_fairing.core.face_search.face_finisher` (closed and
       periodic seams tied, collapsed borders kept).
 
-    ``rectangle``: :func:`conversion.is_uv_rectangle` of ``face`` where already known
-    (asked of OCCT once for all the masks).
+    ``domain``: the :class:`conversion.FaceDomain` of ``face`` where already read (its
+    trim is read from OCCT once for all the masks).
 
     Returns
     -------
@@ -345,24 +345,25 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
     """
     (a, b), (c, d) = source.domain
     u0, u1, v0, v1 = face.ParameterRange
-    rectangle = conversion.is_uv_rectangle(face) if rectangle is None else rectangle
+    domain = conversion.FaceDomain(face) if domain is None else domain
     nu, nv = sample_counts(source)
     u, v = np.clip(np.linspace(u0, u1, nu), a, b), np.clip(np.linspace(v0, v1, nv), c, d)
-    grid = (u, v, conversion.inside_mask(face, u, v, rectangle))
+    grid = (u, v, domain.inside(u, v))
     cu, cv = 0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1])
     check = analysis.SampledDeviation(
-        source, (grid, (cu, cv, conversion.inside_mask(face, cu, cv, rectangle))))
+        source, (grid, (cu, cv, domain.inside(cu, cv))))
     outcome = search_face(
         source, tolerance, grid, face_finisher(source, conversion.periodic_directions(face)),
         check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
-        exceeds=check.exceeds, region=conversion.face_region(face, rectangle),
+        exceeds=check.exceeds, region=domain.region(),
         window=uv_window(conversion.uv_range(face, source), source), details=False,
         judge="the workbench")
     return outcome, check
 
 
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
-              search="local", measure=MEASURES[0], objective="compact", borders="auto"):
+              search="local", measure=MEASURES[0], objective="compact", borders="auto",
+              domain=None):
     r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
     Parameters
@@ -409,6 +410,8 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         poles; ``free`` is the plain projection, often a much faster search on a face
         whose pinned net slides along it (the 50 x 80 test face: 19 x 21 poles in
         about 1.6 s instead of 11 x 11 in about 11 s); ``pinned`` always pins.
+    domain : conversion.FaceDomain, optional
+        That of ``face`` where already read (none: read here).
 
     Raises
     ------
@@ -426,10 +429,10 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
     _core_keywords(method, objective, tolerance, borders)
     note = ""
-    rectangle = conversion.is_uv_rectangle(face)
+    domain = conversion.FaceDomain(face) if domain is None else domain
     if tolerance is not None:
         outcome, check = searched_face(face, source, _check_tolerance(tolerance), search,
-                                       measure, method, objective, borders, rectangle)
+                                       measure, method, objective, borders, domain)
         faired, deviation, note = outcome.surface, outcome.deviation, _outcome_note(outcome)
         if boundary != "free":
             faired = _closed_like(source, _fix_boundary(source, faired, boundary))
@@ -437,7 +440,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     else:
         faired = _closed_like(source, _fix_boundary(source, _target_net(source, target).surface,
                                                     boundary))
-        deviation = face_deviation(face, source, faired, rectangle)
+        deviation = face_deviation(face, source, faired, domain)
     if tolerance is not None and boundary != "free" and deviation > tolerance:
         raise cf.ToleranceNotMetError(
             f"boundary handling '{boundary}' moved the face {deviation:.4g} mm from the "
@@ -446,7 +449,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     if tolerance is not None and outcome.status == "unchanged":
         shape = face.copy()   # nothing to fair: the source face itself, not a rebuild
     else:
-        shape = conversion.face_on_surface(conversion.part_surface(faired), face, rectangle)
+        shape = conversion.face_on_surface(conversion.part_surface(faired), face, domain)
     return FairedShape(shape, tuple(source.shape), tuple(faired.shape), deviation,
                        time.perf_counter() - start, note, faired)
 
@@ -459,15 +462,16 @@ def _outcome_note(outcome):
     return f"faired: {'; '.join(outcome.notes)}" if outcome.notes else ""
 
 
-def face_deviation(face, source, faired, rectangle=None):
+def face_deviation(face, source, faired, domain=None):
     """Largest two-sided deviation (``analysis.two_sided_deviation``) between ``source``
     and ``faired`` at ``DEVIATION_SAMPLES`` squared samples of ``face``'s UV box that lie
     on the face (inside its trim; a trim too thin to hold a sample falls back on its UV
-    box).  ``rectangle``: :func:`conversion.is_uv_rectangle` of ``face`` where known."""
+    box).  ``domain``: the :class:`conversion.FaceDomain` of ``face`` where already
+    read."""
     uv_range = conversion.uv_range(face, source)
     both = np.abs(analysis.two_sided_deviation(source, faired, uv_range, DEVIATION_SAMPLES)[1])
-    inside = conversion.inside_mask(
-        face, *analysis.sample_parameters(uv_range, DEVIATION_SAMPLES), rectangle)
+    domain = conversion.FaceDomain(face) if domain is None else domain
+    inside = domain.inside(*analysis.sample_parameters(uv_range, DEVIATION_SAMPLES))
     return float((both[inside] if inside.any() else both).max())
 
 
@@ -595,19 +599,12 @@ def named_elements(obj, subs):
 def neighbour_faces(obj, subs):
     """``[(sub, Part.Face)]``: the faces of ``obj``'s shape, any surface, that share a
     non-degenerated edge with a face of ``subs``, or have a free edge that is one
-    boundary with one of its free edges (loose faces, :func:`joins.loose_neighbours`),
-    and are not among ``subs``, in the shape's order; read in the thread that owns the
-    document, as :func:`named_elements`."""
+    boundary with one of its free edges (loose faces), and are not among ``subs``
+    (:func:`joins.face_neighbours`), in the shape's order; read in the thread that owns
+    the document, as :func:`named_elements`."""
     faces = obj.Shape.Faces
     chosen = {int(sub[len("Face"):]) - 1 for sub in subs if sub.startswith("Face")}
-    near = loose_neighbours(faces, chosen)
-    for index in chosen:
-        for edge in faces[index].Edges:
-            if edge.Degenerated:
-                continue
-            for owner in obj.Shape.ancestorsOfType(edge, Part.Face):
-                near.update(k for k, face in enumerate(faces) if face.isSame(owner))
-    return [(f"Face{k + 1}", faces[k]) for k in sorted(near - chosen)]
+    return [(f"Face{k + 1}", faces[k]) for k in sorted(face_neighbours(faces, chosen))]
 
 
 def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
@@ -658,6 +655,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     check_joins(joins, angle_tolerance)
     target = settings["target"]
     results = []
+    domains = {sub: conversion.FaceDomain(element) for sub, element in named
+               if sub.startswith("Face")}   # each trim read once: fairing, checks, rebuilds
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -665,7 +664,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             own = target if target is None or len(named) == 1 else _clamped_target(target,
                                                                                    element)
             try:
-                result = fair_face(element, **face_settings, **{**settings, "target": own})
+                result = fair_face(element, **face_settings, **{**settings, "target": own},
+                                   domain=domains[sub])
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
@@ -678,13 +678,15 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             results.append(fair_edge(element, **{**settings, "target": own}))
     if progress is not None:
         progress(len(named), len(named))
-    return _joined(named, results, settings, joins, angle_tolerance, list(neighbours))
+    return _joined(named, results, settings, joins, angle_tolerance, list(neighbours),
+                   domains)
 
 
-def _joined(named, results, settings, joins, angle_tolerance, neighbours):
+def _joined(named, results, settings, joins, angle_tolerance, neighbours, domains):
     """``results`` with the joins of the faces of ``named``, among themselves and with
     their ``neighbours`` (fixed), held (:func:`_hold`) and measured, as
-    :class:`FairedShapes`."""
+    :class:`FairedShapes`; ``domains``: ``{sub: conversion.FaceDomain}`` of the faces
+    of ``named``."""
     tolerance = settings["tolerance"]
     faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
     if not faces or (len(faces) == 1 and not neighbours):
@@ -696,7 +698,9 @@ def _joined(named, results, settings, joins, angle_tolerance, neighbours):
     alone = [results[k] for k in faces]
     faired, outcome = alone, HeldJoins({}, {}, [], [], [])
     if joins != "free" and tolerance is not None and found.joins:
-        faired, outcome = _hold(found, elements, alone, tolerance, joins, settings["method"])
+        faired, outcome = _hold(found, elements, alone, tolerance, joins, settings["method"],
+                                [domains.get(sub) or conversion.FaceDomain(face)
+                                 for sub, face in elements])
     out = list(results)
     for k, result in zip(faces, faired):
         out[k] = result
@@ -707,7 +711,7 @@ def _joined(named, results, settings, joins, angle_tolerance, neighbours):
     return FairedShapes(out, report)
 
 
-def _hold(found, elements, alone, tolerance, joins, method):
+def _hold(found, elements, alone, tolerance, joins, method, domains):
     """The faces faired ``alone`` faired again together (:func:`joins.hold_joins`):
     ``(results, HeldJoins)``.  A face with a join across its surface
     (:func:`~cq_fairing.core.joint_projection.unholdable`) is first projected alone with
@@ -720,21 +724,22 @@ def _hold(found, elements, alone, tolerance, joins, method):
     network's reason where one kept it:
     :func:`~cq_fairing.core.network_fairing.kept_sentence`).
     ``elements`` are the faces faired then their neighbours (fixed: no tolerance, no
-    target)."""
+    target); ``domains`` their :class:`conversion.FaceDomain`, in the same order."""
     faired = list(alone)
     moved = {i for i, r in enumerate(alone) if r.surface is not None}
     stuck = unholdable(found.joins, found.readable, moved, moved)
     measured = {}
 
     def check(face, surface):
-        measured[face] = face_deviation(elements[face][1], found.sources[face], surface)
+        measured[face] = face_deviation(elements[face][1], found.sources[face], surface,
+                                        domains[face])
         return measured[face]
 
     pins = pin_faces(found, elements, stuck, {i: alone[i].surface for i in stuck}, tolerance,
                      JOIN_CONTINUITY[joins], method, check)
     for i in stuck:
-        faired[i] = (_installed(alone[i], elements[i], pins.surfaces[i], measured[i],
-                                f"{elements[i][0]} {pins.notes[i]}")
+        faired[i] = (_installed(alone[i], elements[i], domains[i], pins.surfaces[i],
+                                measured[i], f"{elements[i][0]} {pins.notes[i]}")
                      if i in pins.surfaces else _kept_as_is(elements[i], pins.notes[i]))
     coarsest = {i for i in moved - set(stuck)
                 if _nothing_faired(found.sources[i], alone[i].surface, method)}
@@ -744,7 +749,7 @@ def _hold(found, elements, alone, tolerance, joins, method):
                          dict.fromkeys(range(len(alone)), tolerance), check, joins, method,
                          pinned=set(pins.surfaces))
     for i, surface in outcome.surfaces.items():
-        faired[i] = _installed(alone[i], elements[i], surface, measured[i])
+        faired[i] = _installed(alone[i], elements[i], domains[i], surface, measured[i])
     for i, deviation in outcome.kept.items():
         faired[i] = _kept_by_joins(elements[i], deviation, tolerance)
     for i in coarsest - set(outcome.surfaces):
@@ -757,10 +762,11 @@ def _hold(found, elements, alone, tolerance, joins, method):
     return faired, outcome
 
 
-def _installed(result, element, surface, deviation, note=""):
-    """``result`` (the face ``element`` faired alone) with ``surface`` solved with its
-    joins held, at ``deviation``, under the face's trim."""
-    shape = conversion.face_on_surface(conversion.part_surface(surface), element[1])
+def _installed(result, element, domain, surface, deviation, note=""):
+    """``result`` (the face ``element`` faired alone, ``domain`` its
+    :class:`conversion.FaceDomain`) with ``surface`` solved with its joins held, at
+    ``deviation``, under the face's trim."""
+    shape = conversion.face_on_surface(conversion.part_surface(surface), element[1], domain)
     return replace(result, shape=shape, poles_after=tuple(surface.shape),
                    max_deviation=deviation, note=note, surface=surface)
 

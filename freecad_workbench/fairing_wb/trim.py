@@ -22,10 +22,15 @@ A face on a periodic surface, or with a seam (an edge used twice), is asked samp
 sample: its p-curves need not lie in one period of the grid.
 """
 
+import functools
+
 import numpy as np
+import Part
 from scipy.spatial import cKDTree
 
-__all__ = ["on_face", "seams", "SAMPLES"]
+import cq_fairing as cf
+
+__all__ = ["on_face", "Trim", "seams", "SAMPLES"]
 
 SAMPLES = 257          # p-curve samples per edge (the polygon's vertices)
 BAND_FACTOR = 4.0      # the band around the polygon, in chord deviations
@@ -35,15 +40,32 @@ BAND_FLOOR = 1e-5      # ... at least this share of the parameter box's diagonal
 def on_face(face, u, v):
     """``(len(u), len(v))`` booleans: :math:`(u_i, v_j)` on ``face`` by OCCT's
     ``isPartOfDomain`` (module notes: asked only where the trim's polygon cannot say)."""
-    u, v = np.asarray(u, float), np.asarray(v, float)
-    polygon = _polygon(face)
-    if polygon is None:
-        return _asked(face, u, v, np.ones((len(u), len(v)), bool))
-    segments, band = polygon
-    inside, unsure = _even_odd(segments, u, v)
-    unsure |= _near(segments, band, u, v)
-    inside[unsure] = _asked(face, u, v, unsure)[unsure]
-    return inside
+    return Trim(face).on_face(u, v)
+
+
+class Trim:
+    """The trim of ``face`` for :func:`on_face` on any number of grids: its polygon
+    (module notes) sampled from the p-curves once, at the first grid."""
+
+    def __init__(self, face):
+        self.face = face
+
+    @functools.cached_property
+    def polygon(self):
+        """``(segments, band)`` of the trim, or ``None`` where the face is asked sample
+        by sample (:func:`_polygon`)."""
+        return _polygon(self.face)
+
+    def on_face(self, u, v):
+        """:func:`on_face` of the face at the grid ``(u_i, v_j)``."""
+        u, v = np.asarray(u, float), np.asarray(v, float)
+        if self.polygon is None:
+            return _asked(self.face, u, v, np.ones((len(u), len(v)), bool))
+        segments, band = self.polygon
+        inside, unsure = _even_odd(segments, u, v)
+        unsure |= _near(segments, band, u, v)
+        inside[unsure] = _asked(self.face, u, v, unsure)[unsure]
+        return inside
 
 
 def seams(face):
@@ -83,8 +105,7 @@ def _polygon(face):
                 continue    # the rows it leaves open are crossed an odd number of times
             return None
         curve, first, last = found[0], found[1], found[2]
-        t = np.linspace(first, last, 2 * SAMPLES - 1)
-        points = np.array([(p.x, p.y) for p in (curve.value(float(x)) for x in t)])
+        points = _curve_points(curve, np.linspace(first, last, 2 * SAMPLES - 1))
         nodes, middles = points[::2], points[1::2]
         chords = 0.5 * (nodes[:-1] + nodes[1:])
         deviation = max(deviation, float(np.linalg.norm(middles - chords, axis=1).max()))
@@ -94,6 +115,22 @@ def _polygon(face):
     u0, u1, v0, v1 = face.ParameterRange
     band = max(BAND_FACTOR * deviation, BAND_FLOOR * float(np.hypot(u1 - u0, v1 - v0)))
     return np.concatenate(segments), band
+
+
+def _curve_points(curve, t):
+    """``(len(t), 2)`` points of the p-curve ``curve`` at parameters ``t``: a
+    non-periodic B-spline clamped at both ends and ``t`` in its domain by the core's
+    batched evaluation (Part's points to rounding, which moves the polygon far less
+    than its band), any other by Part's ``value`` point by point."""
+    if isinstance(curve, Part.Geom2d.BSplineCurve2d) and not curve.isPeriodic():
+        degree, mults = curve.Degree, curve.getMultiplicities()
+        knots = np.repeat(np.asarray(curve.getKnots(), float), mults)
+        if (mults[0] == mults[-1] == degree + 1 and knots[0] <= t.min()
+                and t.max() <= knots[-1]):
+            weights = curve.getWeights() if curve.isRational() else None
+            poles = np.array([(p.x, p.y) for p in curve.getPoles()])
+            return cf.make_curve(poles, knots, degree, weights).evaluate(t)
+    return np.array([(p.x, p.y) for p in (curve.value(float(x)) for x in t)])
 
 
 def _even_odd(segments, u, v):
@@ -118,11 +155,23 @@ def _even_odd(segments, u, v):
 
 
 def _near(segments, band, u, v):
-    """Grid samples within ``band`` of the polygon (the tree of both ends of every
-    segment, the segments' longest half length added)."""
-    vertices = segments.reshape(-1, 2)
-    reach = band + 0.5 * float(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1).max())
+    r"""Grid samples within ``band`` of the polygon: the distance from a sample
+    :math:`p` to a segment :math:`[a, b]` is :math:`|a + t (b - a) - p|` with
+    :math:`t = \operatorname{clip}((p - a)\cdot(b - a) / |b - a|^2, 0, 1)`, measured for
+    the segments whose midpoints lie within ``band`` plus the segments' longest half
+    length (a tree of the midpoints): no other segment can be nearer than ``band``."""
+    a, b = segments[:, 0], segments[:, 1]
+    reach = band + 0.5 * float(np.linalg.norm(b - a, axis=1).max())
     uu, vv = np.meshgrid(u, v, indexing="ij")
-    distance, _ = cKDTree(vertices).query(np.column_stack([uu.ravel(), vv.ravel()]),
-                                          distance_upper_bound=reach)
-    return np.isfinite(distance).reshape(len(u), len(v))
+    points = np.column_stack([uu.ravel(), vv.ravel()])
+    pairs = cKDTree(points).sparse_distance_matrix(cKDTree(0.5 * (a + b)), reach,
+                                                   output_type="ndarray")
+    i, k = pairs["i"], pairs["j"]
+    along = b[k] - a[k]
+    length2 = np.einsum("ij,ij->i", along, along)
+    t = np.clip(np.divide(np.einsum("ij,ij->i", points[i] - a[k], along), length2,
+                          out=np.zeros_like(length2), where=length2 > 0), 0.0, 1.0)
+    distance = np.linalg.norm(a[k] + t[:, None] * along - points[i], axis=1)
+    near = np.zeros(points.shape[0], bool)
+    near[i[distance <= band]] = True
+    return near.reshape(len(u), len(v))

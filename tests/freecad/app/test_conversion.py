@@ -160,3 +160,28 @@ def test_a_face_cut_inside_its_box_is_not_a_uv_box():
         assert not conversion._along_box_sides(face)
         assert not conversion.is_uv_rectangle(face)
     assert conversion._along_box_sides(whole) and conversion.is_uv_rectangle(whole)
+
+
+def test_a_face_domain_answers_each_grid_as_occt_and_reads_the_trim_once():
+    """:class:`conversion.FaceDomain` of a trimmed linkrods face: OCCT's
+    ``isPartOfDomain`` at every sample of two grids, the same answer when a grid is
+    asked again (a copy, which the caller may change) and its region the same
+    classification; the fixture's whole face is its box, all samples on it, no
+    region."""
+    face = next(f for f in Part.read(str(fixtures.REAL / "linkrods.step")).Faces
+                if isinstance(f.Surface, Part.BSplineSurface)
+                and not conversion.is_uv_rectangle(f))
+    domain = conversion.FaceDomain(face)
+    u0, u1, v0, v1 = face.ParameterRange
+    for u, v in ((np.linspace(u0, u1, 17), np.linspace(v0, v1, 13)),
+                 (np.linspace(u0, u1, 9), np.linspace(v0, v1, 21))):
+        occt = np.array([[face.isPartOfDomain(float(a), float(b)) for b in v] for a in u])
+        first = domain.inside(u, v)
+        assert np.array_equal(first, occt) and 0 < occt.sum() < occt.size
+        first[:] = ~first
+        assert np.array_equal(domain.inside(u, v), occt)
+        assert np.array_equal(domain.region()(u, v), occt)
+    assert not domain.rectangle
+    whole = conversion.FaceDomain(fixtures.noisy_blade_surface(20, 30)[0].toShape())
+    assert whole.rectangle and whole.region() is None
+    assert whole.inside(np.linspace(0, 1, 4), np.linspace(0, 1, 3)).all()

@@ -8,6 +8,8 @@ selected, the others take part as fixed faces: the fuselage's B-spline faces, an
 cylinder and torus next to linkrods' trimmed B-spline faces.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -245,3 +247,23 @@ def test_document_without_join_properties_migrates(doc, fuselage, tmp_path):
         assert again.Proxy.Version == feature.VERSION
         reopened.recompute()
         assert again.isValid() and "; joins: 6 (" in again.Status, again.Status
+
+
+def test_joins_of_faces_on_their_sources_keep_the_sources_measures(fuselage):
+    """Measured with the sources' nets (copies), every join gives the measures
+    ``find_joins`` took; with one face faired, the joins of that face are measured
+    again, as a measurement from scratch gives them, and they open."""
+    shape = fuselage.Shape
+    found = joins.find_joins(list(shape.Faces))
+    fresh = dataclasses.replace(found, measures=[])
+    copies = {face: dataclasses.replace(s, poles=s.poles.copy())
+              for face, s in found.sources.items()}
+    kept = joins.measure_joins(found, copies)
+    assert all(a is b for pair, source in zip(kept, found.measures)
+               for a, b in zip(pair, source))
+    faired = make.fair_face(shape.Faces[4], **SETTINGS).surface
+    moved = joins.measure_joins(found, {**copies, 4: faired})
+    scratch = joins.measure_joins(fresh, {**copies, 4: faired})
+    for join, after, again, before in zip(found.joins, moved, scratch, found.measures):
+        assert all(np.array_equal(a, b) for a, b in zip(after, again))
+        assert (4 in join.faces) == (after[0].max() > before[0].max() + 1e-6)

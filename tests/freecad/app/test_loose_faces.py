@@ -186,3 +186,20 @@ def test_loose_impeller_faces_keep_their_joins(impeller):
     assert np.all(after <= before + GAP * size), (before, after)
     alone = _gaps_along(found, source, [r.shape for r in runs["free"]])
     assert np.max(alone - before) > 1e3 * GAP * size
+
+
+def test_neighbours_of_a_sewn_shell_are_the_faces_owning_their_edges(doc):
+    """On a sewn shell (testtoler) the neighbours of a few faces are the faces that
+    Part's ``ancestorsOfType`` names as owners of their non-degenerated edges, less the
+    faces chosen."""
+    obj = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "testtoler.brep")), "Shell")
+    shape = obj.Shape
+    faces = shape.Faces
+    for chosen in ([0], [3, 17], [5, 6, 30, 41]):
+        owners = {k for index in chosen for edge in faces[index].Edges if not edge.Degenerated
+                  for owner in shape.ancestorsOfType(edge, Part.Face)
+                  for k, face in enumerate(faces) if face.isSame(owner)}
+        subs = [f"Face{k + 1}" for k in chosen]
+        expected = [f"Face{k + 1}" for k in sorted(owners - set(chosen))]
+        assert [sub for sub, _ in make.neighbour_faces(obj, subs)] == expected
+        assert expected

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import Part
-from fairing_wb import trim
+from cq_fairing.core.face_search import sample_counts
+from fairing_wb import conversion, trim
 
 import fixtures
 
@@ -50,3 +51,57 @@ def test_a_face_on_a_seam_is_asked_sample_by_sample():
     u0, u1, v0, v1 = face.ParameterRange
     u, v = np.linspace(u0, u1, 9), np.linspace(v0, v1, 7)
     assert np.array_equal(trim.on_face(face, u, v), _occt(face, u, v))
+
+
+def _trimmed(name, count):
+    """The first ``count`` B-spline faces of ``name`` that have a trim polygon."""
+    faces = [f for f in _bspline_faces(name, 10 ** 6) if trim._polygon(f) is not None]
+    return faces[:count]
+
+
+@pytest.mark.parametrize("name", ["linkrods.step", "impeller.igs"])
+def test_p_curve_points_are_parts_values(name):
+    """The polygon's vertices, evaluated by the core on B-spline p-curves, are Part's
+    ``value`` at the same parameters to rounding (1e-12 of the parameter box)."""
+    for face in _trimmed(name, 8):
+        u0, u1, v0, v1 = face.ParameterRange
+        for edge in face.Edges:
+            found = face.curveOnSurface(edge)
+            if found is None:
+                continue
+            curve, first, last = found
+            t = np.linspace(first, last, 41)
+            part = np.array([(p.x, p.y) for p in (curve.value(float(x)) for x in t)])
+            assert np.abs(trim._curve_points(curve, t) - part).max() <= 1e-12 * max(
+                u1 - u0, v1 - v0)
+
+
+def test_near_is_the_band_around_the_segments():
+    """The samples OCCT is asked near the trim are those within the band of a segment
+    of the polygon, by the distance to every segment measured one by one."""
+    face = _trimmed("impeller.igs", 1)[0]
+    segments, band = trim._polygon(face)
+    u0, u1, v0, v1 = face.ParameterRange
+    u, v = np.linspace(u0, u1, 61), np.linspace(v0, v1, 47)
+    near = trim._near(segments, band, u, v)
+    a, b = segments[:, 0], segments[:, 1]
+    for i, j in [(i, j) for i in range(len(u)) for j in range(len(v))]:
+        p = np.array([u[i], v[j]])
+        t = np.clip(np.sum((p - a) * (b - a), axis=1)
+                    / np.maximum(np.sum((b - a) ** 2, axis=1), 1e-300), 0.0, 1.0)
+        distance = np.linalg.norm(a + t[:, None] * (b - a) - p, axis=1).min()
+        assert near[i, j] == (distance <= band), (i, j, distance, band)
+    assert 0 < near.sum() < 0.2 * near.size
+
+
+def test_search_grids_are_classified_as_occt_classifies_them():
+    """The grids a tolerance search samples on real trimmed faces (its counts over the
+    face's parameter box, and the centres of their cells), asked of one
+    :class:`trim.Trim` each: OCCT's answer at every sample."""
+    for face in _trimmed("impeller.igs", 12):
+        source = conversion.surface_from_face(face)
+        u0, u1, v0, v1 = conversion.uv_range(face, source)
+        u, v = (np.linspace(u0, u1, n) for n in sample_counts(source))
+        once = trim.Trim(face)
+        for grid in ((u, v), (0.5 * (u[1:] + u[:-1]), 0.5 * (v[1:] + v[:-1]))):
+            assert np.array_equal(once.on_face(*grid), _occt(face, *grid))
