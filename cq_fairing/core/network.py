@@ -8,14 +8,15 @@ network is faired as a whole by the thin-plate energy of every patch in its own
 parameters, under the joins' constraints (Eck and Hadenfeld's energy fairing, with the
 tolerance as its bound):
 
-.. math:: \min_{C} \sum_f (C_f - P_f)^T M_f (C_f - P_f) + \lambda\, s_f\, C_f^T H_f C_f
-          \quad\text{subject to}\quad A C = 0,
+.. math:: \min_{C} \sum_f (C_f - P_f)^T M_f (C_f - P_f) + \lambda_f\, s_f\, C_f^T H_f C_f
+          \quad\text{subject to}\quad A C = k,
 
 with :math:`M_f = G_u\otimes G_v` the patch's L2 Gram matrix (so the first term is
 :math:`\iint |T_f - S_f|^2`), :math:`H_f = G''_u\otimes G_v + 2 G'_u\otimes G'_v +
 G_u\otimes G''_v` its thin-plate energy, :math:`s_f = \mathrm{tr} M_f / \mathrm{tr} H_f`
-the scale that makes one :math:`\lambda` mean the same on patches of any size, and
-:math:`A` the joins:
+the scale that makes one :math:`\lambda_f` mean the same on patches of any size, and
+:math:`A` the joins (:math:`k = 0` but on the rows of a join that keeps the source's
+kink):
 
 * **G0**: the two border rows of a join are one row, pole for pole (the patches share
   their knots and degree along the join);
@@ -28,6 +29,12 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   one ratio per join would only bend patches that meet well: the joins are held closed
   first, and the mirrored rows come in on those that then turn more than the slack
   beyond the source (:meth:`PatchNetwork.fair`).
+* **Source kinks.**  Where the mirrored rows would hold a patch over its tolerance (or
+  fold it), the smooth joins of that patch along which they would move the source's
+  inner poles by more than its tolerance (:func:`_kinks`) keep the source's kink
+  instead: their rows hold the source's residual, :math:`w_{a,i} + \mu w_{b,i} =
+  w^0_{a,i} + \mu w^0_{b,i}`, so that the join turns as the source's does (checked as
+  every smooth join is); a patch the joins still hold over its tolerance is kept.
 * **C2 across cuts** of one surface into pieces (:func:`_curvature_rows`).
 * **Vertices.**  Around a vertex the rows next to it tie the patches' twist poles in a
   cycle, singular where the ratios' product is 1 (the vertex enclosure condition); a
@@ -48,17 +55,24 @@ the scale that makes one :math:`\lambda` mean the same on patches of any size, a
   one kept corner, a patch would open its join to the other by their distance, and the
   edge between them would need a larger tolerance than the source's.
 
+A planar source is kept: it has no curvature to fair, and the energy could only bend it
+out of its plane (:func:`_planar`).
+
 The borders move with the patches: the energy runs across the joins.  The patches that
 share no unknown (joined only through kept patches) are independent parts of the
 system, each with its own :math:`\lambda`: the largest (bisection on its logarithm) for
 which every patch of the part stays within the tolerance of its source by the
 same-parameter distance on :data:`SAMPLES` x :data:`SAMPLES` points, an upper bound of
 the true distance, so that one patch held close by its joins does not hold back the
-energy of the others.  The G0 rows and the kept
-patches' poles are identities, eliminated exactly (one unknown per class of tied poles);
-the G1 rows remain in one regularised KKT system, the same for x, y and z and factorized
-once per :math:`\lambda`; the tangent-plane rows, the only ones that couple the
-coordinates, come in exactly by their Schur complement.
+energy of the others.  Within a part each patch's weight :math:`\lambda_f` is then
+raised from the part's as far as the part stays within its tolerances
+(:func:`_bisected`): a patch near its tolerance holds back its own energy, not its
+neighbours'.
+
+The G0 rows and the kept patches' poles are identities, eliminated exactly (one unknown
+per class of tied poles); the G1 rows remain in one regularised KKT system, the same for
+x, y and z and factorized once per set of weights; the tangent-plane rows, the only
+ones that couple the coordinates, come in exactly by their Schur complement.
 
 This module imports numpy and scipy only.
 """
@@ -91,6 +105,7 @@ KNOT_TOLERANCE = 1e-9
 SPREAD = 1e-9       # x the network's size (round-off): kept corners farther apart leave
                     # their vertex open
 STRAIGHT = 0.1      # relative residual of a source's rows at a vertex for its lines to stay
+PLANAR = 1e-9       # x a patch's size (round-off): poles this close to one plane are planar
 
 
 @dataclass(frozen=True)
@@ -103,23 +118,28 @@ class NetworkResult:
         The faired patches, each on its source's spaces with a one-span direction's
         span halved (kept ones: the source).
     smoothing : float
-        The smallest :math:`\\lambda` used by the network's independent parts (0 when
-        even the constrained projection alone is over the tolerance somewhere: then
+        The smallest energy weight :math:`\\lambda_f` of the moved patches (0 when even
+        the constrained projection alone is over the tolerance somewhere: then
         ``surfaces`` are the sources).
     deviations : numpy.ndarray
         Each patch's largest same-parameter distance from its source on the samples.
     g1_rows : int
         Mirrored-row constraints imposed (with the C2 rows across cuts).
     kept : set of int
-        The patches that kept their surfaces: those asked for, those the joins would
-        hold out of their tolerance even without energy, and one patch of each smooth
+        The patches that kept their surfaces: those asked for, the planar ones, those
+        the joins would hold out of their tolerance even without energy (their source
+        kinks kept where that helps), and one patch of each smooth
         join that would turn more than the source's even held (:func:`_covering`; it
         then constrains its neighbours instead, and the join is checked again).
     reasons : dict
         Why the network kept each patch it was not asked to keep: ``("tolerance", d)``,
         the joins alone hold it ``d`` from its source (the same-parameter distance on
-        the samples, the energy at zero; infinite where it folds), or ``("turned",
-        joins)``, the indices of its smooth joins that would turn.
+        the samples, the energy at zero; infinite where it folds), ``("turned",
+        joins)``, the indices of its smooth joins that would turn, or ``("planar",)``:
+        its source is planar (:func:`_planar`).
+    kinked : set of int
+        The smooth joins that keep the source's kink instead of being made tangent
+        (:func:`_kinks`).
     """
 
     surfaces: list
@@ -128,6 +148,7 @@ class NetworkResult:
     g1_rows: int
     kept: set
     reasons: dict = field(default_factory=dict)
+    kinked: set = field(default_factory=set)
 
 
 def network_joinable(a, side_a, b, side_b, reversed_):
@@ -217,14 +238,16 @@ class PatchNetwork:
         """
         sources = self.sources
         tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(sources),))
-        kept = set(kept)
+        planar = {f for f, source in enumerate(sources) if _planar(source)} - set(kept)
+        kept = set(kept) | planar
         turned_by = {}   # patch: the joins that turned it
         # tangent sources: closed joins first, mirrored rows where they then turn
         held = set() if self.turns is not None and self.turns.tangent() else None
+        kinked = set()
         for _ in range(len(sources) + len(self.joins)):
-            result = _smoothest(self, tols, kept, held)
+            result = _smoothest(self, tols, kept, held, kinked)
             if self.turns is None:
-                return result
+                break
             moved = set(range(len(sources))) - result.kept
             turned = self.turns.turned_joins(result.surfaces, moved)
             if held is not None and turned - held:
@@ -238,7 +261,9 @@ class PatchNetwork:
                 turned_by.setdefault(patch, []).extend(joins)
             kept |= set(turned_by)
         turned_reasons = {p: ("turned", joins) for p, joins in turned_by.items()}
-        return replace(result, reasons={**turned_reasons, **result.reasons})
+        return replace(result, reasons={**dict.fromkeys(planar, ("planar",)),
+                                        **turned_reasons, **result.reasons},
+                       kinked=kinked)
 
 
 def _covering(joins, turned, moved):
@@ -260,22 +285,27 @@ def _covering(joins, turned, moved):
     return out
 
 
-def _smoothest(network, tols, kept, held=None):
-    """The largest energy weight of each independent part of the system
-    (:meth:`_System._components`) within the tolerances, the patches that the joins alone
-    hold out of their tolerance kept."""
+def _smoothest(network, tols, kept, held, kinked):
+    """The largest energy weights within the tolerances (:func:`_bisected`), the patches
+    that the joins alone hold out of their tolerance kept once the joins that put them
+    there keep their source kinks (``kinked``, a set of join indices, updated:
+    :func:`_kinks`)."""
     sources = network.sources
     kept = set(kept)
     count = len(sources)
     reasons = {}
-    for _ in range(count):
+    for _ in range(count + len(network.sides)):
         system = _System(network.forms, kept, network.sides, network.continuity,
-                         network.spread, network.vertices, held)
+                         network.spread, network.vertices, held, kinked)
         solve = _solver(system, network.probes, kept)
         best = solve(0.0)
         over = {f for f in range(count) if best[1][f] > tols[f]} - kept
         if not over:
             break
+        bent = _kinks(network, over, tols, held, kinked) if network.turns is not None \
+            else set()
+        kinked |= bent
+        over -= {p for k in bent for p in (network.joins[k].a, network.joins[k].b)}
         reasons.update({f: ("tolerance", float(best[1][f])) for f in over})
         kept |= over     # the joins hold these too far: they constrain their neighbours
     if len(kept) == count:
@@ -283,24 +313,73 @@ def _smoothest(network, tols, kept, held=None):
                              reasons)
     part = system.patch_components
     members = [np.flatnonzero(part == c) for c in range(part.max() + 1)]
-    lo = np.full(len(members), np.log(LAMBDA_RANGE[0]))
-    hi = np.full(len(members), np.log(LAMBDA_RANGE[1]))
-    lam = np.zeros(len(members))
+    weights = np.zeros(count)
     surfaces, deviations = list(best[0]), best[1].copy()
+    lo = np.full(count, np.log(LAMBDA_RANGE[0]))
+    for whole in (True, False):     # each part's weight, then each patch's from it
+        hi = np.full(count, np.log(LAMBDA_RANGE[1]))
+        _bisected(solve, members, tols, (lo, hi), (weights, surfaces, deviations), whole)
+    surfaces = [sources[f] if f in kept else s for f, s in enumerate(surfaces)]
+    return NetworkResult(surfaces, float(weights[np.concatenate(members)].min()),
+                         deviations, system.g1_rows, kept, reasons)
+
+
+def _bisected(solve, members, tols, bounds, state, whole):
+    """:data:`BISECTIONS` steps of bisection on every moving patch's log energy weight
+    between ``bounds`` (``(lo, hi)`` per patch, updated), the parts ``members`` (the
+    system's independent parts) at once.  A trial that holds every patch of a part
+    within its tolerance is taken for the part (``state``: ``(weights, surfaces,
+    deviations)`` per patch, updated) and raises its patches' lower ends; one that does
+    not lowers the upper ends of all the part's patches (``whole``: one weight per
+    part) or of those over their tolerance only (each patch's weight raised as far as
+    its part stays within its tolerances).  The state holds one solve per part."""
+    lo, hi = bounds
+    weights, surfaces, deviations = state
+    moving = np.concatenate(members)
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
-        trial = solve(np.exp(mid))
-        for c, group in enumerate(members):
-            if np.all(trial[1][group] <= tols[group]):
-                lam[c], lo[c] = np.exp(mid[c]), mid[c]
-                deviations[group] = trial[1][group]
+        trial = np.zeros_like(weights)
+        trial[moving] = np.exp(mid[moving])
+        solved, distances = solve(trial)
+        for group in members:
+            over = group[distances[group] > tols[group]]
+            if over.size == 0:
+                weights[group], lo[group] = trial[group], mid[group]
+                deviations[group] = distances[group]
                 for f in group:
-                    surfaces[f] = trial[0][f]
+                    surfaces[f] = solved[f]
             else:
-                hi[c] = mid[c]
-    surfaces = [sources[f] if f in kept else s for f, s in enumerate(surfaces)]
-    return NetworkResult(surfaces, float(lam.min()), deviations, system.g1_rows, kept,
-                         reasons)
+                failed = group if whole else over
+                hi[failed] = mid[failed]
+
+
+def _kinks(network, over, tols, held, kinked):
+    r"""The smooth joins with mirrored rows (all, or those ``held``; not cuts, not in
+    ``kinked``) of the patches ``over`` their tolerance along which the mirrored rows
+    would move the source's inner poles by more than the tolerance of such a patch:
+    :math:`|w^0_{a,i} + \mu w^0_{b,i}| / (1 + \mu)` (the smallest equal move of the two
+    inner poles that makes the rows mirror) above it at some pole.  Those joins then
+    keep the source's kink instead (:func:`_constraints`)."""
+    source = network.forms.source
+    out = set()
+    for k, (join, border_a, inner_a, border_b, inner_b, mu) in enumerate(network.sides):
+        patches = {join.a, join.b} & over
+        if (not join.smooth or join.cut or k in kinked or not patches
+                or (held is not None and k not in held)):
+            continue
+        residual = source[inner_a] - source[border_a] + mu * (source[inner_b] - source[border_b])
+        if np.linalg.norm(residual, axis=1).max() / (1.0 + mu) > min(tols[p] for p in patches):
+            out.add(k)
+    return out
+
+
+def _planar(patch):
+    """True when the poles of ``patch`` lie within :data:`PLANAR` times their size of
+    one plane (through their centroid, normal to their direction of least spread)."""
+    poles = patch.poles.reshape(-1, 3)
+    centred = poles - poles.mean(axis=0)
+    normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
+    return float(np.abs(centred @ normal).max()) <= PLANAR * _diagonal(poles)
 
 
 def _refined(patch):
@@ -420,11 +499,13 @@ class _System:
     The poles tied by G0 rows form classes; a class tied to a kept pole takes that
     pole's source position (a constant), every other class is one unknown, so that the
     poles are :math:`C = P z + h` (:math:`P` a 0/1 matrix, :math:`h` the held
-    positions), per coordinate.  The G1 rows remain as constraints :math:`A C = 0`, per
-    coordinate, and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
+    positions), per coordinate.  The G1 rows remain as constraints :math:`A C = k`, per
+    coordinate (:math:`k` the source's residuals on the rows of the joins ``kinked``, 0
+    elsewhere), and the vertices' tangent planes as :math:`R\,\mathrm{vec}(C) = 0`
     over the three coordinates together (:func:`_constraints`, :func:`_plane_rows`)."""
 
-    def __init__(self, forms, kept, sides, continuity, spread, vertices, held=None):
+    def __init__(self, forms, kept, sides, continuity, spread, vertices, held=None,
+                 kinked=frozenset()):
         self.patches = forms.patches
         self.offsets, self.mass, self.energy = forms.offsets, forms.mass, forms.energy
         self.source = forms.source
@@ -434,18 +515,19 @@ class _System:
         split = _split_vertices(self.source, fixed, spread, vertices.groups)
         fixed[split] = True
         self.fixed = fixed
-        ties, mirrored, planes, self.g1_rows = _constraints(self, sides, continuity, split,
-                                                            vertices, held)
+        ties, mirrored, kinks, planes, self.g1_rows = _constraints(
+            self, sides, continuity, split, vertices, held, kinked)
         self.basis, self.held = self._eliminated(ties)
-        self.kkt, self.rhs = self._kkt(mirrored)
+        self.owner = np.repeat(np.arange(len(self.patches)), np.diff(self.offsets))
+        self.kkt, self.rhs = self._kkt(mirrored, kinks)
         self.coupling = self._coupling(planes)
         self.diagonals = [form.diagonal() for form in (self.mass, self.energy)]
-        self.components, self.patch_components = self._components()
+        self.patch_components = self._components()
 
     def _components(self):
-        """The independent parts of the system: the component of each unknown in the
-        graph of the KKT matrix and the tangent-plane rows (patches joined only through
-        kept ones share no unknown), and the component of each patch (-1 for a patch
+        """The independent parts of the system, from the components of the unknowns in
+        the graph of the KKT matrix and the tangent-plane rows (patches joined only
+        through kept ones share no unknown): the component of each patch (-1 for a patch
         without unknowns)."""
         unknowns = self.basis.shape[1]
         graph = abs(self.kkt[0]) + abs(self.kkt[1]) + abs(self.kkt[2])
@@ -457,10 +539,9 @@ class _System:
         _, label = connected_components(graph, directed=False)
         _, label = np.unique(label[:unknowns], return_inverse=True)
         per_patch = np.full(len(self.patches), -1)
-        owner = np.repeat(np.arange(len(self.patches)), np.diff(self.offsets))
         rows, columns = self.basis.nonzero()
-        per_patch[owner[rows]] = label[columns]
-        return label, per_patch
+        per_patch[self.owner[rows]] = label[columns]
+        return per_patch
 
     def _eliminated(self, ties):
         """``(P, h)`` of the classes of poles tied by the G0 rows ``ties`` (pairs of pole
@@ -468,18 +549,20 @@ class _System:
         :func:`~cq_fairing.core.joins.shared_basis`."""
         return shared_basis(ties, np.where(self.fixed[:, None], self.source, np.nan))
 
-    def _kkt(self, mirrored):
-        r"""The per-coordinate KKT matrix :math:`K_M + \lambda K_H + s K_A` in parts and
-        its right-hand sides :math:`b_M + \lambda b_H` and :math:`s b_A` in parts, one
-        column per coordinate:
+    def _kkt(self, mirrored, kinks):
+        r"""The parts :math:`K_M, K_H, K_A` of the per-coordinate KKT matrix
+        :math:`K_M + K_\Lambda + s K_A` (:meth:`solve`; :math:`K_H` its energy unweighted, for
+        :meth:`_components`) and the parts :math:`b_M, s b_A` of its right-hand sides,
+        one column per coordinate:
 
         .. math:: K_M = \begin{bmatrix}P^T M P & 0\\ 0 & 0\end{bmatrix},\;
                   K_H = \begin{bmatrix}P^T H P & 0\\ 0 & 0\end{bmatrix},\;
                   K_A = \begin{bmatrix}0 & B^T\\ B & -\varepsilon I\end{bmatrix},
 
-        :math:`B = A P`, :math:`b_M = P^T M (C_0 - h)`, :math:`b_H = -P^T H h`,
-        :math:`b_A = -A h` (:math:`C_0` the sources' poles, :math:`\varepsilon` =
-        :data:`KKT_EPS`)."""
+        :math:`B = A P`, :math:`b_M = P^T M (C_0 - h)`, :math:`b_A = k - A h`
+        (:math:`C_0` the sources' poles, :math:`k` the rows' right-hand sides:
+        ``kinks``, the source's residual on the rows of a join that keeps its kink, 0
+        elsewhere; :math:`\varepsilon` = :data:`KKT_EPS`)."""
         b = (mirrored @ self.basis).tocsc()
         unknowns, rows = self.basis.shape[1], b.shape[0]
         empty = sp.csc_matrix((rows, rows))
@@ -489,7 +572,7 @@ class _System:
                               [b, -KKT_EPS * sp.identity(rows)]], format="csc")
                      if rows else sp.csc_matrix((unknowns, unknowns)))
         rhs = [self.basis.T @ (self.mass @ (self.source - self.held)),
-               -(self.basis.T @ (self.energy @ self.held)), -(mirrored @ self.held)]
+               kinks - mirrored @ self.held]
         return parts, rhs
 
     def _coupling(self, planes):
@@ -514,11 +597,14 @@ class _System:
         .. math:: K x_d + s E\,\mathrm{diag}(n_d)\,\nu = f_d,\qquad
                   s \sum_d \mathrm{diag}(n_d) E^T x_d - \varepsilon s\,\nu = s p,
 
-        :math:`K = K_M + \Lambda K_H + s K_A`, the same for x, y and z, and :math:`f_d`
-        column :math:`d` of :math:`[b_M + \Lambda b_H;\; s b_A]` (:meth:`_kkt`);
-        :math:`\Lambda` the diagonal of each unknown's energy weight, ``lam`` of its
-        independent part (:meth:`_components`; one weight for all or one per part);
-        :math:`s` the mean diagonal of :math:`M + \max\lambda\, H`, which scales the
+        :math:`K = K_M + K_\Lambda + s K_A`, the same for x, y and z, and :math:`f_d`
+        column :math:`d` of :math:`[b_M + b_\Lambda;\; s b_A]` (:meth:`_kkt`), with the
+        weighted energy :math:`K_\Lambda = \begin{bmatrix}P^T \Lambda H P & 0\\ 0 &
+        0\end{bmatrix}` and :math:`b_\Lambda = -P^T \Lambda H h`, :math:`\Lambda` the
+        diagonal of each pole's patch's weight :math:`\lambda_f` (``lam``: one for all
+        or one per patch; :math:`H` is block-diagonal by patch, so :math:`\Lambda H =
+        \sum_f \lambda_f H_f`);
+        :math:`s` the mean diagonal of :math:`M + \max\lambda_f\, H`, which scales the
         constraint rows like the rest; :math:`E, n_d, p` the tangent-plane rows
         (:meth:`_coupling`).  Only :math:`K` is factorized; the plane rows, which couple
         the coordinates, come in exactly by their Schur complement, :math:`W = K^{-1}E`:
@@ -532,14 +618,14 @@ class _System:
         unknowns = self.basis.shape[1]
         if unknowns == 0:
             return self.held
-        lam = np.broadcast_to(np.asarray(lam, dtype=float), (self.patch_components.max() + 1,))
-        per_unknown = lam[self.components]
+        lam = np.broadcast_to(np.asarray(lam, dtype=float), (len(self.patches),))
         scale = float(np.mean(self.diagonals[0] + lam.max() * self.diagonals[1]))
-        weights = sp.diags(np.concatenate([per_unknown,
-                                           np.zeros(self.kkt[1].shape[0] - unknowns)]))
-        lu = spla.splu((self.kkt[0] + weights @ self.kkt[1] + scale * self.kkt[2]).tocsc())
+        weighted = self.basis.T @ (sp.diags(lam[self.owner]) @ self.energy)   # P^T Lambda H
+        rows = self.kkt[0].shape[0] - unknowns
+        energy = sp.block_diag([weighted @ self.basis, sp.csc_matrix((rows, rows))])
+        lu = spla.splu((self.kkt[0] + energy + scale * self.kkt[2]).tocsc())
         plane_rows, plane_columns, normals, plane_rhs = self.coupling
-        rhs = np.vstack([self.rhs[0] + per_unknown[:, None] * self.rhs[1], scale * self.rhs[2]])
+        rhs = np.vstack([self.rhs[0] - weighted @ self.held, scale * self.rhs[1]])
         solved = _solved(lu, np.hstack([rhs, plane_columns]))
         x, w = solved[:, :3], solved[:, 3:]
         if plane_rhs.size:
@@ -688,12 +774,13 @@ def _split_vertices(source, fixed, spread, groups):
     return np.array(out, dtype=int)
 
 
-def _constraints(system, sides, continuity, split, vertices, held=None):
+def _constraints(system, sides, continuity, split, vertices, held=None, kinked=()):
     """The G0 pole identities (pairs of pole indices), the sparse G1 mirrored rows and
     the C2 rows across cuts of one surface (per coordinate; across a cut with any
-    ``continuity``: :func:`_curvature_rows`), the vertices' tangent-plane rows (over the
-    three coordinates: :func:`_plane_rows`) and the number of those rows per
-    coordinate.
+    ``continuity``: :func:`_curvature_rows`), their right-hand sides (rows, 3: on the
+    rows of the joins ``kinked`` the sources' values, which keep the source's kink
+    there, 0 elsewhere), the vertices' tangent-plane rows (over the three coordinates:
+    :func:`_plane_rows`) and the number of those rows per coordinate.
 
     The kept patches' poles are one held class; the joins' border poles are tied pair
     after pair (``vertices.pairs``, those of the ``split`` vertices left out), each pair
@@ -735,7 +822,9 @@ def _constraints(system, sides, continuity, split, vertices, held=None):
     used = values != 0.0
     matrix = sp.csr_matrix((values[used], (np.nonzero(used)[0], rows.columns[taken][used])),
                            shape=(len(taken), size))
-    return ties, matrix, _plane_rows(system, fans, vertices.normals, label), len(taken)
+    kinks = np.isin(rows.side[taken], list(kinked))[:, None] * (matrix @ system.source)
+    return (ties, matrix, kinks, _plane_rows(system, fans, vertices.normals, label),
+            len(taken))
 
 
 class _Rows(NamedTuple):

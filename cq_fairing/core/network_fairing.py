@@ -57,16 +57,17 @@ class NetworkFairing:
     kept : list of int
         The faces of the network that kept their surfaces.
     joins : list of Join
-        The joins held closed (G0, and G1 where smooth).
+        The joins held closed (G0, and G1 where smooth, or turning as the source's where
+        tangency would hold a face over its tolerance).
     smoothing : float
-        The smallest energy weight :math:`\lambda` reached by the network's independent
-        parts (:func:`~cq_fairing.core.network.fair_network`).
+        The smallest energy weight :math:`\lambda_f` reached by the network's moved
+        pieces (:func:`~cq_fairing.core.network.fair_network`).
     surfaces : dict
         ``{face: BSplineSurface}`` of the moved faces, as checked.
     reasons : dict
         ``{face: reason}``: why the network kept each face of :attr:`kept` that the
-        solve kept (the joins alone hold it over its tolerance, or a smooth join of it
-        would turn more than the source's; :func:`kept_reasons`, worded by
+        solve kept (the joins alone hold it over its tolerance, a smooth join of it
+        would turn more than the source's, or it is planar; :func:`kept_reasons`, worded by
         :func:`kept_sentence`); a face kept because all its pieces lie along joins the
         network does not fair across has none.
     """
@@ -132,14 +133,16 @@ def kept_reasons(pieces_of, reasons, tols, join_faces):
     the worst distance ``d`` a piece's joins alone hold it at, over the tolerance ``tol``
     it was solved to (infinite where it folds), else ``("turned", faces)``, the other
     faces across the smooth joins that would turn (empty where the join runs between
-    its own pieces).  :func:`kept_sentence` words it.
+    its own pieces), else ``("planar",)``, the face is planar.  :func:`kept_sentence`
+    words it.
 
     Parameters
     ----------
     pieces_of : dict
         ``{face: [piece, ...]}`` of the faces kept, pieces indexed as the network's.
     reasons : dict
-        The network's ``{piece: ("tolerance", d) or ("turned", [join, ...])}``.
+        The network's ``{piece: ("tolerance", d), ("turned", [join, ...]) or
+        ("planar",)}``.
     tols : sequence of float
         The tolerance each piece was solved to.
     join_faces : sequence of (int, int)
@@ -148,12 +151,15 @@ def kept_reasons(pieces_of, reasons, tols, join_faces):
     out = {}
     for face, own in pieces_of.items():
         why = [reasons[k] + (tols[k],) for k in own if k in reasons]
-        over = [(d, tol) for kind, d, tol in why if kind == "tolerance"]
+        over = [(w[1], w[2]) for w in why if w[0] == "tolerance"]
+        turned = [w[1] for w in why if w[0] == "turned"]
         if over:
             out[face] = ("tolerance", *max(over))
-        elif why:
-            out[face] = ("turned", sorted({other for _, joins, _ in why for join in joins
+        elif turned:
+            out[face] = ("turned", sorted({other for joins in turned for join in joins
                                            for other in join_faces[join] if other != face}))
+        elif why:
+            out[face] = ("planar",)
     return out
 
 
@@ -167,6 +173,9 @@ def kept_sentence(reason, name=lambda face: f"face {face + 1}"):
                 "folds over itself (its normal turns against the source's)")
         return (f"with its network's joins held it {what}; kept as it was, and its "
                 "neighbours close onto it")
+    if reason[0] == "planar":
+        return ("planar: energy fairing could only bend it out of its plane; kept as it "
+                "was, and its neighbours close onto it")
     where = (f"with {', '.join(name(face) for face in reason[1])}" if reason[1]
              else "between its own pieces")
     return (f"with its network's joins held its smooth joins ({where}) would turn more "

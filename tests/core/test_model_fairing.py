@@ -141,7 +141,7 @@ def test_a_face_with_a_join_outside_the_network_keeps_its_surface():
 def test_a_kept_face_takes_the_worst_of_its_pieces_reasons():
     """Two pieces of face 5: a distance over the tolerance outweighs a turned join; a
     turned join alone names the faces across it, none across a cut between its own
-    pieces; an infinite distance is a fold."""
+    pieces; an infinite distance is a fold; a face whose pieces are planar is."""
     join_faces = [(5, 7), (5, 5), (9, 5)]
     both = kept_reasons({5: [0, 1]}, {0: ("turned", [0]), 1: ("tolerance", 0.2)},
                         [0.1, 0.1], join_faces)
@@ -153,3 +153,7 @@ def test_a_kept_face_takes_the_worst_of_its_pieces_reasons():
     assert "between its own pieces" in kept_sentence(("turned", []))
     assert "stays 0.2 from its source" in kept_sentence(both[5])
     assert "folds" in kept_sentence(("tolerance", np.inf, 0.1))
+    planar = kept_reasons({5: [0, 1], 6: [2]}, {0: ("planar",), 1: ("turned", [1]),
+                                                2: ("planar",)}, [0.1, 0.1, 0.1], join_faces)
+    assert planar == {5: ("turned", []), 6: ("planar",)}
+    assert kept_sentence(planar[6]).startswith("planar")

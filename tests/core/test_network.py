@@ -31,7 +31,8 @@ from cq_fairing.core.spaces import SplineSpace
 from cq_fairing.errors import InvalidInputError
 
 from .naive import basis_matrix, dense_gram
-from .test_joins import _joins_measured
+from .test_joins import SAMPLES as ALONG
+from .test_joins import _border, _joins_measured
 
 
 def _dense_deviation(surfaces, sources):
@@ -107,7 +108,9 @@ def test_a_tolerance_below_what_the_joins_need_keeps_every_patch(grid):
 def test_each_patch_the_network_keeps_has_its_reason(grid):
     """A patch asked to be kept has no reason; one the joins alone hold over its own
     (tiny) tolerance has ``("tolerance", d)``, ``d`` over that tolerance; on the grid at
-    a tolerance below what its joins need, every patch has that reason."""
+    a tolerance below what its joins need, every patch has a reason: held tangent its
+    joins would hold it over, and with their source kinks kept they would turn more
+    than the source's, ``("turned", joins)``, joins that keep their kinks."""
     example = patch_network()
     asked = fair_network(example.patches, example.joins, 0.01, kept=[0])
     assert asked.kept == {0} and asked.reasons == {}
@@ -117,7 +120,62 @@ def test_each_patch_the_network_keeps_has_its_reason(grid):
     assert kind == "tolerance" and distance > 1e-12
     grid_result = fair_network(grid.patches, grid.joins, 1e-4)
     assert set(grid_result.reasons) == {0, 1, 2, 3}
-    assert all(k == "tolerance" and d > 1e-4 for k, d in grid_result.reasons.values())
+    assert all(k == "turned" and joins and set(joins) <= grid_result.kinked
+               for k, joins in grid_result.reasons.values())
+
+
+def _angles(surfaces, join):
+    """The normal angle (degrees) across ``join`` at 101 equal parameters along it."""
+    _, na = _border(surfaces[join.a], join.side_a, ALONG)
+    _, nb = _border(surfaces[join.b], join.side_b, 1 - ALONG if join.reversed else ALONG)
+    return np.degrees(np.arccos(np.clip(np.abs(np.sum(na * nb, axis=1)), 0.0, 1.0)))
+
+
+@pytest.mark.parametrize(("example", "tol", "kinked"), [
+    ("L", 0.002, {1}), ("L", 0.001, {0, 1}), ("crossing", 0.002, {0, 2})])
+def test_a_join_whose_tangency_would_hold_a_patch_over_keeps_the_source_kink(
+        example, tol, kinked):
+    """The L of patch_network and the one-span 2 x 2 grid (a crossing) at tolerances
+    below what tangent joins need: made tangent, the joins hold patches over their
+    tolerance (which were then kept).  The joins along which tangency would move the
+    source's poles by more than the tolerance keep the source's kink instead: every
+    patch moves, within its tolerance, the joins stay closed and turn no more than the
+    source's + 0.05 deg at the same parameters, those joins by more than 0.5 deg, and
+    the L's other join is tangent (at the crossing, whose rows at the vertex the kinked
+    joins share, the others turn less than the source's)."""
+    source = patch_network() if example == "L" else patch_grid(poles=4)
+    network = PatchNetwork(source.patches, source.joins)
+    tangent = _System(network.forms, set(), network.sides, "G1", network.spread,
+                      network.vertices)
+    assert _dense_deviation(tangent.surfaces(tangent.solve(0.0)), source.patches).max() > tol
+    result = fair_network(source.patches, source.joins, tol)
+    assert result.kinked == kinked and not result.kept and result.smoothing > 0
+    assert _dense_deviation(result.surfaces, source.patches).max() <= tol * 1.02
+    assert _joins_measured(result.surfaces, source.joins)[0] <= 1e-9 * 2.0
+    for k, join in enumerate(source.joins):
+        faired, before = _angles(result.surfaces, join), _angles(source.patches, join)
+        assert np.max(faired - before) <= 0.05
+        if k in kinked:
+            assert faired.max() > 0.5
+        elif example == "L":
+            assert faired.max() <= 0.05
+
+
+def test_a_planar_patch_is_kept_and_its_neighbours_close_onto_it():
+    """The L of patch_network with its corner patch flattened (z = 0, and the border
+    rows its neighbours share with it): the planar patch keeps its surface, with the
+    reason ``("planar",)``, and the two others move and close onto it."""
+    source = patch_network()
+    patches = [p.poles.copy() for p in source.patches]
+    patches[0][..., 2] = 0.0
+    for join in source.joins:
+        _border_row_of(patches[join.b], join.side_b)[..., 2] = 0.0
+    patches = [replace(p, poles=poles) for p, poles in zip(source.patches, patches)]
+    result = fair_network(patches, source.joins, 0.05)
+    assert result.kept == {0} and result.reasons == {0: ("planar",)}
+    assert np.array_equal(result.surfaces[0].poles, patches[0].poles)
+    assert all(_dense_deviation([result.surfaces[k]], [patches[k]])[0] > 1e-4 for k in (1, 2))
+    assert _joins_measured(result.surfaces, source.joins)[0] <= 1e-9 * 2.0
 
 
 def test_one_span_patches_are_refined_and_stay_the_same_surface_where_kept():
@@ -137,7 +195,11 @@ def test_joins_along_different_knots_are_refused(grid):
 
 def _border_row(surface, side):
     """The border poles along ``side`` in the order of its along-parameter."""
-    poles = surface.poles
+    return _border_row_of(surface.poles, side)
+
+
+def _border_row_of(poles, side):
+    """The border row of a net ``poles`` along ``side`` (a view)."""
     return {"u0": poles[0], "u1": poles[-1], "v0": poles[:, 0], "v1": poles[:, -1]}[side]
 
 
@@ -318,8 +380,8 @@ def test_the_schur_complement_solves_the_coupled_kkt_system_of_a_fan(kept):
     system = _System(network.forms, set(kept), network.sides, "G1", network.spread,
                      network.vertices)
     assert np.array_equal(np.flatnonzero(system.fixed), np.arange(6 * 6 * len(kept)))  # no split
-    _, mirrored, planes, g1_rows = _constraints(system, network.sides, "G1",
-                                                np.array([], dtype=int), network.vertices)
+    _, mirrored, _, planes, g1_rows = _constraints(system, network.sides, "G1",
+                                                   np.array([], dtype=int), network.vertices)
     difference, normals = planes
     assert g1_rows > 0 and difference.shape[0] == (1 if kept else 3)   # one per free edge
     assert np.all(np.abs(normals).max(axis=0) > 0.1)           # x, y and z coupled
@@ -450,8 +512,8 @@ def test_the_constraints_are_those_of_ties_taken_one_at_a_time(example, kept, he
     system = _System(network.forms, set(kept), network.sides, "G1", network.spread,
                      network.vertices, held)
     split = np.array([], dtype=int)
-    ties, mirrored, planes, g1_rows = _constraints(system, network.sides, "G1", split,
-                                                   network.vertices, held)
+    ties, mirrored, _, planes, g1_rows = _constraints(system, network.sides, "G1", split,
+                                                      network.vertices, held)
     expected_ties, expected_rows = _constraints_one_by_one(system, network, split, held)
     assert [tuple(t) for t in np.asarray(ties).tolist()] == expected_ties
     assert g1_rows == len(expected_rows) == mirrored.shape[0] > 0
