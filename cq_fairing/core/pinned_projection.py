@@ -17,9 +17,13 @@ projection (:mod:`cq_fairing.core.projection`): its normal equations
 :math:`(G_u\otimes G_v)\,C = E_u C_S E_v^T` per coordinate, :math:`G = \langle\Phi|\Phi\rangle`
 of the target, :math:`E = \langle\Phi|\Phi_S\rangle`, in coordinates centred on the
 source's poles.  A rational source is solved in homogeneous coordinates
-:math:`(X, w) = (w (x - c), w)`, where both conditions stay linear: at a point where
-:math:`T = S`, :math:`X - (S - c)\,w = 0` (three rows, the weight free) and
-:math:`n\cdot T_u = 0 \iff n\cdot X_u - n\cdot(S - c)\,w_u = 0`.
+:math:`(X, w) = (w (x - c), w)`, where both conditions stay linear: a point is pinned
+to the source's homogeneous point, :math:`X = w_S (S - c)` and :math:`w = w_S` (four
+rows: then :math:`T = S`), and
+:math:`n\cdot T_u = 0 \iff n\cdot X_u - n\cdot(S - c)\,w_u = 0`.  Between the
+samples the weights are free: where the rows are more than the target can meet, the
+compromise may take them through zero, and the target folds (its normals turn by up to
+180 degrees against the source's); :func:`pin_face` measures that as the angle.
 
 Each row is scaled so that its residual is a length: a point row by :math:`1/w_S`, a
 tangent row by :math:`\ell / (w_S |S_u|)`, whose residual is then the tilt of
