@@ -627,9 +627,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     ``cq-fairing fair`` does): the patch grids that form whole parts of the shape as one
     surface each, the other faces projected together, and the faces already at their
     coarsest together by energy; closed to round-off, and smooth across the joins that
-    were smooth in the source.  Their joins are measured either way.  The ``neighbours``, faces of the same shape
-    not faired, take part as fixed faces: a faired face's join with one stays as the
-    source has it.
+    were smooth in the source.  Their joins are measured either way.  The
+    ``neighbours``, faces of the same shape not faired, take part as fixed faces: a
+    faired face's join with one stays as the source has it.
 
     Parameters
     ----------
