@@ -18,6 +18,7 @@ STEP_FLOOR = 1e-10   # a Newton step moving the foot point less than this x size
 
 
 HALVINGS = 12        # a Newton step that increases the distance is halved up to this often
+BATCHED_TRIALS = 512  # halvings of few points are tried together, this many trials a call
 
 
 # -- closest points ---------------------------------------------------------------------------
@@ -163,22 +164,38 @@ def _span_speeds(curve):
     return np.lib.stride_tricks.sliding_window_view(speed, p).max(axis=1)
 
 
-def _damped(trial, active, step, dist, halvings=HALVINGS):
+def _damped(trial, active, step, dist, halvings=HALVINGS, batched=BATCHED_TRIALS):
     """Halve steps until the distance does not grow; returns the last trial per point.
 
     Only the points whose distance grew pay for a halving.  A Newton step can overshoot
     by far more than 2^5: on a fillet whose u domain is 6e-4 long (``|S_u|`` about 2e3,
     ``|S_v|`` about 2), the first step from a point 0.08 off was twice the u domain, and
-    the point stopped there, 30 times its true distance (0.0024) away."""
+    the point stopped there, 30 times its true distance (0.0024) away.
+
+    The halvings of few points are tried together: the steps :math:`s / 2^k` for as
+    many ``k`` as keep a call within ``batched`` trials (all that remain for a
+    handful of points, one at a time for thousands), and each point takes its first
+    ``k`` that does not grow its distance, or its last.  That is the same as halving
+    one ``k`` after another (powers of two scale a step exactly), in a few evaluations
+    where the last Newton iterations of a search had a dozen of one or two points
+    each."""
     new, d_new = trial(active, step)
-    for _ in range(halvings):
-        worse = d_new > dist[active]
-        if not worse.any():
-            break
-        step = np.where(worse.reshape((-1,) + (1,) * (step.ndim - 1)), 0.5 * step, step)
-        sel = np.flatnonzero(worse)
-        n2, d2 = trial(active[sel], step[sel])
-        new[sel], d_new[sel] = n2, d2
+    worse = np.flatnonzero(d_new > dist[active])
+    done = 0
+    while worse.size and done < halvings:
+        count = min(halvings - done, max(1, batched // worse.size))
+        factors = 0.5 ** np.arange(done + 1, done + count + 1)
+        steps = (factors.reshape((count,) + (1,) * step.ndim) * step[worse]).reshape(
+            (-1,) + step.shape[1:])
+        tried, d_tried = trial(np.tile(active[worse], count), steps)
+        tried = tried.reshape((count, worse.size) + tried.shape[1:])
+        d_tried = d_tried.reshape(count, worse.size)
+        better = d_tried <= dist[active[worse]]
+        first = np.where(better.any(axis=0), better.argmax(axis=0), count - 1)
+        columns = np.arange(worse.size)
+        new[worse], d_new[worse] = tried[first, columns], d_tried[first, columns]
+        worse = worse[~better.any(axis=0)]
+        done += count
     return new, d_new
 
 

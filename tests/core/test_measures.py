@@ -13,7 +13,7 @@ import cq_fairing as cf
 from cq_fairing.core import examples, probes
 from cq_fairing.core import measures as M
 from cq_fairing.core.adaptive_knots import _source_density, equidistributed_space
-from cq_fairing.core.closest_points import _distance, distance_floor
+from cq_fairing.core.closest_points import HALVINGS, _damped, _distance, distance_floor
 from cq_fairing.core.plans import target_space
 from cq_fairing.core.probes import _FlatBound, _RowBound, box_region
 from cq_fairing.core.projection import project_curve, project_surface
@@ -488,6 +488,48 @@ def test_newton_recovers_from_steps_far_past_a_short_domain():
     nearest_sample = cKDTree(dense.reshape(-1, 3)).query(points)[0]
     _, _, found = M.closest_points_surface(strip, points, u0, v0)
     assert np.all(found <= nearest_sample + 1e-9)
+
+
+def _halved_one_at_a_time(trial, active, step, dist):
+    """Naive damping: halve the steps of the points whose distance grew, one halving
+    after another, re-trying those points only (the rule :func:`_damped` batches)."""
+    new, d_new = trial(active, step)
+    for _ in range(HALVINGS):
+        worse = d_new > dist[active]
+        if not worse.any():
+            break
+        step = np.where(worse.reshape((-1,) + (1,) * (step.ndim - 1)), 0.5 * step, step)
+        sel = np.flatnonzero(worse)
+        new[sel], d_new[sel] = trial(active[sel], step[sel])
+    return new, d_new
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), count=st.sampled_from([1, 3, 40, 700]),
+       batched=st.sampled_from([1, 12, 512]), surface=st.booleans())
+def test_batched_halvings_take_the_steps_of_one_halving_at_a_time(seed, count, batched,
+                                                                  surface):
+    """Trials of a wavy distance (steps of random sizes, many overshooting by up to
+    2^14): each point ends at the same trial, bit for bit, whether its halvings are
+    tried together or one after another, and whatever the batch size."""
+    rng = np.random.default_rng(seed)
+    dims = 2 if surface else 1
+    start = rng.uniform(-1.0, 1.0, (count, dims))
+    target = rng.uniform(-1.0, 1.0, (count, dims))
+    step = (target - start) * 2.0 ** rng.integers(0, 15, (count, 1))
+    if not surface:
+        start, target, step = start[:, 0], target[:, 0], step[:, 0]
+
+    def trial(idx, st_):
+        new = start[idx] + st_
+        offset = (new - target[idx]).reshape(len(idx), -1)
+        return new, np.sqrt((offset ** 2).sum(axis=1)) + 0.1 * np.sin(40.0 * offset).sum(axis=1) ** 2
+
+    active = np.arange(count)
+    dist = trial(active, np.zeros_like(step))[1]
+    naive = _halved_one_at_a_time(trial, active, step.copy(), dist)
+    fast = _damped(trial, active, step.copy(), dist, batched=batched)
+    assert np.array_equal(naive[0], fast[0]) and np.array_equal(naive[1], fast[1])
 
 
 def test_a_region_excludes_whole_rows_from_the_maximum():
