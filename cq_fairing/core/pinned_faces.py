@@ -23,7 +23,9 @@ from .joint_projection import SOURCE_GAP
 from .pinned_projection import GAP, pin_face
 
 __all__ = ["PinAttempt", "pin_budget", "pinned_sides", "attempt_pin", "pinned_sentence",
-           "unpinned_sentence", "over_sentence", "held_by_pins"]
+           "unpinned_sentence", "over_sentence", "held_by_pins", "FOLD"]
+
+FOLD = 90.0   # degrees: a pinned target whose normal turns more than this has folded
 
 
 @dataclass(frozen=True)
@@ -113,8 +115,10 @@ def unpinned_sentence(neighbours, attempt):
         return f"{joins}, where no fairing can hold them"
     if outcome.surface is None:
         return f"{joins}; pinned to its source there it needs a net as large as its source's"
+    turn = (f"turn {outcome.angle:.2g} deg" if outcome.angle <= FOLD else
+            f"fold (its normal turns by up to {outcome.angle:.0f} deg against the source's)")
     return (f"{joins}; pinned to its source there it would still open {outcome.gap:.2g} or "
-            f"turn {outcome.angle:.2g} deg after {outcome.refined} refinements")
+            f"{turn} after {outcome.refined} refinements")
 
 
 def over_sentence(deviation, tolerance, refined):
