@@ -48,6 +48,7 @@ from ..errors import InvalidInputError, NumericalError, ToleranceNotMetError
 from .adaptive_surface import fair_surface_adaptive
 from .fairing import fair_surface
 from .geometry import BSplineSurface, closed_axes, collapse_rows, collapsed_rows
+from .gram import sandwiched
 from .options import DEFAULTS
 from .plans import target_space
 from .results import SurfaceFairResult
@@ -431,6 +432,6 @@ def non_rational(surface):
     mu = surface.u_space.collocation(u).toarray()
     mv = surface.v_space.collocation(v).toarray()
     pu, pv = np.linalg.pinv(mu), np.linalg.pinv(mv)
-    poles = np.einsum("ia,abd,jb->ijd", pu, points, pv)
+    poles = sandwiched(pu, points, pv)
     return BSplineSurface(poles, surface.u_knots, surface.v_knots, surface.u_degree,
                           surface.v_degree)

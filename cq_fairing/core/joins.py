@@ -98,7 +98,7 @@ from ..errors import InvalidInputError
 from .banded import BandedSPD
 from .evaluation import rational_derivatives
 from .geometry import BSplineSurface
-from .gram import gram_matrix
+from .gram import gram_matrix, sandwiched
 from .spaces import SplineSpace
 
 __all__ = ["BorderJoin", "JointPatch", "JointResult", "fair_patches", "join_angles",
@@ -978,9 +978,9 @@ class _Patchwork:
         for index in self.slots:
             source, (tu, tv) = self.patches[index].source, self.spaces[index]
             blocks.append(sp.kron(gram_matrix(tu), gram_matrix(tv)))
-            moments.append(np.einsum("ia,abd,jb->ijd", gram_matrix(tu, source.u_space).toarray(),
-                                     _net(source, self.lifted),
-                                     gram_matrix(tv, source.v_space).toarray())
+            moments.append(sandwiched(gram_matrix(tu, source.u_space).toarray(),
+                                      _net(source, self.lifted),
+                                      gram_matrix(tv, source.v_space).toarray())
                            .reshape(-1, self.dimension))
         return sp.block_diag(blocks, format="csr"), np.concatenate(moments)
 

@@ -27,7 +27,7 @@ import scipy.linalg as sla
 
 from ..errors import InvalidInputError, InvalidToleranceError, UnsupportedGeometryError
 from .geometry import BSplineSurface, extent
-from .gram import gram_matrix
+from .gram import gram_matrix, sandwiched
 from .spaces import SplineSpace
 
 __all__ = ["MergedGrid", "merge_grid", "split_grid", "cut_surface", "join_pieces", "oriented",
@@ -135,8 +135,8 @@ class MergedGrid:
             terms.append((gram_matrix(target).toarray(), gram_matrix(target, space).toarray(),
                           at_breaks, at_breaks.T @ space.collocation(breaks).toarray()))
         (gu, eu, fu, nu), (gv, ev, fv, nv) = terms
-        rhs = (np.einsum("ia,abd,jb->ijd", eu + weight * nu, source.poles, ev)
-               + weight * np.einsum("ia,abd,jb->ijd", eu, source.poles, nv))
+        rhs = (sandwiched(eu + weight * nu, source.poles, ev)
+               + weight * sandwiched(eu, source.poles, nv))
         # A1 C B1 + A2 C B2 = R with A2 Q = A1 Q diag(lam), Q^T A1 Q = I:  C = Q Y,
         # (B1 + lam_i B2) y_i = (Q^T R)_i
         lam, q = sla.eigh(gu, gu + weight * fu.T @ fu)

@@ -54,7 +54,7 @@ import scipy.sparse.linalg as spla
 
 from .evaluation import surface_derivatives
 from .geometry import BSplineSurface, collapsed_kept
-from .gram import gram_matrix
+from .gram import gram_matrix, sandwiched
 from .joins import DEGENERATE, kkt_solve
 from .joint_projection import REFINEMENTS, refined_targets
 from .results import _centred_coefficients
@@ -160,7 +160,7 @@ def _projection(source, target, net):
     block = sp.kron(gram_matrix(tu), gram_matrix(tv), format="csr")
     eu = gram_matrix(tu, source.u_space).toarray()
     ev = gram_matrix(tv, source.v_space).toarray()
-    moments = np.einsum("ia,abd,jb->dij", eu, net, ev)
+    moments = np.moveaxis(sandwiched(eu, net, ev), -1, 0)
     return sp.block_diag([block] * net.shape[2], format="csr"), moments.ravel()
 
 

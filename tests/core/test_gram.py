@@ -1,12 +1,12 @@
 """Exact Gram matrices: dense quadrature, closed forms, symmetry, band structure."""
 
 import numpy as np
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cq_fairing import SplineSpace
 from cq_fairing.core.banded import BandedSPD, bandwidth
-from cq_fairing.core.gram import gram_matrix
+from cq_fairing.core.gram import gram_matrix, sandwiched
 
 from .naive import dense_gram, random_clamped_knots
 
@@ -48,3 +48,17 @@ def test_gram_is_banded_and_the_banded_solver_is_exact():
     rhs = np.random.default_rng(0).normal(size=(s.dimension, 4))
     x = BandedSPD(g).solve(rhs)
     assert np.allclose(g @ x, rhs, atol=1e-10)
+
+
+@settings(max_examples=40, deadline=None)
+@given(shape=st.tuples(*[st.integers(1, 9)] * 5), seed=st.integers(0, 2**31 - 1))
+def test_sandwiched_is_the_plain_sum_over_both_indices(shape, seed):
+    """L C R^T per coordinate against the explicit double sum over a and b."""
+    i, a, b, j, d = shape
+    rng = np.random.default_rng(seed)
+    left, net, right = rng.normal(size=(i, a)), rng.normal(size=(a, b, d)), rng.normal(size=(j, b))
+    expected = np.zeros((i, j, d))
+    for p in range(a):
+        for q in range(b):
+            expected += left[:, p, None, None] * right[None, :, q, None] * net[p, q]
+    assert np.allclose(sandwiched(left, net, right), expected, rtol=1e-12, atol=1e-12)
