@@ -23,6 +23,7 @@
     python benchmarks/bench_joins.py [--rounds 3]   # grid; fuselage 2.5, testtoler 0.01,
                                                     # shell_patches 0.083 (its default),
                                                     # linkrods 0.01, impeller 0.2 (its default)
+    python benchmarks/bench_joins.py --models testtoler   # those models only, no grid
 """
 
 import argparse
@@ -275,9 +276,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3,
                         help="timed runs per model and way, in alternation (default 3)")
+    parser.add_argument("--models", nargs="*", default=None,
+                        help="words of the model file names to run, without the grid "
+                             "(default: the grid and every model)")
     args = parser.parse_args()
-    synthetic()
-    print()
+    if args.models is None:
+        synthetic()
+        print()
     print("| model | tol | joins | s | faces faired | poles | joins held | largest gap "
           "opened | largest smooth-join angle excess (deg) | worst deviation / tol | valid | "
           "edge / vertex tolerances raised (largest rise) | "
@@ -285,6 +290,8 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     ratios = []
     for name, tol in CASES:
+        if args.models is not None and not any(word in name for word in args.models):
+            continue
         rows, ratio = model_rows(name, tol, args.rounds)
         print("\n".join(rows), flush=True)
         ratios.append(f"{name} {ratio:.2f}x")
