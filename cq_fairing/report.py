@@ -427,6 +427,30 @@ def _html_table(report):
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
 
 
+JOIN_COLUMNS = ("faces", "kind", "held", "source gap", "gap", "source angle (deg)",
+                "angle (deg)", "angle excess (deg)")
+
+
+def _joins_html(joins):
+    """The joins' table: one row per join of the source, its gap and normal angle in the
+    source and faired (``rows`` of the report's ``joins``); none for a report without
+    joins."""
+    rows = (joins or {}).get("rows") or []
+    if not rows:
+        return "<p>no joins</p>"
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in JOIN_COLUMNS)
+    body = []
+    for row in rows:
+        cells = (" - ".join(str(f) for f in row["faces"]), row["kind"],
+                 "yes" if row["held"] else "no", _fmt(row["source_gap"], 3),
+                 _fmt(row["gap"], 3), _fmt(row["source_angle"], 3), _fmt(row["angle"], 3),
+                 _fmt(row["angle_excess"], 3))
+        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i < 3
+                      else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
+        body.append(f"<tr>{tds}</tr>")
+    return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+
+
 def _method(report):
     """``adaptive (faithful, auto borders)``, or the bare method when it has no objective."""
     settings = [report.get("objective")] + (
@@ -475,6 +499,10 @@ def render_html(report):
             f"<h2>Faces</h2><p>max dev: largest true distance from the original face to the "
             f"faired one; energy: thin-plate bending energy before -> after; wiggles: "
             f"sign changes of the mean curvature per iso-line.</p>{_html_table(report)}"
+            f"<h2>Joins</h2><p>gap: largest distance between the two faces along the join; "
+            f"angle: largest angle between their normals; angle excess: the largest of "
+            f"faired minus source angle at the same place; held: closed by construction."
+            f"</p>{_joins_html(report.get('joins'))}"
             f"<h2>Skipped or failed</h2><ul>{skipped}</ul><h2>Maps</h2>"
             f"{images or '<p>no maps</p>'}</body></html>\n")
 

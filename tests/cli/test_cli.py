@@ -77,6 +77,56 @@ def test_a_face_kept_as_it_was_is_counted_unchanged_not_faired(blade_run):
     assert "<th>unchanged</th><td class='l'>1</td>" in page
 
 
+def test_the_html_report_lists_every_join_with_its_gap_and_angle(tmp_path):
+    """The fuselage's 14 joins, one table row each, in the JSON's order, with its source
+    and faired gap and angle: the 10 held joins say so and close to round-off, the 2
+    creases stay creases."""
+    from html.parser import HTMLParser
+
+    from cq_fairing.report import JOIN_COLUMNS, render_html
+
+    proc = run("fair", data_path("fuselage.brep"), "-o", "out.brep", "--tol", "2.5",
+               "--report", "r.json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads((tmp_path / "r.json").read_text())
+    rows = report["joins"]["rows"]
+
+    class Tables(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.tables, self.cell = [], None
+
+        def handle_starttag(self, tag, attrs):
+            if tag == "table":
+                self.tables.append([])
+            elif tag == "tr":
+                self.tables[-1].append([])
+            elif tag in ("td", "th"):
+                self.cell = ""
+
+        def handle_endtag(self, tag):
+            if tag in ("td", "th"):
+                self.tables[-1][-1].append(self.cell)
+                self.cell = None
+
+        def handle_data(self, data):
+            if self.cell is not None:
+                self.cell += data
+
+    page = Tables()
+    page.feed(render_html(report))
+    table = next(t for t in page.tables if tuple(t[0]) == JOIN_COLUMNS)[1:]
+    assert len(rows) == len(table) == 14
+    for row, cells in zip(rows, table):
+        assert cells[0] == " - ".join(str(f) for f in row["faces"]) and cells[1] == row["kind"]
+        assert cells[2] == ("yes" if row["held"] else "no")
+        assert float(cells[4]) == pytest.approx(row["gap"], rel=5e-3, abs=1e-300)
+        assert float(cells[6]) == pytest.approx(row["angle"], rel=5e-3, abs=1e-300)
+    held = [cells for cells in table if cells[2] == "yes"]
+    assert len(held) == 10 and all(float(c[4]) <= 1e-9 for c in held)
+    assert sum(c[1] == "crease" for c in table) == 2
+
+
 def _colours(path):
     from PIL import Image
 
