@@ -412,6 +412,12 @@ def _image(path, caption):
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
+def _cells(cells, left):
+    """A table row's ``<td>`` cells, those at the indices ``left`` aligned left."""
+    return "".join(f"<td class='l'>{html.escape(c)}</td>" if i in left
+                   else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
+
+
 def _html_table(report):
     cls = {"ok": "ok", "unchanged": "ok", "tolerance-not-met": "bad", "failed": "bad",
            "skipped": "skip"}
@@ -421,9 +427,7 @@ def _html_table(report):
     body = []
     for face in report["faces"]:
         cells = _row(face, columns) + (_fair(face, "mean_curvature_range", _range),)
-        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i in left
-                      else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
-        body.append(f"<tr class='{cls.get(face['status'], '')}'>{tds}</tr>")
+        body.append(f"<tr class='{cls.get(face['status'], '')}'>{_cells(cells, left)}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
 
 
@@ -445,9 +449,7 @@ def _joins_html(joins):
                  "yes" if row["held"] else "no", _fmt(row["source_gap"], 3),
                  _fmt(row["gap"], 3), _fmt(row["source_angle"], 3), _fmt(row["angle"], 3),
                  _fmt(row["angle_excess"], 3))
-        tds = "".join(f"<td class='l'>{html.escape(c)}</td>" if i < 3
-                      else f"<td>{html.escape(c)}</td>" for i, c in enumerate(cells))
-        body.append(f"<tr>{tds}</tr>")
+        body.append(f"<tr>{_cells(cells, {0, 1, 2})}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
 
 

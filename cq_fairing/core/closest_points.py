@@ -191,10 +191,11 @@ def _damped(trial, active, step, dist, halvings=HALVINGS, batched=BATCHED_TRIALS
         tried = tried.reshape((count, worse.size) + tried.shape[1:])
         d_tried = d_tried.reshape(count, worse.size)
         better = d_tried <= dist[active[worse]]
-        first = np.where(better.any(axis=0), better.argmax(axis=0), count - 1)
+        found = better.any(axis=0)
+        first = np.where(found, better.argmax(axis=0), count - 1)
         columns = np.arange(worse.size)
         new[worse], d_new[worse] = tried[first, columns], d_tried[first, columns]
-        worse = worse[~better.any(axis=0)]
+        worse = worse[~found]
         done += count
     return new, d_new
 
