@@ -166,13 +166,11 @@ def test_a_worker_killed_mid_run_costs_a_retry_and_nothing_else(tmp_path, serial
     it); the batch runs on it through --scheduler; a worker is killed while it fairs a
     face of testtoler.  Its task runs again elsewhere, the batch completes, the retry is
     in the model's report and the summary, and the output equals the serial run."""
-    import dask
-    from distributed import Client, LocalCluster
+    from cq_fairing.batch import open_cluster
 
     inputs = _folder(tmp_path / "in", ("testtoler.brep",))
-    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
-            LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                         dashboard_address=None) as cluster, Client(cluster) as client:
+    client, cluster = open_cluster(workers=2, quiet=True)
+    with cluster, client:
         proc = subprocess.Popen(
             [sys.executable, "-m", "cq_fairing.cli", "batch", str(inputs), "-o",
              str(tmp_path / "out"), "--rel-tol", REL_TOL, "--scheduler",
@@ -246,14 +244,12 @@ def test_fair_shape_on_dask_workers_is_bit_identical_to_one_process(serial):
     """``fair_shape(engine=DaskFaces(...))`` from a client of a 2-worker LocalCluster: the
     blade's faces are fitted on the workers (its joins then solved here) and every net,
     deviation, status and join equals the serial run's exactly."""
-    from distributed import Client, LocalCluster
-
-    from cq_fairing.batch import DaskFaces
+    from cq_fairing.batch import DaskFaces, open_cluster
     from cq_fairing.occ import fair_shape, read_shape
 
     tol, expected = serial["IEA_15MW_CFD.stp"]
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster):
+    client, cluster = open_cluster(workers=2, quiet=True)
+    with cluster, client:
         result = fair_shape(read_shape(data_path("IEA_15MW_CFD.stp")), tol=tol,
                             engine=DaskFaces("blade", in_task=False))
     assert [f.status for f in result.faces] == [f.status for f in expected.faces]
@@ -263,3 +259,21 @@ def test_fair_shape_on_dask_workers_is_bit_identical_to_one_process(serial):
         if reference.faired:
             assert np.array_equal(face.surface.poles, reference.surface.poles)
     assert result.joins.line() == expected.joins.line() and result.valid
+
+
+def test_local_workers_keep_one_blas_thread_and_no_malloc_trim_threshold():
+    """The workers of ``open_cluster`` (a fresh interpreter, whose environment has no
+    ``MALLOC_TRIM_THRESHOLD_``) run with one BLAS thread, as Dask sets it, and without
+    Dask's ``MALLOC_TRIM_THRESHOLD_=65536`` (``cq_fairing.batch.WORKER_ENVIRON``)."""
+    script = ("import json, os\n"
+              "from cq_fairing.batch import open_cluster\n"
+              "client, cluster = open_cluster(workers=2, quiet=True)\n"
+              "names = ('MALLOC_TRIM_THRESHOLD_', 'OPENBLAS_NUM_THREADS')\n"
+              "seen = client.run(lambda: [os.environ.get(n) for n in names])\n"
+              "print(json.dumps(list(seen.values())))\n"
+              "client.close(); cluster.close()\n")
+    env = {k: v for k, v in ENV.items() if k != "MALLOC_TRIM_THRESHOLD_"}
+    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert json.loads(proc.stdout.splitlines()[-1]) == [[None, "1"], [None, "1"]]
