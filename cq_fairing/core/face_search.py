@@ -25,8 +25,14 @@ the face's samples with the distance to the faired tangent planes (a first-order
 estimate of the true distance), the core's two-sided uniform search
 (:func:`~cq_fairing.core.fairing.fair_surface` with ``search="guaranteed"``), then the
 bisection with the parametric distance :math:`|S_f(u, v) - S(u, v)|`, an upper bound of
-the true distance.  They aim at ``MARGIN * tol`` (room for excursions between samples);
-the last one aims at ``tol`` itself.  A core step rule (``"linear"``, ``"guaranteed"``,
+the true distance.  On a source whose spans are graded each bisection runs twice, on
+quasi-uniform targets and on targets graded like the source's spans
+(:func:`~cq_fairing.core.plans.graded_space`), and the fewer poles win (the outcome's
+notes say when the graded ones did): quasi-uniform targets cannot follow a grading that
+the shape has (the IEA blade's spanwise stations, 74 to 1: 17 x 9 poles against 11 x 9
+graded), and graded ones waste spans on a grading it does not have (a testtoler strip's
+refined end: 19 x 4 against 10 x 4).  They aim at ``MARGIN * tol`` (room for excursions
+between samples); the last one aims at ``tol`` itself.  A core step rule (``"linear"``, ``"guaranteed"``,
 ``"polyfit"``) replaces the first two by the core's search with that rule (and its
 ``measure``).  The adaptive method lets the core choose non-uniform targets at ``tol``,
 then at ``MARGIN * tol``; the energy method likewise keeps the net and moves its poles.
@@ -50,7 +56,8 @@ from .fairing import fair_surface
 from .geometry import BSplineSurface, closed_axes, collapse_rows, collapsed_rows
 from .gram import sandwiched
 from .options import DEFAULTS
-from .plans import target_space
+from .plans import direction_target, has_graded_spans
+from .projection import project_surface
 from .results import SurfaceFairResult
 from .scale_search import SurfaceSampler, _operator, max_scales, search_scales, target_degrees
 from .spaces import SplineSpace
@@ -157,7 +164,7 @@ def face_attempts(tol, search="local", method="wavelet", objective="compact",
 
 def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None,
                 attempts=None, exceeds=None, region=None, window=None, details=True,
-                judge="the backend"):
+                judge="the backend", grading="auto"):
     """Fair a face's ``surface`` within ``tol`` (or onto ``n``), each candidate judged by
     the backend's ``check`` (module notes).
 
@@ -192,6 +199,9 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
         Compute the wavelet details of a local search's winner with the core.
     judge : str
         Who owns ``check``, for the error message: ``"OCCT"`` says "by OCCT's measure".
+    grading : {"auto", "uniform"}
+        The bisections' targets (:func:`_bisected`): with ``"auto"`` also targets graded
+        like the source's spans where they are graded.
 
     Returns
     -------
@@ -213,14 +223,17 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     if None in scales:  # the core's uniform search coarsens both directions or none
         attempts = [a for a in attempts if not isinstance(a[0], CoreSearch)]
     sampler = SurfaceSampler(grid, surface)
+    graded = grading == "auto" and any(has_graded_spans(s)
+                                       for s in (surface.u_space, surface.v_space))
     pieces = _Pieces(tol, n, degree, sampler, finish, check, exceeds, region, window,
-                     details, judge)
+                     details, judge, ("uniform", "source") if graded else ("uniform",))
     try:
         return _verified(surface, pieces, attempts)
     except NumericalError:
         note = ("fairing in homogeneous coordinates gave non-positive weights; faired a "
                 "non-rational least-squares approximation instead")
-        return _verified(non_rational(surface), pieces, attempts)._replace(notes=(note,))
+        outcome = _verified(non_rational(surface), pieces, attempts)
+        return outcome._replace(notes=(note,) + outcome.notes)
 
 
 class _Pieces(NamedTuple):
@@ -237,6 +250,7 @@ class _Pieces(NamedTuple):
     window: tuple
     details: bool
     judge: str
+    gradings: tuple
 
 
 def _verified(source, pieces, attempts):
@@ -253,7 +267,7 @@ def _verified(source, pieces, attempts):
         if target is not None and _is_identity(source, target, pieces.degree):
             return _unchanged(source, "the finest admissible target is the source space "
                               "itself; nothing to fair")
-        if target is not None and _keeps_every_pole(source, target, faired):
+        if isinstance(criterion, AdaptiveTarget) and _keeps_every_pole(source, faired):
             return _unchanged(source, "the adaptive target needs as many poles as the "
                               "source; nothing to reduce")
         if tol is not None and pieces.exceeds is not None and pieces.exceeds(faired, tol):
@@ -265,7 +279,8 @@ def _verified(source, pieces, attempts):
                 result = _core_fair(source, target, pieces.degree)
             if result is not None:
                 result = result.replace(surface=faired)
-            return FaceOutcome("faired", "", faired, result, deviation)
+            return FaceOutcome("faired", "", faired, result, deviation,
+                               _graded_note(criterion, target))
         measured.append(deviation)
     measured += [pieces.check(faired) for faired in prefiltered]
     known = [d for d in measured if d is not None]
@@ -285,12 +300,20 @@ def _unchanged(surface, message):
     return FaceOutcome("unchanged", message, surface, None, 0.0)
 
 
-def _keeps_every_pole(source, target, faired):
-    """True when an adaptive result (``target`` holds spaces, not scales) has at least the
-    source's pole count: it only moved knots, so the face is kept, as the uniform search
-    keeps a face whose only admissible target is the source's own space."""
-    adaptive = any(isinstance(t, SplineSpace) for t in target)
-    return adaptive and faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
+def _keeps_every_pole(source, faired):
+    """True when an adaptive result has at least the source's pole count: it only moved
+    knots, so the face is kept, as the uniform search keeps a face whose only admissible
+    target is the source's own space."""
+    return faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
+
+
+def _graded_note(criterion, target):
+    """The note of a bisection whose targets graded like the source won (:func:`_bisected`)."""
+    if criterion in ("normal", "parametric") and any(
+            isinstance(t, SplineSpace) and not t.is_quasi_uniform for t in target):
+        return ("targets graded like the source's knot spans: fewer poles than "
+                "quasi-uniform ones",)
+    return ()
 
 
 def _is_identity(source, target, degree):
@@ -299,7 +322,7 @@ def _is_identity(source, target, degree):
     for space, n, deg in zip((source.u_space, source.v_space), target, degree):
         if n is None:
             continue
-        chosen = n if isinstance(n, SplineSpace) else target_space(space, int(n), deg)
+        chosen = n if isinstance(n, SplineSpace) else direction_target(space, int(n), deg)
         if not chosen.same_as(space):
             return False
     return True
@@ -343,17 +366,42 @@ def _choose(source, tol, criterion, pieces):
             raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
         result = _core_fair(source, pair, degree)
         return pair, finish(result.surface), result
-    sampler = pieces.sampler
-    measure = sampler.normal if criterion == "normal" else sampler.parametric
-    target, faired, _, _ = search_scales(source, tol, degree, measure, finish)
+    target, faired = _bisected(source, tol, criterion, pieces)
     return target, faired, None
 
 
+def _bisected(source, tol, criterion, pieces):
+    """``(target spaces, faired)`` of the bisection
+    (:func:`~cq_fairing.core.scale_search.search_scales`) with the ``criterion``'s
+    measure, over each of ``pieces.gradings``: quasi-uniform targets, and for a source
+    whose spans are graded (a blade's spanwise stations, a strip's refined end) also
+    targets graded like them (:func:`~cq_fairing.core.plans.graded_space`).  The fewer
+    poles win, the quasi-uniform targets on a tie.
+
+    Raises
+    ------
+    ToleranceNotMetError
+        No grading's targets meet ``tol`` (the first one's refusal).
+    """
+    measure = pieces.sampler.normal if criterion == "normal" else pieces.sampler.parametric
+    found, refusals = [], []
+    for grading in pieces.gradings:
+        try:
+            found.append(search_scales(source, tol, pieces.degree, measure, pieces.finish,
+                                       grading=grading)[:2])
+        except ToleranceNotMetError as exc:
+            refusals.append(exc)
+    if not found:
+        raise refusals[0]
+    return min(found, key=lambda pair: pair[1].shape[0] * pair[1].shape[1])
+
+
 def _core_fair(source, target, degree):
-    """The core's :class:`SurfaceFairResult` (with details) for the chosen target."""
-    return fair_surface(source.poles, n=target, u_knots=source.u_knots,
-                        v_knots=source.v_knots, degree=(source.u_degree, source.v_degree),
-                        weights=source.weights, target_degree=degree)
+    """The core's :class:`SurfaceFairResult` (with details) for the chosen target: spaces
+    (``None`` keeps a direction) or scales."""
+    spaces = [t if isinstance(t, SplineSpace) else direction_target(space, t, p)
+              for t, space, p in zip(target, (source.u_space, source.v_space), degree)]
+    return project_surface(source, *spaces)
 
 
 def face_finisher(surface, periodic=(), fixed_border=False):

@@ -307,10 +307,10 @@ class _MergedFit:
     def search(self, tol):
         """``(scales, faired)`` of the fewest poles within ``tol`` by :meth:`distance`."""
         keep = tuple(count == 1 for count in self.merged.shape)
-        scales, faired, _, _ = search_scales(self.merged.surface, tol, self.degrees,
+        target, faired, _, _ = search_scales(self.merged.surface, tol, self.degrees,
                                              self.distance, keep=keep,
                                              projection=self._projection)
-        return scales, faired
+        return tuple(None if space is None else space.n_spans for space in target), faired
 
 
 def _samples(breaks):

@@ -42,6 +42,14 @@ The options
     ``"local"``: bisection on the face's own samples inside its trim
     (:mod:`cq_fairing.core.scale_search`).  Default ``"guaranteed"`` in the core, ``"local"``
     for faces.
+``grading`` : {"auto", "uniform"}, default "auto"
+    Occ faces only: the targets of the bisections on a face's samples (``"wavelet"``
+    with ``tol``).  ``"auto"``: quasi-uniform targets and, on a face whose knot spans
+    are graded, targets graded like them (:func:`~cq_fairing.core.plans.graded_space`),
+    the fewer poles winning; ``"uniform"``: quasi-uniform targets only, the method's own
+    :math:`V_n`.  In a model a face that shares a held join with another face searches
+    quasi-uniform targets, whose knots its neighbours share along the join.  Refused
+    with ``n``.  The command line and the workbench use the default.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
 ``measure`` : {"geometric", "parametric"}, default "geometric"
@@ -116,7 +124,7 @@ import numpy as np
 from ..errors import InvalidInputError, InvalidToleranceError
 
 __all__ = ["METHODS", "CURVE_METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES",
-           "FACE_SEARCHES", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY", "DEFAULTS",
+           "FACE_SEARCHES", "GRADINGS", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY", "DEFAULTS",
            "CURVE_DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED", "RENAMED_VALUES",
            "curve_method", "tolerance_method", "check_applies", "check_search_options",
            "checked_choice", "check_joins", "checked_objective", "check_borders",
@@ -137,6 +145,8 @@ BOUNDARIES = ("free", "fixed")
 SEARCHES = ("guaranteed", "linear", "polyfit")
 #: Tolerance searches of an occ face: its own samples, or the core's with a step rule.
 FACE_SEARCHES = ("local",) + SEARCHES
+#: Targets of an occ face's bisections (``"auto"`` first: the default).
+GRADINGS = ("auto", "uniform")
 #: The distance the core's tolerance search bounds.
 MEASURES = ("geometric", "parametric")
 #: Spaces visited by the core's projection.
@@ -149,7 +159,7 @@ JOIN_CONTINUITY = {"smooth": "G1", "curvature": "G2", "closed": "G0"}
 #: Default of each option (``search`` of an occ face: ``"local"``).
 DEFAULTS = {"method": "wavelet", "objective": "compact", "borders": "auto",
             "boundary": "free", "search": "guaranteed", "order": 6, "measure": "geometric",
-            "schedule": "auto", "window": None, "target_degree": None}
+            "schedule": "auto", "window": None, "target_degree": None, "grading": "auto"}
 
 _FACE_DEFAULTS = {**DEFAULTS, "search": "local"}
 #: Default of each option of :func:`~cq_fairing.core.fairing.fair_curve`.
@@ -159,7 +169,7 @@ CURVE_DEFAULTS = {**DEFAULTS, "method": "auto"}
 APPLIES = {"objective": ("adaptive",), "borders": ("adaptive",),
            "target_degree": ("auto", "wavelet", "adaptive"),
            "boundary": ("wavelet", "adaptive"),
-           "window": ("wavelet", "adaptive"), "search": ("wavelet",),
+           "window": ("wavelet", "adaptive"), "search": ("wavelet",), "grading": ("wavelet",),
            "order": ("wavelet",), "measure": ("wavelet",), "schedule": ("wavelet",)}
 
 #: What each method does that makes the other methods' options meaningless for it.
@@ -412,17 +422,17 @@ def check_search_options(n, tol, options):
 
 
 def check_face_options(tol, n, method, boundary, objective="compact", borders="auto",
-                       search="local", target_degree=None):
+                       search="local", target_degree=None, grading="auto"):
     """Validate the options of an occ face (:func:`cq_fairing.occ.fair_face`, and
     :func:`cq_fairing.occ.fair_shape` for each of its faces) once.
 
     ``tol`` and ``n`` exclude each other (both ``None``: the default tolerance); the
     values are checked against :data:`METHODS`, :data:`OBJECTIVES`, :data:`BORDERS`,
-    :data:`BOUNDARIES` and :data:`FACE_SEARCHES`; ``objective``, ``borders``,
-    ``boundary``, ``target_degree`` and ``search`` (an occ face's default: ``"local"``)
-    are refused with a method that does not use them (:func:`check_applies`);
-    ``"adaptive"`` and ``"energy"`` refuse ``n``; ``search`` is refused with ``n``
-    (:func:`check_search_options`).
+    :data:`BOUNDARIES`, :data:`FACE_SEARCHES` and :data:`GRADINGS`; ``objective``,
+    ``borders``, ``boundary``, ``target_degree``, ``search`` (an occ face's default:
+    ``"local"``) and ``grading`` are refused with a method that does not use them
+    (:func:`check_applies`); ``"adaptive"`` and ``"energy"`` refuse ``n``; ``search``
+    and ``grading`` are refused with ``n`` (:func:`check_search_options`).
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -432,18 +442,19 @@ def check_face_options(tol, n, method, boundary, objective="compact", borders="a
     checked_objective(objective)
     for name, value, choices in (("borders", borders, BORDERS),
                                  ("boundary", boundary, BOUNDARIES),
-                                 ("search", search, FACE_SEARCHES)):
+                                 ("search", search, FACE_SEARCHES),
+                                 ("grading", grading, GRADINGS)):
         checked_choice(name, value, choices)
     check_applies(method, (("objective", objective), ("borders", borders),
                            ("boundary", boundary), ("target_degree", target_degree),
-                           ("search", search)), _FACE_DEFAULTS)
+                           ("search", search), ("grading", grading)), _FACE_DEFAULTS)
     if method != "wavelet" and n is not None:
         what = ("chooses the target itself" if method == "adaptive"
                 else "keeps the control points")
         raise InvalidInputError(
             f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
             "Give tol, or use method='wavelet' for explicit scales.")
-    check_search_options(n, tol, (("search", search, "local"),))
+    check_search_options(n, tol, (("search", search, "local"), ("grading", grading, "auto")))
 
 
 def _listed(words):

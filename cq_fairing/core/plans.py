@@ -13,16 +13,17 @@ from .decomposition import decomposition
 from .schedule import plan_spaces
 from .spaces import SplineSpace
 
-__all__ = ["target_space", "direction_target", "resolved_plan", "checked_plan",
-           "largest_resolved_scale"]
+__all__ = ["target_space", "graded_space", "has_graded_spans", "direction_target",
+           "resolved_plan", "checked_plan", "largest_resolved_scale"]
 
 
 def _default_target_degree(source_degree):
     return min(3, source_degree)
 
 
-def target_space(source, n, degree=None):
-    """The quasi-uniform target ``V_n`` on the source's domain, validated.
+def target_space(source, n, degree=None, grading="uniform"):
+    """The target ``V_n`` on the source's domain, validated: quasi-uniform, or with
+    ``grading="source"`` graded like the source's spans (:func:`graded_space`).
 
     Raises
     ------
@@ -43,7 +44,36 @@ def target_space(source, n, degree=None):
             f"target scale n must be between 1 and {k - degree} (n + {degree} poles, at "
             f"most the source's {k}), got n={n}."
         )
+    if grading == "source":
+        return graded_space(source, int(n), degree)
     return SplineSpace.quasi_uniform(int(n), degree, source.domain)
+
+
+def has_graded_spans(space):
+    """True when the breakpoints of ``space`` are not equally spaced (to 1e-9)."""
+    steps = np.diff(space.breakpoints)
+    return bool(steps.max() > steps.min() * (1.0 + 1e-9))
+
+
+def graded_space(source, n, degree):
+    r"""The ``n``-span space of ``degree`` whose breakpoints are the source's at equal
+    steps of their index.
+
+    With the source's breakpoints :math:`b_0 < \dots < b_m`, the target's are
+    :math:`t_i = b(i m / n)`, :math:`i = 0..n`, where :math:`b(x)` interpolates
+    :math:`b_j` linearly in :math:`j`: every target span covers :math:`m / n` source
+    spans, so a source whose spans grow along a direction (a blade's spanwise stations)
+    gets targets that grow alike.  Where :math:`n` divides :math:`m` the target's knots
+    are the source's own (nested spaces); on equally spaced breakpoints it is the
+    quasi-uniform :math:`V_n` itself.
+    """
+    if not has_graded_spans(source):
+        return SplineSpace.quasi_uniform(n, degree, source.domain)
+    b = source.breakpoints
+    t = np.interp(np.arange(n + 1) * ((b.size - 1) / n), np.arange(b.size), b)
+    t[0], t[-1] = b[0], b[-1]
+    return SplineSpace(int(degree), np.concatenate([np.full(degree, t[0]), t,
+                                                    np.full(degree, t[-1])]))
 
 
 def resolved_plan(source, target, schedule):

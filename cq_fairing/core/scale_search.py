@@ -91,7 +91,7 @@ def max_scales(surface, target_degree):
 
 
 def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(True, True),
-                  projection=None):
+                  projection=None, grading="uniform"):
     """Fewest-poles ``(n_u, n_v)`` with ``deviation(faired) <= tol``.
 
     Parameters
@@ -110,11 +110,14 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     projection : callable, optional
         ``projection(target_u, target_v) -> BSplineSurface`` (``None`` keeps a
         direction) in place of the plain L2 projection :func:`project`.
+    grading : {"uniform", "source"}
+        The targets' knots (:func:`~cq_fairing.core.plans.target_space`): quasi-uniform,
+        or graded like the source's spans.
 
     Returns
     -------
-    n : (int or None, int or None)
-        ``None`` keeps that direction unchanged.
+    target : (SplineSpace or None, SplineSpace or None)
+        The target spaces; ``None`` keeps that direction unchanged.
     faired : BSplineSurface
     dev : float
     evaluations : int
@@ -135,7 +138,7 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
             return None
         if n not in spaces[axis]:
             source = surface.u_space if axis == 0 else surface.v_space
-            spaces[axis][n] = target_space(source, int(n), target_degree[axis])
+            spaces[axis][n] = target_space(source, int(n), target_degree[axis], grading)
         return spaces[axis][n]
 
     halves = {}
@@ -172,7 +175,7 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     best = min((_shrink(p, tol, run) for p in feasible),
                key=lambda n: _poles(n, surface, target_degree))
     faired, dev = run(best)
-    return best, faired, dev, len(cache)
+    return (space(0, best[0]), space(1, best[1])), faired, dev, len(cache)
 
 
 def _poles(n, surface, degree):

@@ -131,7 +131,8 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
               target_degree: int | tuple[int, int] | None = None,
               density: int | tuple[int, int] | None = None, details: bool = True,
               search: Literal["local", "guaranteed", "linear", "polyfit"] = "local",
-              borders: Literal["auto", "free", "pinned"] = "auto") -> FaceFairReport:
+              borders: Literal["auto", "free", "pinned"] = "auto",
+              grading: Literal["auto", "uniform"] = "auto") -> FaceFairReport:
     r"""Fair one face and put the result under the face's own trim.
 
     Parameters
@@ -146,7 +147,10 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         Explicit target scales (knot spans) per direction, passed to
         :func:`cq_fairing.fair_surface`; ``None`` keeps a direction.
     method : {"wavelet", "adaptive", "energy"}
-        ``"wavelet"``: multiresolution (ARWFA/DWFA) fairing onto quasi-uniform targets.
+        ``"wavelet"``: multiresolution (ARWFA/DWFA) fairing onto quasi-uniform targets
+        (on a face whose spans are graded, the bisections on its samples also try
+        targets graded like them, the fewer poles winning:
+        :mod:`cq_fairing.core.face_search`).
         ``"adaptive"``: the same exact L2 projection onto u and v targets whose knots
         follow the error (``cq_fairing.fair_surface(method="adaptive")``), usually
         fewer poles at the same ``tol``.  ``"energy"``: Eck-Hadenfeld local thin-plate
@@ -200,6 +204,11 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         ``"free"`` is the plain projection and often a faster search on faces whose
         pinned net slides along the surface; ``"pinned"`` always pins.  Independent of
         ``boundary``, which restores the source's border rows afterwards.
+    grading : {"auto", "uniform"}
+        ``method="wavelet"`` with ``tol``: the targets of the bisections on the face's
+        samples.  ``"auto"``: quasi-uniform ones and, where the face's knot spans are
+        graded, ones graded like them, the fewer poles winning (the report's message
+        says when the graded ones won); ``"uniform"``: quasi-uniform ones only.
 
     Returns
     -------
@@ -216,7 +225,8 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
     start = time.perf_counter()
     face = as_face(face)
     search = renamed_value("fair_face", "search", search)
-    check_face_options(tol, n, method, boundary, objective, borders, search, target_degree)
+    check_face_options(tol, n, method, boundary, objective, borders, search, target_degree,
+                       grading)
     info = face_info(face)
     if not info.is_bspline:
         if not convert:
@@ -229,7 +239,8 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         tol = default_tolerance(face)
     attempts = face_attempts(tol, search, method, objective, borders)
     try:
-        report = _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts)
+        report = _fair_bspline(face, tol, n, boundary, target_degree, density, details,
+                               attempts, grading)
     except UnsupportedGeometryError as exc:  # energy: weights, a degree-1 direction
         if method != "energy":
             raise
@@ -248,7 +259,8 @@ def _not_for_energy(face, info, tol, refusal):
     return FaceFairReport(face, status, str(refusal), info=info, tolerance=tol)
 
 
-def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts):
+def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts,
+                  grading):
     """The core's face search (:func:`~cq_fairing.core.face_search.search_face`) with
     OCCT's pieces: the face's samples (classified inside its trim), its finisher and
     OCCT's two-sided check (:class:`_OcctCheck`)."""
@@ -267,7 +279,7 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attem
         check, n=n, target_degree=target_degree, attempts=attempts, exceeds=check.exceeds,
         region=face_region(face) if info.trimmed else None,
         window=uv_window(_uv_box(face), surface) if info.trimmed else None,
-        details=details, judge="OCCT")
+        details=details, judge="OCCT", grading=grading)
     if outcome.status == "unchanged":
         return FaceFairReport(face, "unchanged", outcome.message, info=info,
                               poles_before=surface.shape, poles_after=surface.shape,

@@ -139,7 +139,8 @@ def _selection(faces, count):
 def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
                convert=False, progress=None, boundary="free", target_degree=None,
                density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
-               borders="auto", in_place=False, joins="smooth", angle_tol=1.0, engine=None):
+               borders="auto", in_place=False, joins="smooth", angle_tol=1.0, engine=None,
+               grading="auto"):
     """Fair the (selected) B-spline faces of a shape and rebuild it.
 
     Parameters
@@ -153,8 +154,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         Explicit target scales for every selected face.
     faces : iterable of int, optional
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
-    method, objective, borders, boundary, target_degree, density
-        As in :func:`~cq_fairing.occ.fair_face` (``method="adaptive"``: the core's
+    method, objective, borders, boundary, target_degree, density, grading
+        As in :func:`~cq_fairing.occ.fair_face` (with ``grading="auto"`` a face that
+        shares a held join with another face searches quasi-uniform targets only, whose
+        knots its neighbours share along the join; ``method="adaptive"``: the core's
         adaptive targets per face, ``objective`` ``"compact"``, ``"faithful"`` or ``"fair"``,
         ``borders`` ``"auto"``, ``"free"`` or ``"pinned"``; the
         faces next to a too-large gap are faired again the same way with half ``tol``).
@@ -233,7 +236,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     start = time.perf_counter()
     shape = as_shape(shape)
     check_face_options(tol, n, method, boundary, objective, borders,
-                       target_degree=target_degree)
+                       target_degree=target_degree, grading=grading)
     check_joins(joins, angle_tol)
     if progress is not None and not callable(progress):
         raise InvalidInputError(f"progress must be callable or None, got {progress!r}.")
@@ -252,14 +255,18 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     originals = indexed_faces(source)
     selected = _selection(faces, len(originals))
     options = dict(method=method, objective=objective, borders=borders, boundary=boundary,
-                   target_degree=target_degree, density=density, details=details)
+                   target_degree=target_degree, density=density, details=details,
+                   grading=grading)
     pool = None if engine is not None or jobs == 1 and face_timeout is None else \
         ProcessFaces(jobs, face_timeout)
     try:
         job = _Job(source, originals, options, engine or pool)
-        job.fair_first(selected, tol, n, progress)
         adjacency = find_joins(source, angle_tol=angle_tol)
-        if joins != "free" and tol is not None:
+        held = joins != "free" and tol is not None
+        if held and method == "wavelet" and grading == "auto":
+            job.uniform_targets(adjacency)
+        job.fair_first(selected, tol, n, progress)
+        if held:
             joint = fair_joined(job, adjacency, joins)
             job.grids, job.networks, job.curved = joint.grids, joint.networks, joint.curved
             job.closed_edges = {side.edge for join in joint.joins for side in join.sides}
@@ -332,6 +339,7 @@ class _Job:
     def __init__(self, source, originals, options, engine=None):
         self.source, self.originals, self.options = source, originals, options
         self.engine = engine
+        self.face_options = {}      # index: options of that face over ``options``
         self.reports = [None] * len(originals)
         self.tol = {}
         self.face_class, self.motion = congruence_classes(originals)
@@ -341,6 +349,16 @@ class _Job:
         self.grids = []             # patch grids faired as one surface each
         self.networks = []          # faces at their coarsest faired together by energy
         self.curved = []            # joins held curvature-continuous (joins="curvature")
+
+    def uniform_targets(self, adjacency):
+        """Quasi-uniform targets (``grading="uniform"``) for every face that meets
+        another face in ``adjacency``: faces that share a border keep its knots shared
+        when both search the same family of targets."""
+        for join in adjacency.joins:
+            a, b = join.faces
+            if a != b:
+                for face in (a, b):
+                    self.face_options[face] = {"grading": "uniform"}
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""
@@ -378,14 +396,20 @@ class _Job:
         options = dict(self.options, tol=tol, n=n)
         if self.engine is None:
             for index in leaders:
-                report(index, fair_one_face(index, self.originals[index], options))
+                report(index, fair_one_face(index, self.originals[index],
+                                            self._options(options, index)))
         else:
-            self.engine.run([(index, self.originals[index], options) for index in leaders],
+            self.engine.run([(index, self.originals[index], self._options(options, index))
+                             for index in leaders],
                           lambda index, outcome: report(index, self._from_worker(index, outcome)))
         for index in indices:
             leader = first[self.face_class[index]]
             if leader != index:
                 report(index, self._placed(self.reports[leader], index))
+
+    def _options(self, options, index):
+        """``options`` with face ``index``'s own (:attr:`face_options`) over them."""
+        return {**options, **self.face_options.get(index, {})}
 
     def measured(self, index, surface, source=None):
         """``(face, surface, deviation)``: ``surface`` under face ``index``'s trim, measured

@@ -312,7 +312,8 @@ def _target_net(source, target):
 
 
 def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
-                  method="wavelet", objective="compact", borders="auto", domain=None):
+                  method="wavelet", objective="compact", borders="auto", domain=None,
+                  grading="auto"):
     r"""The tolerance search of ``face`` (whose net is ``source``) by ``method``: the
     core's :func:`~cq_fairing.core.face_search.search_face` with the attempts of
     :func:`~cq_fairing.core.face_search.face_attempts`, the search ``cq-fairing`` and
@@ -331,7 +332,8 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
       periodic seams tied, collapsed borders kept).
 
     ``domain``: the :class:`conversion.FaceDomain` of ``face`` where already read (its
-    trim is read from OCCT once for all the masks).
+    trim is read from OCCT once for all the masks).  ``grading``: the bisections'
+    targets, as :func:`cq_fairing.occ.fair_face`'s option of that name.
 
     Returns
     -------
@@ -357,13 +359,13 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
         check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
         exceeds=check.exceeds, region=domain.region(),
         window=uv_window(conversion.uv_range(face, source), source), details=False,
-        judge="the workbench")
+        judge="the workbench", grading=grading)
     return outcome, check
 
 
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
               search="local", measure=MEASURES[0], objective="compact", borders="auto",
-              domain=None):
+              domain=None, grading="auto"):
     r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
     Parameters
@@ -412,6 +414,11 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         about 1.6 s instead of 11 x 11 in about 11 s); ``pinned`` always pins.
     domain : conversion.FaceDomain, optional
         That of ``face`` where already read (none: read here).
+    grading : {"auto", "uniform"}
+        The wavelet method's bisections on the face's samples try quasi-uniform targets
+        and, on a face whose knot spans are graded, targets graded like them
+        (``auto``), or quasi-uniform ones only (``uniform``: a face that shares a held
+        join with another, :func:`fair_shapes`), as :func:`cq_fairing.occ.fair_face`.
 
     Raises
     ------
@@ -432,7 +439,8 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     domain = conversion.FaceDomain(face) if domain is None else domain
     if tolerance is not None:
         outcome, check = searched_face(face, source, _check_tolerance(tolerance), search,
-                                       measure, method, objective, borders, domain)
+                                       measure, method, objective, borders, domain,
+                                       grading)
         faired, deviation, note = outcome.surface, outcome.deviation, _outcome_note(outcome)
         if boundary != "free":
             faired = _closed_like(source, _fix_boundary(source, faired, boundary))
@@ -657,6 +665,12 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     results = []
     domains = {sub: conversion.FaceDomain(element) for sub, element in named
                if sub.startswith("Face")}   # each trim read once: fairing, checks, rebuilds
+    start = time.perf_counter()
+    found, faces = _joins_of(named, angle_tolerance, neighbours)
+    held = (joins != "free" and settings["tolerance"] is not None and found is not None
+            and settings["method"] == "wavelet")
+    uniform = _sharing(found, faces) if held else set()
+    found_seconds = time.perf_counter() - start
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -665,7 +679,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                                                                                    element)
             try:
                 result = fair_face(element, **face_settings, **{**settings, "target": own},
-                                   domain=domains[sub])
+                                   domain=domains[sub],
+                                   grading="uniform" if done in uniform else "auto")
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
@@ -678,23 +693,45 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             results.append(fair_edge(element, **{**settings, "target": own}))
     if progress is not None:
         progress(len(named), len(named))
-    return _joined(named, results, settings, joins, angle_tolerance, list(neighbours),
-                   domains)
+    return _joined(named, results, settings, joins, list(neighbours), domains,
+                   (found, faces, found_seconds))
 
 
-def _joined(named, results, settings, joins, angle_tolerance, neighbours, domains):
+def _joins_of(named, angle_tolerance, neighbours):
+    """``(found, faces)``: the joins (:func:`find_joins`) of the faces of ``named``
+    among themselves and with their ``neighbours``, and the positions in ``named`` of
+    those faces; ``found`` is ``None`` for one face without neighbours, or none."""
+    faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
+    if not faces or (len(faces) == 1 and not neighbours):
+        return None, faces
+    return find_joins([named[k][1] for k in faces], angle_tolerance,
+                      neighbours=[face for _, face in neighbours]), faces
+
+
+def _sharing(found, faces):
+    """The positions in ``named`` (``faces``: those of the faces) of the faces that meet
+    another face in ``found``: with their joins held they search quasi-uniform targets,
+    whose knots their neighbours share along the join (as ``cq-fairing fair``)."""
+    out = set()
+    for join in found.joins:
+        a, b = join.faces
+        if a != b:
+            out |= {faces[f] for f in (a, b) if f < len(faces)}
+    return out
+
+
+def _joined(named, results, settings, joins, neighbours, domains, joins_found):
     """``results`` with the joins of the faces of ``named``, among themselves and with
     their ``neighbours`` (fixed), held (:func:`_hold`) and measured, as
     :class:`FairedShapes`; ``domains``: ``{sub: conversion.FaceDomain}`` of the faces
-    of ``named``."""
+    of ``named``; ``joins_found``: ``(found, faces, seconds)`` of :func:`_joins_of` and
+    the time it took."""
     tolerance = settings["tolerance"]
-    faces = [k for k, (sub, _) in enumerate(named) if sub.startswith("Face")]
-    if not faces or (len(faces) == 1 and not neighbours):
+    found, faces, found_seconds = joins_found
+    if found is None:
         return FairedShapes(results)
-    start = time.perf_counter()
+    start = time.perf_counter() - found_seconds
     elements = [named[k] for k in faces] + neighbours
-    found = find_joins([named[k][1] for k in faces], angle_tolerance,
-                       neighbours=[face for _, face in neighbours])
     alone = [results[k] for k in faces]
     faired, outcome = alone, HeldJoins({}, {}, [], [], [])
     if joins != "free" and tolerance is not None and found.joins:

@@ -11,9 +11,10 @@ repository root::
     python -m tests.freecad.face_references
 
 The faces: every face of ``fuselage.brep`` at 2.5 mm, the 50 x 80 noisy face of the
-workbench tests (:func:`noisy_blade_net`) at 0.05 mm, and a 20 x 30 rational one
-(:func:`rational_blade_net`) at 0.05 mm; the settings (:data:`SETTINGS`): the defaults on
-the fuselage and the noisy face, ``method="adaptive"`` on the fuselage,
+workbench tests (:func:`noisy_blade_net`) at 0.05 mm, a 20 x 30 rational one
+(:func:`rational_blade_net`) at 0.05 mm, and the IEA blade's main face (its spanwise
+spans graded 74 to 1) at 0.12 m; the settings (:data:`SETTINGS`): the defaults on
+the fuselage, the noisy face and the blade face, ``method="adaptive"`` on the fuselage,
 ``method="energy"`` on all three (it keeps the rational face with its reason), and
 ``method="adaptive", borders="free"`` on the noisy face.  A case is named
 ``"<setting>/<face>"`` (``"energy/fuselage/3"``, ``"wavelet/noisy"``).  This module
@@ -29,8 +30,10 @@ REFERENCES = REPO / "tests" / "data" / "face_references.npz"
 FUSELAGE = ("fuselage.brep", 2.5)
 NOISY = ((50, 80), 0.05)
 RATIONAL = ((20, 30), 0.05)
+#: The IEA blade's second face (``Face2``) and its tolerance (m).
+BLADE = ("IEA_15MW_CFD.stp", 1, 0.12)
 #: ``{setting: (options of fair_face and of the workbench's make_fairing, faces)}``.
-SETTINGS = {"wavelet": ({}, ("fuselage", "noisy")),
+SETTINGS = {"wavelet": ({}, ("fuselage", "noisy", "blade")),
             "adaptive": ({"method": "adaptive"}, ("fuselage",)),
             "energy": ({"method": "energy"}, ("fuselage", "noisy", "rational")),
             "adaptive-free": ({"method": "adaptive", "borders": "free"}, ("noisy",))}
@@ -100,8 +103,8 @@ def setting(case):
     """``(options, tol)`` of ``case``: the options of its setting and its face's
     tolerance."""
     name, face = case.split("/", 1)
-    return SETTINGS[name][0], {"noisy": NOISY[1], "rational": RATIONAL[1]}.get(
-        face, FUSELAGE[1])
+    return SETTINGS[name][0], {"noisy": NOISY[1], "rational": RATIONAL[1],
+                               "blade": BLADE[2]}.get(face, FUSELAGE[1])
 
 
 def computed():
@@ -114,6 +117,7 @@ def computed():
     from cq_fairing.core.geometry import make_surface
     from cq_fairing.occ import read_shape
     from cq_fairing.occ.builders import surface_to_natural_face
+    from cq_fairing.occ.convert import indexed_faces
 
     explorer = TopExp_Explorer(read_shape(REPO / "tests" / "data" / FUSELAGE[0]), TopAbs_FACE)
     faces = {}
@@ -125,6 +129,7 @@ def computed():
     poles, weights, u_knots, v_knots = rational_blade_net(*RATIONAL[0])
     faces["rational"] = surface_to_natural_face(
         make_surface(poles, u_knots, v_knots, (3, 3), weights=weights))
+    faces["blade"] = indexed_faces(read_shape(REPO / "examples" / "data" / BLADE[0]))[BLADE[1]]
     out = {}
     for name, (_, kinds) in SETTINGS.items():
         for key, face in faces.items():

@@ -304,3 +304,28 @@ def test_a_target_degree_one_direction_cannot_take_is_a_tolerance_refusal(real):
     face = faces_of(real("IEA_15MW_CFD.stp"))[0]
     with pytest.raises(ToleranceNotMetError, match="no target keeps this face"):
         fair_face(face, tol=0.01, target_degree=5, details=False)
+
+
+def test_graded_spans_get_graded_targets_where_they_need_fewer_poles(real):
+    """The IEA blade's main face has spanwise spans graded 74 to 1.  At its default
+    tolerance the search keeps 11 x 9 poles on targets graded like them (its report
+    says so), within tol by OCCT's projection; the quasi-uniform target of the same size
+    (explicit ``n``) deviates more than tol."""
+    from cq_fairing.core.plans import graded_space, has_graded_spans
+    from cq_fairing.occ import default_tolerance
+
+    face = faces_of(real("IEA_15MW_CFD.stp"))[1]
+    source, _ = face_to_surface(face)
+    assert has_graded_spans(source.u_space) and not has_graded_spans(source.v_space)
+    tol = default_tolerance(face)
+    report = fair_face(face, tol=tol)
+    check_within(report, face, tol)
+    assert report.poles_after == (11, 9)
+    assert "graded like the source's knot spans" in report.message
+    u_space = report.surface.u_space
+    np.testing.assert_array_equal(u_space.breakpoints,
+                                  graded_space(source.u_space, 8, 3).breakpoints)
+    uniform = fair_face(face, n=(8, 6))
+    assert uniform.poles_after == (11, 9) and uniform.max_deviation > tol
+    np.testing.assert_allclose(report.result.reconstruct(), source.poles,
+                               atol=1e-8 * np.abs(source.poles).max())

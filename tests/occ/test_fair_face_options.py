@@ -52,6 +52,8 @@ def test_a_core_step_rule_runs_the_cores_search_with_it(face):
     ("energy", "target_degree", 2, "keeps the control points, the degree"),
     ("energy", "boundary", "fixed", "the border ring"),
     ("wavelet", "borders", "pinned", "projects onto quasi-uniform targets"),
+    ("adaptive", "grading", "uniform", "chooses its knots itself"),
+    ("energy", "grading", "uniform", "keeps the control points"),
 ])
 def test_fair_face_refuses_an_option_its_method_does_not_use(face, method, option, value, why):
     if why is None:
@@ -64,6 +66,15 @@ def test_fair_face_refuses_an_option_its_method_does_not_use(face, method, optio
     assert message.startswith(f"{option}={value!r} applies to method=")
     assert f"got method={method!r}, which" in message and why in message
     assert message.endswith(f"or drop {option}.")
+
+
+def test_grading_is_refused_with_an_explicit_scale_and_outside_its_values(face):
+    with pytest.raises(InvalidInputError, match="grading applies to the tolerance search"):
+        fair_face(face, n=(5, 5), grading="uniform")
+    with pytest.raises(InvalidInputError, match=r"grading must be one of \('auto', 'uniform'\)"):
+        fair_face(face, tol=TOL, grading="graded")
+    with pytest.raises(InvalidInputError, match="grading must be one of"):
+        fair_shape(face, tol=TOL, grading="source")
 
 
 def test_fair_shape_refuses_what_fair_face_refuses_before_any_work(face):
@@ -113,4 +124,7 @@ def test_the_occ_signatures_take_their_defaults_from_the_options_module():
         for name in ("method", "objective"):
             assert parameters[name].default == options.DEFAULTS[name], (function, name)
     assert inspect.signature(fair_face).parameters["search"].default == "local"
+    for function in (fair_face, fair_shape):
+        assert inspect.signature(function).parameters["grading"].default == \
+            options.GRADINGS[0] == "auto"
     assert options.FACE_SEARCHES[0] == "local"

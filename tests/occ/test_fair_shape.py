@@ -8,7 +8,14 @@ from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
 from OCP.TopExp import TopExp_Explorer
 
 from cq_fairing.errors import InvalidInputError
-from cq_fairing.occ import fair_face, fair_shape, list_faces, read_shape, write_shape
+from cq_fairing.occ import (
+    face_to_surface,
+    fair_face,
+    fair_shape,
+    list_faces,
+    read_shape,
+    write_shape,
+)
 from cq_fairing.occ.convert import indexed_faces
 from tests.occ.helpers import area, compound, faces_of, volume
 
@@ -357,3 +364,27 @@ def test_a_gap_that_halving_the_tolerance_does_not_shrink_is_closed_at_once(real
     assert report.status == "unchanged"
     assert report.message.endswith("along a shared edge even at tol=0.005")
     assert result.max_gap <= 0.01
+
+
+def test_faces_that_share_a_held_join_search_quasi_uniform_targets(real):
+    """The IEA blade's three faces share their spanwise borders (spans graded 74 to 1).
+    With their joins held they search quasi-uniform targets, whose knots they share
+    along the joins (graded ones would differ face by face and the joins would take
+    the union of both); faired alone (``joins="free"``) the two main faces get graded
+    targets and fewer poles."""
+    from cq_fairing.core.plans import graded_space
+
+    shape = real("IEA_15MW_CFD.stp")
+    held = fair_shape(shape)
+    alone = fair_shape(shape, joins="free")
+    assert [f.status for f in held.faces] == ["unchanged", "faired", "faired"]
+    assert all("graded" not in f.message for f in held.faces)
+    for index in (1, 2):
+        source = face_to_surface(alone.faces[index].original)[0]
+        faired = alone.faces[index].surface
+        assert "graded like the source's knot spans" in alone.faces[index].message
+        np.testing.assert_array_equal(
+            faired.u_space.breakpoints,
+            graded_space(source.u_space, faired.u_space.n_spans, 3).breakpoints)
+        assert np.prod(faired.shape) < np.prod(held.faces[index].surface.shape)
+        assert alone.faces[index].max_deviation <= alone.tolerance

@@ -42,6 +42,10 @@ def _source(doc, case):
     if face == "rational":
         surface = fixtures.rational_blade_surface(*face_references.RATIONAL[0])
         return fixtures.add_shape(doc, surface.toShape(), "Rational"), "Face1"
+    if face == "blade":
+        name, index, _ = face_references.BLADE
+        shape = Part.read(str(fixtures.REPO / "examples" / "data" / name))
+        return fixtures.add_shape(doc, shape, "Blade"), f"Face{index + 1}"
     shape = Part.read(str(fixtures.REAL / FUSELAGE))
     return fixtures.add_shape(doc, shape, "Fuselage"), f"Face{int(face.split('/')[1]) + 1}"
 
@@ -82,12 +86,13 @@ def test_tolerance_mode_gives_the_command_lines_net(doc, case):
 
 
 def _status(sub, reference, tol):
-    """The feature's ``Status`` for the command line's outcome: ``OK`` for a faired face,
-    the command line's reason for a face with nothing to fair or one the method does not
+    """The feature's ``Status`` for the command line's outcome: ``OK`` for a faired face
+    (with the command line's note where it has one: graded targets), the command line's
+    reason for a face with nothing to fair or one the method does not
     fair (a rational face by energy), and the tolerance and the
     best deviation found for a face kept for its tolerance."""
     if reference["status"] == "faired":
-        return "OK"
+        return f"OK; {sub} faired: {reference['message']}" if reference["message"] else "OK"
     if reference["status"] in ("unchanged", "skipped-rational"):
         return f"OK; {sub} kept unchanged: {reference['message']}"
     assert reference["status"] == "tolerance-not-met"
