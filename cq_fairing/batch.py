@@ -74,6 +74,7 @@ class Settings:
     angle_tol: float = 1.0
     target_degree: tuple = None
     boundary: str = "free"
+    grading: str = "auto"
     convert: bool = False
 
     def as_dict(self):
@@ -197,7 +198,7 @@ def fair_model(name, data, settings, output_name, engine=None, progress=None):
                         borders=settings.borders or "auto", progress=progress,
                         boundary=settings.boundary, target_degree=settings.target_degree,
                         in_place=True, joins=settings.joins, angle_tol=settings.angle_tol,
-                        engine=engine)
+                        grading=settings.grading, engine=engine)
     kind = WRITE_SUFFIXES[Path(output_name).suffix.lower()]
     output = model_bytes(model, kind)
     report = shape_report(result, tol, time.perf_counter() - started,

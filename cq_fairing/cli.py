@@ -4,7 +4,8 @@ Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
 [--method wavelet|adaptive|energy] [--objective compact|faithful|fair]
-[--borders auto|free|pinned] [--joins smooth|closed|free|curvature] [--angle-tol DEG]
+[--borders auto|free|pinned] [--grading auto|uniform]
+[--joins smooth|closed|free|curvature] [--angle-tol DEG]
 [--target-degree P [Q]] [--jobs N]
 [--face-timeout S] [--report r.json|r.html] [--deviation-map m.png|m.vtp]
 [--curvature-map c.png] [--force]``

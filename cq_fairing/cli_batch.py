@@ -85,7 +85,8 @@ def command_batch(args):
         tol=args.tol, rel_tol=None if args.tol else args.rel_tol, method=args.method,
         objective=args.objective, borders=args.borders, joins=args.joins,
         angle_tol=args.angle_tol, target_degree=target_degree_option(args.target_degree),
-        boundary=args.boundary or DEFAULTS["boundary"], convert=args.convert)
+        boundary=args.boundary or DEFAULTS["boundary"],
+        grading=args.grading or DEFAULTS["grading"], convert=args.convert)
     models = _models(args.inputs)
     folder = _output_dir(args.output_dir)
     summary_paths = folder / "summary.json", folder / "summary.html"

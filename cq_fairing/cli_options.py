@@ -8,6 +8,7 @@ from .core.options import (
     BORDERS,
     BOUNDARIES,
     DEFAULTS,
+    GRADINGS,
     JOINS,
     METHOD_DOES,
     METHODS,
@@ -71,6 +72,11 @@ def add_fairing_options(parser):
                         help="with --method adaptive: the target's border rows; auto = "
                              "pinned (corners kept) where that gives fewer poles (default), "
                              "free = plain projection (often faster), pinned = always")
+    parser.add_argument("--grading", choices=GRADINGS,
+                        help="with --method wavelet and --tol: auto = also targets graded "
+                             "like a face's knot spans, where they give fewer poles "
+                             "(default; a face that shares a held join keeps uniform ones), "
+                             "uniform = uniform targets only")
     parser.add_argument("--joins", choices=JOINS, default=JOINS[0],
                         help="smooth = faces that meet along whole borders are faired together, "
                              "joins closed and tangent where the source was (default); "
@@ -94,10 +100,10 @@ def add_fairing_options(parser):
 def check_method(args):
     """Refuse the fairing options ``args.method`` does not use
     (:data:`cq_fairing.core.options.APPLIES`: --objective and --borders need --method
-    adaptive, --target-degree and --boundary not energy) and --target with the methods
+    adaptive, --grading --method wavelet, --target-degree and --boundary not energy) and --target with the methods
     that choose their own net.  An option spelled out at its default is no request, as
     in the API."""
-    for name in ("objective", "borders", "target_degree", "boundary"):
+    for name in ("objective", "borders", "grading", "target_degree", "boundary"):
         value = getattr(args, name)
         allowed = [method for method in APPLIES[name] if method in METHODS]
         if value in (None, DEFAULTS[name]) or args.method in allowed:
@@ -108,6 +114,10 @@ def check_method(args):
             f"{option} {shown} applies to --method {' or '.join(allowed)} only, got "
             f"--method {args.method}, which {METHOD_DOES[args.method]}; add --method "
             f"{allowed[-1]} or drop {option}.")
+    if args.target is not None and args.grading not in (None, DEFAULTS["grading"]):
+        raise InvalidInputError(f"--grading {args.grading} applies to the tolerance search, "
+                                "which does not run with --target; drop --grading or give "
+                                "--tol instead of --target.")
     if args.method != "wavelet" and args.target is not None:
         what = "keeps the control points" if args.method == "energy" else \
             "chooses the target itself"
@@ -121,6 +131,7 @@ def fairing_keywords(args):
     return dict(method=args.method, objective=args.objective or DEFAULTS["objective"],
                 borders=args.borders or DEFAULTS["borders"],
                 boundary=args.boundary or DEFAULTS["boundary"],
+                grading=args.grading or DEFAULTS["grading"],
                 target_degree=target_degree_option(args.target_degree),
                 joins=args.joins, angle_tol=args.angle_tol)
 
