@@ -375,8 +375,9 @@ def _bisected(source, tol, criterion, pieces):
     (:func:`~cq_fairing.core.scale_search.search_scales`) with the ``criterion``'s
     measure, over each of ``pieces.gradings``: quasi-uniform targets, and for a source
     whose spans are graded (a blade's spanwise stations, a strip's refined end) also
-    targets graded like them (:func:`~cq_fairing.core.plans.graded_space`).  The fewer
-    poles win, the quasi-uniform targets on a tie.
+    targets graded like them (:func:`~cq_fairing.core.plans.graded_space`), a candidate
+    both families share measured once.  The fewer poles win, the quasi-uniform targets
+    on a tie.
 
     Raises
     ------
@@ -384,11 +385,11 @@ def _bisected(source, tol, criterion, pieces):
         No grading's targets meet ``tol`` (the first one's refusal).
     """
     measure = pieces.sampler.normal if criterion == "normal" else pieces.sampler.parametric
-    found, refusals = [], []
+    found, refusals, measured = [], [], {}
     for grading in pieces.gradings:
         try:
             found.append(search_scales(source, tol, pieces.degree, measure, pieces.finish,
-                                       grading=grading)[:2])
+                                       grading=grading, measured=measured)[:2])
         except ToleranceNotMetError as exc:
             refusals.append(exc)
     if not found:

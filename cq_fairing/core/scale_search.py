@@ -91,7 +91,7 @@ def max_scales(surface, target_degree):
 
 
 def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(True, True),
-                  projection=None, grading="uniform"):
+                  projection=None, grading="uniform", measured=None):
     """Fewest-poles ``(n_u, n_v)`` with ``deviation(faired) <= tol``.
 
     Parameters
@@ -113,6 +113,11 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     grading : {"uniform", "source"}
         The targets' knots (:func:`~cq_fairing.core.plans.target_space`): quasi-uniform,
         or graded like the source's spans.
+    measured : dict, optional
+        ``{(u space key, v space key): (faired, deviation)}`` of candidates measured
+        already, shared by searches of one surface with one ``deviation`` and ``finish``
+        (the two gradings: a direction whose spans are equal gets the same targets in
+        both); filled here.
 
     Returns
     -------
@@ -132,6 +137,7 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     top = max_scales(surface, target_degree)
     spaces = ({}, {})
     cache = {}
+    measured = {} if measured is None else measured
 
     def space(axis, n):
         if n is None:
@@ -157,8 +163,11 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
         if any(k is not None and k < low for k, low in zip(n, lowest)):
             return None, np.inf   # a closed direction cannot close on so few spans
         if n not in cache:
-            faired = finish(projected(n))
-            cache[n] = (faired, deviation(faired))
+            key = tuple(None if s is None else s.key for s in (space(0, n[0]), space(1, n[1])))
+            if key not in measured:
+                faired = finish(projected(n))
+                measured[key] = (faired, deviation(faired))
+            cache[n] = measured[key]
         return cache[n]
 
     patterns = [top, (top[0], None), (None, top[1])]
