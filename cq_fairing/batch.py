@@ -205,7 +205,8 @@ def fair_model(name, data, settings, output_name, engine=None, progress=None):
                           kept=model.contents() if kind == "step" else None,
                           parts=model.face_parts(), input_path=name, output_path=output_name,
                           method=settings.method, objective=settings.objective,
-                          borders=settings.borders, command="cq-fairing batch")
+                          borders=settings.borders, grading=settings.grading,
+                          command="cq-fairing batch")
     return dict(output=output, faces=len(indexed_faces(model.shape)), report=report,
                 retries=getattr(engine, "retries", 0))
 

@@ -247,6 +247,7 @@ def command_fair(args):
                           parts=model.face_parts(), input_path=args.input,
                           output_path=args.output, method=args.method,
                           objective=args.objective, borders=args.borders,
+                          grading=args.grading,
                           command="cq-fairing " + " ".join(sys.argv[1:]))
     _write_maps(args, result, tol, report)
     _note_nothing_faired(args, result)

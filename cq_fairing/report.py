@@ -264,7 +264,8 @@ def face_entry(index, *, surface_type=None, status, message="", poles_before=Non
 
 
 def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
-                 method=None, objective=None, borders=None, max_gap=None, valid=None,
+                 method=None, objective=None, borders=None, grading=None, max_gap=None,
+                 valid=None,
                  maps=None, seconds=None, command=None, units="mm", kept=None, joins=None):
     """The whole report: settings, one entry per face (see :func:`face_entry`), summary.
 
@@ -282,7 +283,8 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
         ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
-        for the adaptive method, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
+        for the adaptive method, else ``None``), ``grading`` (``"auto"``/``"uniform"``
+        for the wavelet method with a tolerance, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
         worst deviation, largest gap fairing opened between faces (beyond the
         source's own gap on each edge), validity, time), ``maps`` (name ->
         PNG/VTP path), ``skipped`` (index, reason) and ``kept`` (what the output keeps of
@@ -315,7 +317,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command, "input": _str(input_path), "output": _str(output_path),
         "tolerance": tolerance, "units": units, "method": method, "objective": objective,
-        "borders": borders, "kept": kept, "joins": joins,
+        "borders": borders, "grading": grading, "kept": kept, "joins": joins,
         "faces": faces, "summary": summary, "maps": {k: _str(v) for k, v in (maps or {}).items()},
         "skipped": [{"index": f["index"], "reason": f["message"]}
                     for f in faces if f["status"] in NOT_HANDLED],
@@ -454,10 +456,12 @@ def _joins_html(joins):
 
 
 def _method(report):
-    """``adaptive (faithful, auto borders)``, or the bare method when it has no objective."""
-    settings = [report.get("objective")] + (
-        [f"{report['borders']} borders"] if report.get("borders") else [])
-    return f"{report['method']} ({', '.join(settings)})" if settings[0] else report["method"]
+    """``adaptive (faithful, auto borders)``, ``wavelet (auto grading)``, or the bare
+    method when it has neither."""
+    settings = [s for s in (report.get("objective"),
+                            report.get("borders") and f"{report['borders']} borders",
+                            report.get("grading") and f"{report['grading']} grading") if s]
+    return f"{report['method']} ({', '.join(settings)})" if settings else report["method"]
 
 
 def kept_text(kept):

@@ -166,7 +166,9 @@ def test_grading_uniform_keeps_the_graded_faces_on_uniform_targets(tmp_path):
         proc = run("fair", BLADE, "-o", tmp_path / f"{grading}.step", "--joins", "free",
                    "--tol", "0.35", "--grading", grading, "--report", report, cwd=tmp_path)
         assert proc.returncode == 0, proc.stderr
-        faces[grading] = json.loads(report.read_text())["faces"]
+        written = json.loads(report.read_text())
+        assert written["grading"] == grading
+        faces[grading] = written["faces"]
     for auto, uniform in zip(faces["auto"][1:], faces["uniform"][1:]):
         assert auto["status"] == uniform["status"] == "ok"
         assert "graded like the source's knot spans" in auto["message"]
