@@ -100,8 +100,9 @@ def add_fairing_options(parser):
 def check_method(args):
     """Refuse the fairing options ``args.method`` does not use
     (:data:`cq_fairing.core.options.APPLIES`: --objective and --borders need --method
-    adaptive, --grading --method wavelet, --target-degree and --boundary not energy) and --target with the methods
-    that choose their own net.  An option spelled out at its default is no request, as
+    adaptive, --grading --method wavelet, --target-degree and --boundary not energy),
+    --grading with --target (no search runs), and --target with the methods that choose
+    their own net.  An option spelled out at its default is no request, as
     in the API."""
     for name in ("objective", "borders", "grading", "target_degree", "boundary"):
         value = getattr(args, name)

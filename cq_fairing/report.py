@@ -284,7 +284,8 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
         for the adaptive method, else ``None``), ``grading`` (``"auto"``/``"uniform"``
-        for the wavelet method with a tolerance, else ``None``), ``faces``, ``summary`` (counts, poles before/after,
+        for the wavelet method with a tolerance, else ``None``), ``faces``, ``summary``
+        (counts, poles before/after,
         worst deviation, largest gap fairing opened between faces (beyond the
         source's own gap on each edge), validity, time), ``maps`` (name ->
         PNG/VTP path), ``skipped`` (index, reason) and ``kept`` (what the output keeps of

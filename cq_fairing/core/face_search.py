@@ -32,10 +32,11 @@ notes say when the graded ones did): quasi-uniform targets cannot follow a gradi
 the shape has (the IEA blade's spanwise stations, 74 to 1: 17 x 9 poles against 11 x 9
 graded), and graded ones waste spans on a grading it does not have (a testtoler strip's
 refined end: 19 x 4 against 10 x 4).  They aim at ``MARGIN * tol`` (room for excursions
-between samples); the last one aims at ``tol`` itself.  A core step rule (``"linear"``, ``"guaranteed"``,
-``"polyfit"``) replaces the first two by the core's search with that rule (and its
-``measure``).  The adaptive method lets the core choose non-uniform targets at ``tol``,
-then at ``MARGIN * tol``; the energy method likewise keeps the net and moves its poles.
+between samples); the last one aims at ``tol`` itself.  A core step rule (``"linear"``,
+``"guaranteed"``, ``"polyfit"``) replaces the first two by the core's search with that
+rule (and its ``measure``).  The adaptive method lets the core choose non-uniform
+targets at ``tol``, then at ``MARGIN * tol``; the energy method likewise keeps the net
+and moves its poles.
 
 A face is kept ``'unchanged'`` when its net is already at its coarsest (degree + 1 poles
 per direction), when the chosen target is the source's own spaces, or when an adaptive

@@ -59,8 +59,8 @@ from .spaces import SplineSpace
 
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
-           "held_joins", "joint_targets", "locate_side", "refined_targets", "SOURCE_GAP",
-           "REFINEMENTS"]
+           "held_joins", "joint_targets", "locate_side", "refined_targets", "joined_faces",
+           "SOURCE_GAP", "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
 REFINEMENTS = 2    # span halvings of a face over its tolerance before it is kept
@@ -266,6 +266,14 @@ def border_gap(first, side_first, second, side_second, reversed_, samples=33, kn
               for surface, side, ts in ((first, side_first, t),
                                         (second, side_second, 1.0 - t if reversed_ else t))]
     return float(np.linalg.norm(points[0] - points[1], axis=1).max())
+
+
+def joined_faces(joins):
+    """The faces that meet another face in ``joins`` (a face's join with itself, a
+    closed seam, does not count).  With their joins held they search quasi-uniform
+    targets (``grading="uniform"``), whose knots a neighbour searching the same family
+    shares along the join."""
+    return {face for join in joins if join.faces[0] != join.faces[1] for face in join.faces}
 
 
 def joint_targets(sources, faired):

@@ -124,8 +124,8 @@ import numpy as np
 from ..errors import InvalidInputError, InvalidToleranceError
 
 __all__ = ["METHODS", "CURVE_METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES",
-           "FACE_SEARCHES", "GRADINGS", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY", "DEFAULTS",
-           "CURVE_DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED", "RENAMED_VALUES",
+           "FACE_SEARCHES", "GRADINGS", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY",
+           "DEFAULTS", "CURVE_DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED", "RENAMED_VALUES",
            "curve_method", "tolerance_method", "check_applies", "check_search_options",
            "checked_choice", "check_joins", "checked_objective", "check_borders",
            "checked_target_degree", "checked_order", "check_order",

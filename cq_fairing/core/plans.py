@@ -65,7 +65,9 @@ def graded_space(source, n, degree):
     spans, so a source whose spans grow along a direction (a blade's spanwise stations)
     gets targets that grow alike.  Where :math:`n` divides :math:`m` the target's knots
     are the source's own (nested spaces); on equally spaced breakpoints it is the
-    quasi-uniform :math:`V_n` itself.
+    quasi-uniform :math:`V_n` itself.  It is the adaptive method's starting family
+    (:func:`~cq_fairing.core.adaptive_knots.equidistributed_space` of the source's span
+    density), computed on the index so that nested knots are the source's to the bit.
     """
     if not has_graded_spans(source):
         return SplineSpace.quasi_uniform(n, degree, source.domain)

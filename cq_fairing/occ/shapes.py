@@ -43,6 +43,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
+from ..core.joint_projection import joined_faces
 from ..core.options import check_face_options, check_joins
 from ..errors import InvalidInputError
 from .adjacency import find_joins
@@ -352,13 +353,10 @@ class _Job:
 
     def uniform_targets(self, adjacency):
         """Quasi-uniform targets (``grading="uniform"``) for every face that meets
-        another face in ``adjacency``: faces that share a border keep its knots shared
-        when both search the same family of targets."""
-        for join in adjacency.joins:
-            a, b = join.faces
-            if a != b:
-                for face in (a, b):
-                    self.face_options[face] = {"grading": "uniform"}
+        another face in ``adjacency``
+        (:func:`~cq_fairing.core.joint_projection.joined_faces`)."""
+        for face in joined_faces(adjacency.joins):
+            self.face_options[face] = {"grading": "uniform"}
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""

@@ -27,7 +27,7 @@ from cq_fairing.core.face_search import (
     search_face,
     uv_window,
 )
-from cq_fairing.core.joint_projection import unholdable
+from cq_fairing.core.joint_projection import joined_faces, unholdable
 from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
@@ -669,8 +669,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     found, faces = _joins_of(named, angle_tolerance, neighbours)
     held = (joins != "free" and settings["tolerance"] is not None and found is not None
             and settings["method"] == "wavelet")
-    uniform = _sharing(found, faces) if held else set()
-    found_seconds = time.perf_counter() - start
+    # faces that meet another face search quasi-uniform targets, as cq-fairing fair's
+    uniform = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -694,7 +694,7 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     if progress is not None:
         progress(len(named), len(named))
     return _joined(named, results, settings, joins, list(neighbours), domains,
-                   (found, faces, found_seconds))
+                   (found, faces, start))
 
 
 def _joins_of(named, angle_tolerance, neighbours):
@@ -708,29 +708,16 @@ def _joins_of(named, angle_tolerance, neighbours):
                       neighbours=[face for _, face in neighbours]), faces
 
 
-def _sharing(found, faces):
-    """The positions in ``named`` (``faces``: those of the faces) of the faces that meet
-    another face in ``found``: with their joins held they search quasi-uniform targets,
-    whose knots their neighbours share along the join (as ``cq-fairing fair``)."""
-    out = set()
-    for join in found.joins:
-        a, b = join.faces
-        if a != b:
-            out |= {faces[f] for f in (a, b) if f < len(faces)}
-    return out
-
-
 def _joined(named, results, settings, joins, neighbours, domains, joins_found):
     """``results`` with the joins of the faces of ``named``, among themselves and with
     their ``neighbours`` (fixed), held (:func:`_hold`) and measured, as
     :class:`FairedShapes`; ``domains``: ``{sub: conversion.FaceDomain}`` of the faces
-    of ``named``; ``joins_found``: ``(found, faces, seconds)`` of :func:`_joins_of` and
-    the time it took."""
+    of ``named``; ``joins_found``: ``(found, faces)`` of :func:`_joins_of` and the
+    ``time.perf_counter()`` at which it started (the joins' time counts from there)."""
     tolerance = settings["tolerance"]
-    found, faces, found_seconds = joins_found
+    found, faces, start = joins_found
     if found is None:
         return FairedShapes(results)
-    start = time.perf_counter() - found_seconds
     elements = [named[k] for k in faces] + neighbours
     alone = [results[k] for k in faces]
     faired, outcome = alone, HeldJoins({}, {}, [], [], [])
