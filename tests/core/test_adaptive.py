@@ -30,7 +30,8 @@ from cq_fairing.core.polish import (
     net_lengths,
     variation_energy_matrix,
 )
-from cq_fairing.core.surface_fit import _net_solve, _SurfaceFit
+from cq_fairing.core.surface_fit import _SurfaceFit
+from cq_fairing.core.target_projections import _net_solve
 from cq_fairing.errors import InvalidInputError, InvalidToleranceError, ToleranceNotMetError
 from tests.reliability.independent import distance_to_surface, surface_points
 
