@@ -14,8 +14,9 @@ Subcommands
     tolerance; rational faces stay rational, without the energy polish) and takes
     ``--objective faithful`` to stop at the estimated noise level instead of at the
     fewest poles, or ``--objective fair`` for the fairest of the fewest poles and a few
-    more, and ``--borders free|pinned`` to choose the target's border rows
-    (default ``auto``: pinned where that gives fewer poles).
+    more.  ``--borders free|pinned`` chooses the target's border rows of the wavelet
+    and adaptive methods (default ``auto``: pinned to the source's border curves where
+    that gives fewer poles).
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives
     up on a face after S seconds (reported failed, kept unchanged).
 ``batch INPUTS... -o OUT_DIR [--tol T | --rel-tol R] [fair's fairing options]

@@ -4,10 +4,10 @@ errors, argument types and the fairing options of ``fair`` and ``batch``."""
 import argparse
 
 from .core.options import (
-    APPLIES,
     BORDERS,
     BOUNDARIES,
     DEFAULTS,
+    FACE_APPLIES,
     GRADINGS,
     JOINS,
     METHOD_DOES,
@@ -69,9 +69,10 @@ def add_fairing_options(parser):
                              "fair = the fairest of the fewest poles and up to two more "
                              "spans per direction (slower)")
     parser.add_argument("--borders", choices=BORDERS,
-                        help="with --method adaptive: the target's border rows; auto = "
-                             "pinned (corners kept) where that gives fewer poles (default), "
-                             "free = plain projection (often faster), pinned = always")
+                        help="with --method wavelet or adaptive: the target's border rows; "
+                             "auto = pinned to the face's border curves (corners kept) "
+                             "where that gives fewer poles (default; with --target: "
+                             "free), free = plain projection, pinned = always")
     parser.add_argument("--grading", choices=GRADINGS,
                         help="with --method wavelet and --tol: auto = also targets graded "
                              "like a face's knot spans, where they give fewer poles "
@@ -99,14 +100,15 @@ def add_fairing_options(parser):
 
 def check_method(args):
     """Refuse the fairing options ``args.method`` does not use
-    (:data:`cq_fairing.core.options.APPLIES`: --objective and --borders need --method
-    adaptive, --grading --method wavelet, --target-degree and --boundary not energy),
+    (:data:`cq_fairing.core.options.FACE_APPLIES`: --objective needs --method adaptive,
+    --borders wavelet or adaptive, --grading wavelet, --target-degree and --boundary not
+    energy),
     --grading with --target (no search runs), and --target with the methods that choose
     their own net.  An option spelled out at its default is no request, as
     in the API."""
     for name in ("objective", "borders", "grading", "target_degree", "boundary"):
         value = getattr(args, name)
-        allowed = [method for method in APPLIES[name] if method in METHODS]
+        allowed = [method for method in FACE_APPLIES[name] if method in METHODS]
         if value in (None, DEFAULTS[name]) or args.method in allowed:
             continue
         option = "--" + name.replace("_", "-")

@@ -283,7 +283,7 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
         ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
         adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
-        for the adaptive method, else ``None``), ``grading`` (``"auto"``/``"uniform"``
+        for the adaptive and wavelet methods, else ``None``), ``grading`` (``"auto"``/``"uniform"``
         for the wavelet method with a tolerance, else ``None``), ``faces``, ``summary``
         (counts, poles before/after,
         worst deviation, largest gap fairing opened between faces (beyond the
@@ -457,8 +457,8 @@ def _joins_html(joins):
 
 
 def _method(report):
-    """``adaptive (faithful, auto borders)``, ``wavelet (auto grading)``, or the bare
-    method when it has neither."""
+    """``adaptive (faithful, auto borders)``, ``wavelet (auto borders, auto grading)``,
+    or the bare method when it has none."""
     settings = [s for s in (report.get("objective"),
                             report.get("borders") and f"{report['borders']} borders",
                             report.get("grading") and f"{report['grading']} grading") if s]

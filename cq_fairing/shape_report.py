@@ -28,9 +28,10 @@ def faired_reports(result):
 
 def shape_report(result, tol, seconds, *, input_path, output_path, method, objective=None,
                  borders=None, grading=None, kept=None, parts=None, command=None):
-    """The report dict of ``result`` (:func:`cq_fairing.report.build_report`); ``objective``
-    and ``borders`` are reported for ``method="adaptive"`` only, ``grading`` for
-    ``method="wavelet"`` with a tolerance only."""
+    """The report dict of ``result`` (:func:`cq_fairing.report.build_report`);
+    ``objective`` is reported for ``method="adaptive"`` only, ``borders`` for
+    ``"adaptive"`` and ``"wavelet"``, ``grading`` for ``"wavelet"`` with a tolerance
+    only."""
     from .report import build_report, face_entry
     from .viz import fairness_measures
 
@@ -58,7 +59,7 @@ def shape_report(result, tol, seconds, *, input_path, output_path, method, objec
     return build_report(entries, input_path=input_path, output_path=output_path,
                         tolerance=tol, method=method,
                         objective=(objective or "compact") if adaptive else None,
-                        borders=(borders or "auto") if adaptive else None,
+                        borders=(borders or "auto") if method != "energy" else None,
                         grading=(grading or "auto") if method == "wavelet" and tol else None,
                         max_gap=result.max_gap, joins=_joins_entry(result.joins),
                         valid=result.valid, seconds=seconds, kept=kept,

@@ -62,12 +62,16 @@ from .projection import project_surface
 from .results import SurfaceFairResult
 from .scale_search import SurfaceSampler, _operator, max_scales, search_scales, target_degrees
 from .spaces import SplineSpace
+from .target_projections import TargetProjections
 
 __all__ = ["search_face", "FaceOutcome", "face_attempts", "face_finisher", "sample_counts",
            "uv_window", "non_rational", "AdaptiveTarget", "CoreSearch", "MARGIN"]
 
 #: Share of ``tol`` the searches aim at (room for excursions between samples).
 MARGIN = 0.9
+#: Note of a face whose winning target has its borders pinned to the source's.
+PINNED_NOTE = ("target borders pinned to the source's border curves: fewer poles than "
+               "free ones")
 #: Samples per direction for ``k`` poles: ``clip(2 k + 1, *SAMPLE_RANGE)``.
 SAMPLE_RANGE = (20, 400)
 
@@ -165,7 +169,7 @@ def face_attempts(tol, search="local", method="wavelet", objective="compact",
 
 def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None,
                 attempts=None, exceeds=None, region=None, window=None, details=True,
-                judge="the backend", grading="auto"):
+                judge="the backend", grading="auto", borders="auto"):
     """Fair a face's ``surface`` within ``tol`` (or onto ``n``), each candidate judged by
     the backend's ``check`` (module notes).
 
@@ -203,6 +207,12 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     grading : {"auto", "uniform"}
         The bisections' targets (:func:`_bisected`): with ``"auto"`` also targets graded
         like the source's spans where they are graded.
+    borders : {"auto", "free", "pinned"}
+        The border rows of the bisections' targets (:func:`_bisected`) and of explicit
+        scales ``n``: the plain projection (``"free"``), pinned to the source's border
+        curves (``"pinned"``), or both, the fewer poles winning (``"auto"``; with ``n``
+        the plain projection).  The adaptive method takes its own ``borders`` from
+        ``attempts``.
 
     Returns
     -------
@@ -226,8 +236,12 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     sampler = SurfaceSampler(grid, surface)
     graded = grading == "auto" and any(has_graded_spans(s)
                                        for s in (surface.u_space, surface.v_space))
+    gradings = ("uniform", "source") if graded else ("uniform",)
+    sides = {"auto": ("free",) if n is not None else ("free", "pinned"),
+             "free": ("free",), "pinned": ("pinned",)}[borders]
+    families = tuple((g, b) for b in sides for g in gradings)
     pieces = _Pieces(tol, n, degree, sampler, finish, check, exceeds, region, window,
-                     details, judge, ("uniform", "source") if graded else ("uniform",))
+                     details, judge, families, {})
     try:
         return _verified(surface, pieces, attempts)
     except NumericalError:
@@ -251,38 +265,48 @@ class _Pieces(NamedTuple):
     window: tuple
     details: bool
     judge: str
-    gradings: tuple
+    families: tuple
+    projections: dict
+
+    def pinned_projection(self, source):
+        """The pinned-border :class:`~cq_fairing.core.target_projections.TargetProjections`
+        of ``source``, kept for the attempts that follow (their operators are shared)."""
+        kept = self.projections.get(id(source))
+        if kept is None or kept[0] is not source:
+            kept = self.projections[id(source)] = (source, TargetProjections(source, "pinned"))
+        return kept[1]
 
 
 def _verified(source, pieces, attempts):
-    """The first attempt whose candidate passes ``pieces.check`` (module notes)."""
+    """The first candidate of the attempts that passes ``pieces.check`` (module notes)."""
     tol = pieces.tol
     measured, refusals, prefiltered = [], [], []
     for criterion, goal in attempts:
         try:
-            target, faired, result = _choose(source, goal, criterion, pieces)
+            candidates = _candidates(source, goal, criterion, pieces)
         except ToleranceNotMetError as exc:
             measured.append(exc.best_deviation)
             refusals.append((goal, str(exc)))
             continue
-        if target is not None and _is_identity(source, target, pieces.degree):
-            return _unchanged(source, "the finest admissible target is the source space "
-                              "itself; nothing to fair")
-        if isinstance(criterion, AdaptiveTarget) and _keeps_every_pole(source, faired):
-            return _unchanged(source, "the adaptive target needs as many poles as the "
-                              "source; nothing to reduce")
-        if tol is not None and pieces.exceeds is not None and pieces.exceeds(faired, tol):
-            prefiltered.append(faired)
-            continue
-        deviation = pieces.check(faired)
-        if tol is None or deviation <= tol:
-            if pieces.details and result is None:
-                result = _core_fair(source, target, pieces.degree)
-            if result is not None:
-                result = result.replace(surface=faired)
-            return FaceOutcome("faired", "", faired, result, deviation,
-                               _graded_note(criterion, target))
-        measured.append(deviation)
+        for candidate in candidates:
+            target, faired, result = candidate.target, candidate.faired, candidate.result
+            if target is not None and _is_identity(source, target, pieces.degree):
+                return _unchanged(source, "the finest admissible target is the source "
+                                  "space itself; nothing to fair")
+            if isinstance(criterion, AdaptiveTarget) and _keeps_every_pole(source, faired):
+                return _unchanged(source, "the adaptive target needs as many poles as the "
+                                  "source; nothing to reduce")
+            if tol is not None and pieces.exceeds is not None and pieces.exceeds(faired, tol):
+                prefiltered.append(faired)
+                continue
+            deviation = pieces.check(faired)
+            if tol is None or deviation <= tol:
+                if pieces.details and result is None:
+                    result = _core_fair(source, target, pieces.degree)
+                if result is not None:
+                    result = result.replace(surface=faired)
+                return FaceOutcome("faired", "", faired, result, deviation, candidate.notes)
+            measured.append(deviation)
     measured += [pieces.check(faired) for faired in prefiltered]
     known = [d for d in measured if d is not None]
     best = min(known) if known else float("inf")
@@ -308,15 +332,6 @@ def _keeps_every_pole(source, faired):
     return faired.shape[0] * faired.shape[1] >= source.shape[0] * source.shape[1]
 
 
-def _graded_note(criterion, target):
-    """The note of a bisection whose targets graded like the source won (:func:`_bisected`)."""
-    if criterion in ("normal", "parametric") and any(
-            isinstance(t, SplineSpace) and not t.is_quasi_uniform for t in target):
-        return ("targets graded like the source's knot spans: fewer poles than "
-                "quasi-uniform ones",)
-    return ()
-
-
 def _is_identity(source, target, degree):
     """True when the target (scales, or the adaptive method's spaces) gives back the
     source's own spaces."""
@@ -329,14 +344,15 @@ def _is_identity(source, target, degree):
     return True
 
 
-def _choose(source, tol, criterion, pieces):
-    """Target, the faired (finished) surface and the core result if computed.
+def _candidates(source, tol, criterion, pieces):
+    """The attempt's :class:`_Candidate` list, fewest poles first.
 
     For the adaptive method (``criterion`` an :class:`AdaptiveTarget`) the target is the
     pair of non-uniform spaces the core chose, measured only on the face
     (``pieces.region`` and ``pieces.window``, whose bounds are sample lines); the core's
     uniform search (a :class:`CoreSearch`) measures in ``pieces.window``; energy fairing
-    (``criterion`` ``"energy"``) keeps the source's spaces and has no target (``None``).
+    (``criterion`` ``"energy"``) keeps the source's spaces and has no target (``None``);
+    the bisections give one candidate per target family (:func:`_bisected`).
     """
     finish, degree = pieces.finish, pieces.degree
     if criterion == "energy":
@@ -344,14 +360,14 @@ def _choose(source, tol, criterion, pieces):
                               v_knots=source.v_knots,
                               degree=(source.u_degree, source.v_degree),
                               weights=source.weights, method="energy")
-        return None, finish(result.surface), result
+        return [_Candidate(None, finish(result.surface), result)]
     if isinstance(criterion, AdaptiveTarget):
         result = fair_surface_adaptive(source, tol, target_degree=degree,
                                        objective=criterion.objective,
                                        borders=criterion.borders, region=pieces.region,
                                        window=pieces.window)
         spaces = (result.surface.u_space, result.surface.v_space)
-        return spaces, finish(result.surface), result
+        return [_Candidate(spaces, finish(result.surface), result)]
     if isinstance(criterion, CoreSearch):
         result = fair_surface(source.poles, tol=tol, u_knots=source.u_knots,
                               v_knots=source.v_knots,
@@ -359,43 +375,88 @@ def _choose(source, tol, criterion, pieces):
                               weights=source.weights, target_degree=degree,
                               search=criterion.rule, measure=criterion.measure,
                               window=pieces.window)
-        return result.n, finish(result.surface), result
+        return [_Candidate(result.n, finish(result.surface), result)]
     if pieces.n is not None:
-        n = pieces.n
-        pair = (n, n) if np.ndim(n) == 0 else tuple(n)
-        if len(pair) != 2:
-            raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
-        result = _core_fair(source, pair, degree)
-        return pair, finish(result.surface), result
-    target, faired = _bisected(source, tol, criterion, pieces)
-    return target, faired, None
+        return [_explicit(source, pieces)]
+    return _bisected(source, tol, criterion, pieces)
+
+
+class _Candidate(NamedTuple):
+    """One candidate of an attempt: its target (scales or spaces, ``None`` for energy
+    fairing), the finished surface, the core result if computed, and its notes."""
+
+    target: object
+    faired: BSplineSurface
+    result: SurfaceFairResult = None
+    notes: tuple = ()
+
+
+def _explicit(source, pieces):
+    """The candidate of explicit scales ``pieces.n``: the projection onto them, with the
+    borders pinned when ``pieces.families`` has pinned ones only."""
+    n = pieces.n
+    pair = (n, n) if np.ndim(n) == 0 else tuple(n)
+    if len(pair) != 2:
+        raise InvalidInputError(f"n must be an int or a pair (n_u, n_v), got {n!r}.")
+    result = _core_fair(source, pair, pieces.degree)
+    if all(borders == "pinned" for _, borders in pieces.families):
+        spaces = [None if t is None else direction_target(s, t, p) for t, s, p in
+                  zip(pair, (source.u_space, source.v_space), pieces.degree)]
+        surface = TargetProjections(source, "pinned").projected(*spaces)
+        return _Candidate(pair, pieces.finish(surface), result, (PINNED_NOTE,))
+    return _Candidate(pair, pieces.finish(result.surface), result)
 
 
 def _bisected(source, tol, criterion, pieces):
-    """``(target spaces, faired)`` of the bisection
+    """One :class:`_Candidate` per target family of ``pieces.families`` that meets
+    ``tol``, fewest poles first (on a tie in the families' order): the bisection
     (:func:`~cq_fairing.core.scale_search.search_scales`) with the ``criterion``'s
-    measure, over each of ``pieces.gradings``: quasi-uniform targets, and for a source
-    whose spans are graded (a blade's spanwise stations, a strip's refined end) also
-    targets graded like them (:func:`~cq_fairing.core.plans.graded_space`), a candidate
-    both families share measured once.  The fewer poles win, the quasi-uniform targets
-    on a tie.
+    measure on quasi-uniform targets and, for a source whose spans are graded (a blade's
+    spanwise stations, a strip's refined end), on targets graded like them
+    (:func:`~cq_fairing.core.plans.graded_space`); each with free borders (the plain L2
+    projection) and with borders pinned to the source's border curves
+    (:class:`~cq_fairing.core.target_projections.TargetProjections`).  A candidate two
+    families share is measured once.  A pinned family whose rational projection gives
+    a non-positive weight is left out (the free ones keep the core's rule: the caller
+    searches a non-rational approximation).
 
     Raises
     ------
     ToleranceNotMetError
-        No grading's targets meet ``tol`` (the first one's refusal).
+        No family's targets meet ``tol`` (the first one's refusal).
     """
     measure = pieces.sampler.normal if criterion == "normal" else pieces.sampler.parametric
-    found, refusals, measured = [], [], {}
-    for grading in pieces.gradings:
+    found, refusals, measured = [], [], {"free": {}, "pinned": {}}
+    for grading, borders in pieces.families:
+        projection = (pieces.pinned_projection(source).projected if borders == "pinned"
+                      else None)
         try:
-            found.append(search_scales(source, tol, pieces.degree, measure, pieces.finish,
-                                       grading=grading, measured=measured)[:2])
+            target, faired = search_scales(source, tol, pieces.degree, measure,
+                                           pieces.finish, projection=projection,
+                                           grading=grading, measured=measured[borders])[:2]
         except ToleranceNotMetError as exc:
             refusals.append(exc)
+            continue
+        except NumericalError:
+            if borders == "free":
+                raise
+            continue
+        found.append(_Candidate(target, faired, None, _family_notes(target, borders)))
     if not found:
         raise refusals[0]
-    return min(found, key=lambda pair: pair[1].shape[0] * pair[1].shape[1])
+    return sorted(found, key=lambda c: c.faired.shape[0] * c.faired.shape[1])
+
+
+def _family_notes(target, borders):
+    """The notes of a bisection's winner whose targets are not the plain
+    quasi-uniform, free-border ones."""
+    notes = ()
+    if any(isinstance(t, SplineSpace) and not t.is_quasi_uniform for t in target):
+        notes += ("targets graded like the source's knot spans: fewer poles than "
+                  "quasi-uniform ones",)
+    if borders == "pinned":
+        notes += (PINNED_NOTE,)
+    return notes
 
 
 def _core_fair(source, target, degree):

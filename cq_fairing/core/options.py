@@ -28,9 +28,14 @@ The options
 ``objective`` : {"compact", "faithful", "fair"}, default "compact"
     What an adaptive fit spends ``tol`` on.  ``"adaptive"`` only.
 ``borders`` : {"auto", "free", "pinned"}, default "auto"
-    The border rows of the adaptive **target** while it is fitted: ``"pinned"`` keeps the
-    corners and projects each edge on its own, ``"free"`` is the plain projection,
-    ``"auto"`` pins where that gives fewer poles.  ``"adaptive"`` surfaces only.
+    The border rows of the **target** while it is fitted: ``"pinned"`` keeps the
+    corners and projects each edge on its own
+    (:mod:`~cq_fairing.core.target_projections`), ``"free"`` is the plain projection,
+    ``"auto"`` pins where that gives fewer poles.  ``"adaptive"`` surfaces, and
+    ``"wavelet"`` occ faces (the bisections on the face's samples, and explicit ``n``,
+    where ``"auto"`` is the plain projection).  In a model a face that shares a held
+    join with another face searches free borders: the joint projection sets its
+    borders.
 ``boundary`` : {"free", "fixed"}, default "free"
     Occ faces only: ``"fixed"`` puts the **source's** border rows back into the faired
     net after the fit, so the natural boundary curves do not move.  ``"wavelet"`` and
@@ -125,7 +130,8 @@ from ..errors import InvalidInputError, InvalidToleranceError
 
 __all__ = ["METHODS", "CURVE_METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES",
            "FACE_SEARCHES", "GRADINGS", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY",
-           "DEFAULTS", "CURVE_DEFAULTS", "APPLIES", "METHOD_DOES", "RENAMED", "RENAMED_VALUES",
+           "DEFAULTS", "CURVE_DEFAULTS", "APPLIES", "FACE_APPLIES", "METHOD_DOES", "RENAMED",
+           "RENAMED_VALUES",
            "curve_method", "tolerance_method", "check_applies", "check_search_options",
            "checked_choice", "check_joins", "checked_objective", "check_borders",
            "checked_target_degree", "checked_order", "check_order",
@@ -171,6 +177,8 @@ APPLIES = {"objective": ("adaptive",), "borders": ("adaptive",),
            "boundary": ("wavelet", "adaptive"),
            "window": ("wavelet", "adaptive"), "search": ("wavelet",), "grading": ("wavelet",),
            "order": ("wavelet",), "measure": ("wavelet",), "schedule": ("wavelet",)}
+#: :data:`APPLIES` of an occ face: its wavelet search also pins borders.
+FACE_APPLIES = {**APPLIES, "borders": ("wavelet", "adaptive")}
 
 #: What each method does that makes the other methods' options meaningless for it.
 METHOD_DOES = {"auto": "chooses the adaptive fit per curve",
@@ -330,7 +338,7 @@ def _checked_tol(tol):
 
 
 # -- which option goes with which method ---------------------------------------------------
-def check_applies(method, options, defaults=DEFAULTS, methods=METHODS):
+def check_applies(method, options, defaults=DEFAULTS, methods=METHODS, applies=APPLIES):
     """Refuse the method-specific options (:data:`APPLIES`) that ``method`` does not use.
 
     Parameters
@@ -346,6 +354,8 @@ def check_applies(method, options, defaults=DEFAULTS, methods=METHODS):
     methods : tuple of str
         The methods of the calling layer (:data:`METHODS`; curves:
         :data:`CURVE_METHODS`); the message names only those.
+    applies : dict
+        :data:`APPLIES`, or an occ face's (``borders`` also with ``"wavelet"``).
 
     Raises
     ------
@@ -353,7 +363,7 @@ def check_applies(method, options, defaults=DEFAULTS, methods=METHODS):
         Naming the option and its value, what ``method`` does instead, and what to do.
     """
     for name, value in options:
-        allowed = [m for m in APPLIES[name] if m in methods]
+        allowed = [m for m in applies[name] if m in methods]
         if method in allowed or not _differs(value, defaults[name]):
             continue
         listed = " or ".join(repr(m) for m in allowed)
@@ -431,8 +441,9 @@ def check_face_options(tol, n, method, boundary, objective="compact", borders="a
     :data:`BOUNDARIES`, :data:`FACE_SEARCHES` and :data:`GRADINGS`; ``objective``,
     ``borders``, ``boundary``, ``target_degree``, ``search`` (an occ face's default:
     ``"local"``) and ``grading`` are refused with a method that does not use them
-    (:func:`check_applies`); ``"adaptive"`` and ``"energy"`` refuse ``n``; ``search``
-    and ``grading`` are refused with ``n`` (:func:`check_search_options`).
+    (:func:`check_applies` with :data:`FACE_APPLIES`); ``"adaptive"`` and ``"energy"``
+    refuse ``n``; ``search`` and ``grading`` are refused with ``n``
+    (:func:`check_search_options`; ``borders="pinned"`` pins explicit scales).
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -447,7 +458,8 @@ def check_face_options(tol, n, method, boundary, objective="compact", borders="a
         checked_choice(name, value, choices)
     check_applies(method, (("objective", objective), ("borders", borders),
                            ("boundary", boundary), ("target_degree", target_degree),
-                           ("search", search), ("grading", grading)), _FACE_DEFAULTS)
+                           ("search", search), ("grading", grading)), _FACE_DEFAULTS,
+                  applies=FACE_APPLIES)
     if method != "wavelet" and n is not None:
         what = ("chooses the target itself" if method == "adaptive"
                 else "keeps the control points")

@@ -156,9 +156,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     faces : iterable of int, optional
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
     method, objective, borders, boundary, target_degree, density, grading
-        As in :func:`~cq_fairing.occ.fair_face` (with ``grading="auto"`` a face that
-        shares a held join with another face searches quasi-uniform targets only, whose
-        knots its neighbours share along the join; ``method="adaptive"``: the core's
+        As in :func:`~cq_fairing.occ.fair_face` (with ``grading="auto"`` and
+        ``borders="auto"`` a face that shares a held join with another face searches
+        quasi-uniform, free-border targets only, whose knots its neighbours share along
+        the join and whose borders the joint projection sets; ``method="adaptive"``: the core's
         adaptive targets per face, ``objective`` ``"compact"``, ``"faithful"`` or ``"fair"``,
         ``borders`` ``"auto"``, ``"free"`` or ``"pinned"``; the
         faces next to a too-large gap are faired again the same way with half ``tol``).
@@ -264,8 +265,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         job = _Job(source, originals, options, engine or pool)
         adjacency = find_joins(source, angle_tol=angle_tol)
         held = joins != "free" and tol is not None
-        if held and method == "wavelet" and grading == "auto":
-            job.uniform_targets(adjacency)
+        if held and method == "wavelet":
+            job.plain_targets(adjacency, grading, borders)
         job.fair_first(selected, tol, n, progress)
         if held:
             joint = fair_joined(job, adjacency, joins)
@@ -351,12 +352,17 @@ class _Job:
         self.networks = []          # faces at their coarsest faired together by energy
         self.curved = []            # joins held curvature-continuous (joins="curvature")
 
-    def uniform_targets(self, adjacency):
-        """Quasi-uniform targets (``grading="uniform"``) for every face that meets
-        another face in ``adjacency``
-        (:func:`~cq_fairing.core.joint_projection.joined_faces`)."""
+    def plain_targets(self, adjacency, grading, borders):
+        """Quasi-uniform targets (``grading="uniform"``) with free borders
+        (``borders="free"``), each where its option is ``"auto"``, for every face that
+        meets another face in ``adjacency``
+        (:func:`~cq_fairing.core.joint_projection.joined_faces`): the joint projection
+        shares those targets' knots along the joins and sets the borders."""
+        plain = {name: value for name, value, auto in (("grading", "uniform", grading),
+                                                        ("borders", "free", borders))
+                 if auto == "auto"}
         for face in joined_faces(adjacency.joins):
-            self.face_options[face] = {"grading": "uniform"}
+            self.face_options[face] = plain
 
     def fair_first(self, selected, tol, n, progress):
         """The first pass: every selected face at ``tol`` (or ``n``); ``progress`` per face."""

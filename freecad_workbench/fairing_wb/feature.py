@@ -37,8 +37,9 @@ PROPERTIES = (
      "(stop where the residual reaches the source's estimated noise) or fair (the fairest "
      "of the compact net and up to two more spans per direction)", False),
     ("App::PropertyEnumeration", "Borders", "Fairing",
-     "adaptive method only: auto (pinned corners where that gives fewer control points), "
-     "free (plain projection, often a faster search) or pinned", False),
+     "adaptive method, and wavelet in Tolerance mode: auto (borders pinned to the face's "
+     "border curves where that gives fewer control points), free (plain projection) or "
+     "pinned", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Joins", "Fairing",
@@ -236,9 +237,10 @@ class Fairing:
     @staticmethod
     def face_settings(obj):
         """Keyword arguments of :func:`make.fair_face` that faces have and edges do not:
-        ``boundary``, and ``borders`` (adaptive method only, ignored otherwise)."""
-        return {"boundary": obj.Boundary,
-                "borders": obj.Borders if obj.Method == "adaptive" else "auto"}
+        ``boundary``, and ``borders`` where it applies (:func:`make.borders_apply`: the
+        adaptive method, the wavelet method in tolerance mode; ``"auto"`` otherwise)."""
+        applies = make.borders_apply(obj.Method, obj.Mode == "Tolerance")
+        return {"boundary": obj.Boundary, "borders": obj.Borders if applies else "auto"}
 
     def _fair(self, obj):
         if obj.Source is None:

@@ -130,7 +130,8 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
     estimated noise (discrepancy principle, ``cq_fairing.core.fidelity``), ``fair``
     keeps the fairest of the compact net and that net with up to two more spans per
     direction.  So do
-    ``borders``: the target's border rows (``cq_fairing.core.adaptive``).
+    ``borders``: the target's border rows (``cq_fairing.core.adaptive``; the wavelet
+    method's tolerance search takes them in :func:`searched_face`).
     """
     if method not in METHODS or objective not in OBJECTIVES:
         raise cf.InvalidInputError(
@@ -138,7 +139,7 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
             f"{method!r} and {objective!r}.")
     if borders is not None and borders not in BORDERS:
         raise cf.InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
-    _check_adaptive_only(method, objective, borders)
+    _check_method_options(method, objective, borders, tolerance is not None)
     if method == "wavelet":
         return {}
     if tolerance is None:
@@ -157,14 +158,25 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
     return {"method": method}
 
 
-def _check_adaptive_only(method, objective, borders):
-    """``objective`` and ``borders`` other than their defaults need the adaptive method."""
-    for name, value, default in (("objective", objective, "compact"),
-                                 ("borders", borders, "auto")):
-        if method != "adaptive" and value not in (None, default):
-            raise cf.InvalidInputError(
-                f"{name} {value!r} applies to the adaptive method only, got method "
-                f"{method!r}; choose method 'adaptive' or {name} {default!r}.")
+def borders_apply(method, by_tolerance):
+    """True where the ``borders`` option applies: the adaptive method, and the wavelet
+    method's tolerance search (:func:`searched_face`)."""
+    return method == "adaptive" or method == "wavelet" and by_tolerance
+
+
+def _check_method_options(method, objective, borders, by_tolerance=True):
+    """``objective`` other than its default needs the adaptive method, ``borders`` the
+    adaptive method or the wavelet method's tolerance search (:func:`borders_apply`)."""
+    if method != "adaptive" and objective not in (None, "compact"):
+        raise cf.InvalidInputError(
+            f"objective {objective!r} applies to the adaptive method only, got method "
+            f"{method!r}; choose method 'adaptive' or objective 'compact'.")
+    if not borders_apply(method, by_tolerance) and borders not in (None, "auto"):
+        raise cf.InvalidInputError(
+            f"borders {borders!r} applies to the adaptive method and to the wavelet "
+            f"method's tolerance search only, got method {method!r} in "
+            f"{'tolerance' if by_tolerance else 'target'} mode; choose Tolerance mode with "
+            "the wavelet or adaptive method, or borders 'auto'.")
 
 
 def _require_accuracy_control():
@@ -332,8 +344,8 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
       periodic seams tied, collapsed borders kept).
 
     ``domain``: the :class:`conversion.FaceDomain` of ``face`` where already read (its
-    trim is read from OCCT once for all the masks).  ``grading``: the bisections'
-    targets, as :func:`cq_fairing.occ.fair_face`'s option of that name.
+    trim is read from OCCT once for all the masks).  ``grading`` and ``borders``: the
+    bisections' targets, as :func:`cq_fairing.occ.fair_face`'s options of those names.
 
     Returns
     -------
@@ -359,7 +371,7 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
         check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
         exceeds=check.exceeds, region=domain.region(),
         window=uv_window(conversion.uv_range(face, source), source), details=False,
-        judge="the workbench", grading=grading)
+        judge="the workbench", grading=grading, borders=borders)
     return outcome, check
 
 
@@ -407,11 +419,13 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         least curvature-variation energy among the compact net and that net with up to
         two more spans per direction.
     borders : {"auto", "free", "pinned"}
-        ``method="adaptive"`` only: the border rows of the target.  ``auto`` pins them
-        (corners kept, each edge fitted to its own border curve) where that gives fewer
-        poles; ``free`` is the plain projection, often a much faster search on a face
-        whose pinned net slides along it (the 50 x 80 test face: 19 x 21 poles in
-        about 1.6 s instead of 11 x 11 in about 11 s); ``pinned`` always pins.
+        The border rows of the target, with ``method="adaptive"`` and in tolerance mode
+        with ``"wavelet"`` (:func:`borders_apply`).  ``auto`` pins them (corners kept,
+        each edge fitted to its own border curve) where that gives fewer poles; ``free``
+        is the plain projection; ``pinned`` always pins.  The wavelet search on the 50 x
+        80 test face: 12 x 15 poles pinned, 38 x 65 free; the adaptive method's free
+        borders are often a much faster search on a face whose pinned net slides along
+        it (19 x 21 poles in about 1.6 s instead of 11 x 11 in about 11 s).
     domain : conversion.FaceDomain, optional
         That of ``face`` where already read (none: read here).
     grading : {"auto", "uniform"}
@@ -669,8 +683,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     found, faces = _joins_of(named, angle_tolerance, neighbours)
     held = (joins != "free" and settings["tolerance"] is not None and found is not None
             and settings["method"] == "wavelet")
-    # faces that meet another face search quasi-uniform targets, as cq-fairing fair's
-    uniform = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
+    # faces that meet another face search quasi-uniform, free-border targets, as
+    # cq-fairing fair's (the joint projection shares their knots and sets their borders)
+    plain = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -678,9 +693,9 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             own = target if target is None or len(named) == 1 else _clamped_target(target,
                                                                                    element)
             try:
-                result = fair_face(element, **face_settings, **{**settings, "target": own},
-                                   domain=domains[sub],
-                                   grading="uniform" if done in uniform else "auto")
+                result = fair_face(element, **_plain(face_settings, done in plain),
+                                   **{**settings, "target": own}, domain=domains[sub],
+                                   grading="uniform" if done in plain else "auto")
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
@@ -804,6 +819,14 @@ def _nothing_faired(source, surface, method):
             and surface.v_space.same_as(source.v_space))
 
 
+def _plain(face_settings, joined):
+    """``face_settings`` of a face; one that shares a held join keeps ``borders="auto"``
+    as free borders (:func:`fair_shapes`)."""
+    if joined and face_settings.get("borders") == "auto":
+        return {**face_settings, "borders": "free"}
+    return face_settings
+
+
 def _kept_by_joins(element, why, tolerance):
     """:class:`FairedShape` of a face kept as it is for its joins: ``why`` is the
     deviation it stays at with its joins held (over ``tolerance``; ``inf``: weights not
@@ -920,7 +943,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         raise cf.InvalidInputError(
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
-    _check_adaptive_only(method, objective, borders)
+    _check_method_options(method, objective, borders)
     _check_search(search, measure, method)
     check_joins(joins, angle_tolerance)
     obj_source, subs = _source_link(source)

@@ -109,7 +109,8 @@ class FairSurfacePanel:
     """Tolerance, mode, target, method, objective, borders, boundary, figures; Preview /
     OK / Cancel.
 
-    Objective and borders are enabled for the adaptive method only; search and measure for the
+    Objective is enabled for the adaptive method only, borders also for the wavelet
+    method in Tolerance mode; search and measure for the
     wavelet method in tolerance mode (the adaptive method checks the true distance itself,
     energy keeps the net).
     """
@@ -159,8 +160,9 @@ class FairSurfacePanel:
                                   "spans")
         self.borders = _row(layout, "Borders:", QtWidgets.QComboBox(), "fairing_borders")
         self.borders.addItems(list(make.BORDERS))
-        self.borders.setToolTip("auto: pinned corners where that gives fewer control points; "
-                                "free: plain projection, often a faster search; pinned")
+        self.borders.setToolTip("wavelet (Tolerance mode) and adaptive: auto = borders "
+                                "pinned to the face's border curves where that gives fewer "
+                                "control points; free = plain projection; pinned = always")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")
@@ -233,7 +235,8 @@ class FairSurfacePanel:
         wavelet = self.method.currentText() == "wavelet"
         self.tolerance.setEnabled(by_tolerance)
         self.objective.setEnabled(adaptive)
-        self.borders.setEnabled(adaptive and self.kind == "Face")
+        self.borders.setEnabled(make.borders_apply(self.method.currentText(), by_tolerance)
+                                and self.kind == "Face")
         self.search.setEnabled(by_tolerance and wavelet)
         self.measure.setEnabled(by_tolerance and wavelet and not self._local())
         self.target_u.setEnabled(not by_tolerance)
@@ -264,10 +267,10 @@ class FairSurfacePanel:
 
     def face_settings(self):
         """Keyword arguments of :func:`make.fair_face` that edges do not take: ``boundary``
-        and ``borders`` (adaptive method only)."""
-        adaptive = self.method.currentText() == "adaptive"
+        and ``borders`` where it applies (:func:`make.borders_apply`)."""
+        applies = make.borders_apply(self.method.currentText(), self.mode.currentIndex() == 0)
         return {"boundary": self.boundary.currentText(),
-                "borders": self.borders.currentText() if adaptive else "auto"}
+                "borders": self.borders.currentText() if applies else "auto"}
 
     def join_settings(self):
         """Keyword arguments of :func:`make.fair_shapes` for the joins (the feature's

@@ -49,7 +49,8 @@ def test_adaptive_objective_writes_a_valid_step_within_tol(blade_step, tmp_path,
 
 @pytest.mark.parametrize("args, words", [
     (["--objective", "faithful"], "applies to --method adaptive only"),
-    (["--borders", "pinned"], "applies to --method adaptive only"),
+    (["--method", "energy", "--borders", "pinned"],
+     "applies to --method wavelet or adaptive only"),
     (["--method", "adaptive", "--target", "6", "6"], "give --tol instead of --target")])
 def test_objective_or_target_with_the_wrong_method_is_a_usage_error(blade_step, tmp_path,
                                                                      args, words):

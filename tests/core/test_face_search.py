@@ -12,6 +12,7 @@ import cq_fairing as cf
 from cq_fairing.core.closest_points import closest_points_surface_restarted
 from cq_fairing.core.face_search import (
     MARGIN,
+    PINNED_NOTE,
     CoreSearch,
     face_attempts,
     face_finisher,
@@ -65,7 +66,7 @@ def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
     source = _noisy()
     grid = _grid(source)
     check = TwoSided(source, grid)
-    outcome = search_face(source, TOL, grid, face_finisher(source), check)
+    outcome = search_face(source, TOL, grid, face_finisher(source), check, borders="free")
     assert outcome.status == "faired" and outcome.notes == ()
     assert outcome.deviation == check.log[-1][1] <= TOL
     assert outcome.surface.shape[0] * outcome.surface.shape[1] < 30 * 40
@@ -75,9 +76,9 @@ def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
 
 
 def test_a_failing_check_moves_on_to_the_next_attempt():
-    """A check that refuses everything below a pole count sees the attempts in order
-    (local bisection, core search, parametric bisection at MARGIN * tol, then at tol)
-    and the error names the judge and the best value it measured."""
+    """A check that refuses everything sees the attempts in order (local bisection, core
+    search, parametric bisection at MARGIN * tol, then at tol; one candidate each with
+    free borders only) and the error names the judge and the best value it measured."""
     source = _noisy()
     grid = _grid(source)
     measured = TwoSided(source, grid)
@@ -86,7 +87,8 @@ def test_a_failing_check_moves_on_to_the_next_attempt():
         return measured(faired) + 1.0   # never within TOL
 
     with pytest.raises(cf.ToleranceNotMetError, match="by the judge's measure") as error:
-        search_face(source, TOL, grid, face_finisher(source), strict, judge="the judge")
+        search_face(source, TOL, grid, face_finisher(source), strict, judge="the judge",
+                    borders="free")
     assert len(measured.log) == 4
     assert error.value.best_deviation == pytest.approx(min(d for _, d in measured.log) + 1.0)
 
@@ -102,13 +104,95 @@ def test_a_prefiltered_candidate_is_measured_only_when_every_attempt_fails():
         return len(seen) == 1
 
     outcome = search_face(source, TOL, grid, face_finisher(source), check,
-                          exceeds=first_fails)
+                          exceeds=first_fails, borders="free")
     assert outcome.status == "faired" and len(seen) == 2 and len(check.log) == 1
     check.log.clear()
     with pytest.raises(cf.ToleranceNotMetError, match="by the backend's measure"):
         search_face(source, TOL, grid, face_finisher(source), check,
-                    exceeds=lambda faired, tol: True)
+                    exceeds=lambda faired, tol: True, borders="free")
     assert len(check.log) == 4   # measured after all failed, for the best deviation
+
+
+def _held_end_projection(space, source_space, coefficients):
+    """Independent dense computation of a border row with its ends kept: least squares
+    of the target curve against the source curve on a fine Gauss grid."""
+    x, w = np.polynomial.legendre.leggauss(12)
+    breaks = np.union1d(space.breakpoints, source_space.breakpoints)
+    t = np.concatenate([0.5 * (b - a) * x + 0.5 * (a + b) for a, b in zip(breaks, breaks[1:])])
+    weights = np.concatenate([0.5 * (b - a) * w for a, b in zip(breaks, breaks[1:])])
+    target = space.collocation(t).toarray()
+    values = source_space.collocation(t).toarray() @ coefficients
+    root = np.sqrt(weights)[:, None]
+    rest = values - target[:, [0, -1]] @ coefficients[[0, -1]]
+    inner = np.linalg.lstsq(root * target[:, 1:-1], root * rest, rcond=None)[0]
+    return np.vstack([coefficients[:1], inner, coefficients[-1:]])
+
+
+def test_pinned_borders_win_where_the_free_projection_moves_the_corners():
+    """The noisy net's poles are evenly spaced on clamped uniform knots, so its
+    parametric speed changes within the end spans and the plain projection moves the
+    corners along the surface: borders pinned to the source's border curves meet the
+    tolerance with fewer poles.  The winner is within tol by a denser measure, keeps the
+    source's corners exactly, and its border rows are the projections of the source's
+    border curves with their ends kept, computed here by dense least squares."""
+    source = _noisy()
+    grid = _grid(source)
+    free = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
+                       borders="free")
+    outcome = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid))
+    assert outcome.notes == (PINNED_NOTE,)
+    poles = outcome.surface.poles
+    assert poles.shape[0] * poles.shape[1] < free.surface.poles.shape[0] * \
+        free.surface.poles.shape[1]
+    assert _dense_two_sided(source, outcome.surface) <= TOL * 1.02
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):
+        assert np.array_equal(poles[i, j], source.poles[i, j])
+    scale = np.abs(source.poles).max()
+    su, sv, tu, tv = (source.u_space, source.v_space, outcome.surface.u_space,
+                      outcome.surface.v_space)
+    for j in (0, -1):
+        assert np.allclose(poles[:, j], _held_end_projection(tu, su, source.poles[:, j]),
+                           rtol=0, atol=1e-9 * scale)
+    for i in (0, -1):
+        assert np.allclose(poles[i], _held_end_projection(tv, sv, source.poles[i]),
+                           rtol=0, atol=1e-9 * scale)
+    pinned = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
+                         borders="pinned")
+    assert pinned.surface.shape == outcome.surface.shape
+
+
+def test_the_candidates_of_one_attempt_are_checked_fewest_poles_first():
+    """Each target family's bisection gives a candidate; a candidate the check refuses
+    hands over to the attempt's next one, in increasing pole count, before the next
+    attempt runs."""
+    source = _noisy()
+    grid = _grid(source)
+    check = TwoSided(source, grid)
+    seen = []
+
+    def record(faired, tol):
+        seen.append(faired.shape[0] * faired.shape[1])
+        return len(seen) == 1   # the first candidate is refused
+
+    outcome = search_face(source, TOL, grid, face_finisher(source), check, exceeds=record)
+    assert len(seen) >= 2 and seen[0] <= seen[1]   # the first attempt's pinned and free
+    assert check.log[0][0][0] * check.log[0][0][1] == seen[1]   # checked after the refusal
+    assert outcome.deviation == check.log[-1][1] <= TOL
+
+
+def test_explicit_scales_take_pinned_borders_on_request():
+    """With ``n`` the default is the plain projection; ``borders="pinned"`` pins it."""
+    source = _noisy()
+    grid = _grid(source)
+    plain = search_face(source, None, grid, face_finisher(source), TwoSided(source, grid),
+                        n=(6, 8))
+    pinned = search_face(source, None, grid, face_finisher(source), TwoSided(source, grid),
+                         n=(6, 8), borders="pinned")
+    assert plain.notes == () and pinned.notes == (PINNED_NOTE,)
+    assert plain.surface.shape == pinned.surface.shape == (9, 11)
+    assert not np.array_equal(plain.surface.poles[0, 0], source.poles[0, 0])
+    assert np.array_equal(pinned.surface.poles[0, 0], source.poles[0, 0])
+    assert pinned.deviation < plain.deviation
 
 
 def test_attempts_of_each_search():

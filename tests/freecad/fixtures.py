@@ -76,6 +76,16 @@ def blade_shape():
     return Part.read(str(BLADE))
 
 
+def status_ok(obj):
+    """The feature is valid and its ``Status`` says "OK", followed only by the notes of
+    faces it faired ("Face1 faired: ...") and the joins line: no face kept or failed."""
+    head = obj.Status.split("; joins: ")[0]
+    notes = head[len("OK; "):] if head.startswith("OK; ") else ""
+    return (obj.isValid() and "Invalid" not in obj.State
+            and (head == "OK" or bool(notes) and " faired: " in notes.split("; ")[0]
+                 and " kept " not in notes and "Error" not in notes))
+
+
 def sample_distance(faired_face, source_face, count=12):
     """Max FreeCAD ``distToShape`` from faired samples (inside its trim) to the source face."""
     u0, u1, v0, v1 = faired_face.ParameterRange

@@ -329,3 +329,32 @@ def test_graded_spans_get_graded_targets_where_they_need_fewer_poles(real):
     assert uniform.poles_after == (11, 9) and uniform.max_deviation > tol
     np.testing.assert_allclose(report.result.reconstruct(), source.poles,
                                atol=1e-8 * np.abs(source.poles).max())
+
+
+def test_pinned_borders_where_the_free_projection_moves_the_corners():
+    """The noisy 50 x 80 blade (poles evenly spaced on clamped uniform knots, so its
+    parametric speed changes within its end spans): the plain projection of every size
+    the search tries moves the face's corners along the surface, and free-border targets
+    need 38 x 65 poles at 0.05 mm.  By default the search also pins the target's borders
+    to the source's border curves and keeps far fewer poles (its report says so), within
+    tol by OCCT's projection, with the source's corners kept to round-off by OCCT's
+    evaluation of both faces; the free net of the same size (explicit ``n``) deviates
+    more than tol, the pinned one (``borders="pinned"``) does not."""
+    from cq_fairing.core.geometry import make_surface
+    from cq_fairing.occ.builders import surface_to_natural_face
+    from tests.freecad.face_references import NOISY, noisy_blade_net
+
+    noisy, _, u_knots, v_knots = noisy_blade_net(*NOISY[0])
+    face = surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3)))
+    tol = NOISY[1]
+    report = fair_face(face, tol=tol, details=False)
+    check_within(report, face, tol)
+    free = fair_face(face, tol=tol, borders="free", details=False)
+    assert np.prod(report.poles_after) * 4 < np.prod(free.poles_after)
+    assert "pinned to the source's border curves" in report.message
+    corners = [0.0, 1.0]
+    np.testing.assert_allclose(occ_points(report.face, corners, corners),
+                               occ_points(face, corners, corners), rtol=0, atol=1e-9)
+    n = (report.poles_after[0] - 3, report.poles_after[1] - 3)
+    assert fair_face(face, n=n, details=False).max_deviation > tol
+    assert fair_face(face, n=n, borders="pinned", details=False).max_deviation <= tol

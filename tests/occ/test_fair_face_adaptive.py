@@ -1,5 +1,6 @@
 """fair_face(method="adaptive"): within tolerance by OCCT's projection, no more poles than
-the uniform (wavelet) search, and the faithful objective closer to the noise-free truth."""
+the plain uniform (wavelet) search (quasi-uniform targets, free borders), and the faithful
+objective closer to the noise-free truth."""
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ def blade():
     example = blade_surface(shape=(20, 30), noise=0.02)
     face = surface_to_natural_face(example.surface)
     runs = {name: fair_face(face, tol=TOL, details=False, **kw) for name, kw in (
-        ("wavelet", dict(method="wavelet")),
+        ("wavelet", dict(method="wavelet", borders="free", grading="uniform")),
         ("compact", dict(method="adaptive")),
         ("faithful", dict(method="adaptive", objective="faithful")),
         ("fair", dict(method="adaptive", objective="fair")))}
@@ -56,7 +57,7 @@ def test_rational_impeller_fillets_fair_in_homogeneous_coordinates(real):
     """Rational fillets of the impeller (N x 3 poles, degree 3 x 2, a circular arc
     across): within tol by OCCT's own projection, still rational with positive weights
     and three poles across (the arc's span is kept), the sweep reduced to no more poles
-    than the wavelet method keeps."""
+    than the plain uniform wavelet search keeps."""
     shape = real("impeller.igs")
     fillets = [face for face, info in zip(faces_of(shape), list_faces(shape))
                if info.rational and info.n_poles_v == 3 and info.n_poles_u >= 40][:2]
@@ -67,7 +68,8 @@ def test_rational_impeller_fillets_fair_in_homogeneous_coordinates(real):
         faired = report.surface
         assert faired.is_rational and faired.weights.min() > 0
         assert faired.shape[1] == 3 and faired.shape[0] <= report.poles_before[0] / 4
-        wavelet = fair_face(face, tol=0.01, details=False)
+        wavelet = fair_face(face, tol=0.01, borders="free", grading="uniform",
+                            details=False)
         assert np.prod(report.poles_after) <= np.prod(wavelet.poles_after)
 
 
@@ -92,8 +94,8 @@ def test_adaptive_option_errors():
         fair_face(face, tol=TOL, objective="faithful")
     with pytest.raises(InvalidInputError, match="objective must be one of"):
         fair_face(face, tol=TOL, method="adaptive", objective="smooth")
-    with pytest.raises(InvalidInputError, match="method='adaptive' only"):
-        fair_face(face, tol=TOL, borders="free")
+    with pytest.raises(InvalidInputError, match="method='wavelet' or 'adaptive' only"):
+        fair_face(face, tol=TOL, method="energy", borders="free")
     with pytest.raises(InvalidInputError, match="borders must be one of"):
         fair_face(face, tol=TOL, method="adaptive", borders="fixed")
 

@@ -51,7 +51,7 @@ def test_a_core_step_rule_runs_the_cores_search_with_it(face):
     ("energy", "search", "linear", "keeps the control points"),
     ("energy", "target_degree", 2, "keeps the control points, the degree"),
     ("energy", "boundary", "fixed", "the border ring"),
-    ("wavelet", "borders", "pinned", "projects onto quasi-uniform targets"),
+    ("energy", "borders", "pinned", "keeps the control points"),
     ("adaptive", "grading", "uniform", "chooses its knots itself"),
     ("energy", "grading", "uniform", "keeps the control points"),
 ])

@@ -46,9 +46,12 @@ def test_fuselage_edge_and_vertex_tolerances_are_not_raised(fuselage, fuselage_r
 
 
 def test_fuselage_smooth_joins_turn_less_than_faired_alone(fuselage_runs):
+    """Held joins stay closed and turn at most 0.05 deg beyond the source; faired alone
+    the faces turn more (their pinned target borders keep the shared borders where both
+    faces' targets agree along them, not the tangent planes across)."""
     joint = fuselage_runs["smooth"].joins.summary()
     alone = fuselage_runs["free"].joins.summary()
-    assert joint["max_gap_opened"] < 1e-6 < alone["max_gap_opened"]
+    assert joint["max_gap_opened"] < 1e-6
     assert joint["max_angle_excess"] <= 0.05 < alone["max_angle_excess"]
 
 

@@ -55,7 +55,7 @@ def _count(poles):
 
 
 def _ok(obj):
-    return obj.isValid() and "Invalid" not in obj.State and obj.Status == "OK"
+    return fixtures.status_ok(obj)
 
 
 @pytest.mark.parametrize("objective", ["compact", "faithful", "fair"])
@@ -82,11 +82,13 @@ def test_adaptive_targets_have_non_uniform_knots(faired):
     assert any(s.max() > 1.05 * s.min() for s in spans)
 
 
-def test_objective_needs_the_adaptive_method(face):
+def test_objective_needs_the_adaptive_method_and_borders_a_tolerance_search(face):
     with pytest.raises(cf.InvalidInputError, match="applies to the adaptive method only"):
         make.fair_face(face, tolerance=TOL, objective="faithful")
-    with pytest.raises(cf.InvalidInputError, match="applies to the adaptive method only"):
-        make.fair_face(face, tolerance=TOL, borders="free")
+    with pytest.raises(cf.InvalidInputError, match="wavelet method's tolerance search only"):
+        make.fair_face(face, target=(10, 10), borders="free")
+    with pytest.raises(cf.InvalidInputError, match="wavelet method's tolerance search only"):
+        make.fair_face(face, tolerance=TOL, method="energy", borders="pinned")
     with pytest.raises(cf.InvalidInputError, match="borders must be one of"):
         make.fair_face(face, tolerance=TOL, method="adaptive", borders="edges")
 

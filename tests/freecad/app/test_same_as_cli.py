@@ -136,7 +136,7 @@ def test_an_older_documents_search_survives_the_migration(doc, tmp_path, saved):
         assert again.Search == saved
         assert again.Proxy.Version == feature.VERSION
         reopened.recompute()
-        assert again.isValid() and again.Status == "OK", again.Status
+        assert fixtures.status_ok(again), again.Status
         face = again.Source[0].Shape.getElement(sub)
         alone = make.fair_face(face, tolerance=NOISY_TOL, search=saved)
         assert again.PolesAfter == " x ".join(map(str, alone.poles_after))
@@ -160,7 +160,7 @@ def test_an_older_documents_measure_survives_the_migration(doc, tmp_path, search
         assert again.getEnumerationsOfProperty("Measure") == list(MEASURES)
         assert (again.Search, again.Measure) == (search, migrated)
         reopened.recompute()
-        assert again.isValid() and again.Status == "OK", again.Status
+        assert fixtures.status_ok(again), again.Status
         face = again.Source[0].Shape.getElement(sub)
         alone = make.fair_face(face, tolerance=NOISY_TOL, search=search, measure=migrated)
         assert again.PolesAfter == " x ".join(map(str, alone.poles_after))
@@ -177,7 +177,7 @@ def test_measure_is_refused_with_the_local_search(doc):
     obj = make.make_fairing((source, [sub]), tolerance=NOISY_TOL, search="linear",
                             measure="parametric")
     doc.recompute()
-    assert obj.isValid() and obj.Status == "OK", obj.Status
+    assert fixtures.status_ok(obj), obj.Status
     obj.Search = "local"
     doc.recompute()
     assert not obj.isValid() or "Invalid" in obj.State
