@@ -22,6 +22,7 @@ sys.path.insert(0, os.path.join(REPO, "tests", "freecad"))
 import FreeCAD  # noqa: E402
 import FreeCADGui as Gui  # noqa: E402
 from fairing_wb.qt import QtCore, QtGui, QtWidgets  # noqa: E402
+from fixtures import status_ok  # noqa: E402
 
 RESULTS = []
 TIMINGS = []
@@ -338,8 +339,7 @@ def panel_ok(source, subs, what, settings, expected):
     made = [o for o in source.Document.Objects if o.Name not in before]
     joined = len(subs) == 1 or "\njoins: " in figures
     check(f"panel fairs {what}", expected in figures and joined and not error
-          and len(made) == 1 and made[0].isValid()
-          and made[0].Status.split("; joins: ")[0] == "OK",
+          and len(made) == 1 and status_ok(made[0]),
           f"{figures!r} {error!r} {[(o.Name, getattr(o, 'Status', '')) for o in made]}")
 
 
