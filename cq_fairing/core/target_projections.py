@@ -43,7 +43,7 @@ from .weighted import SpanWeightedProjection
 __all__ = ["TargetProjections"]
 
 #: Interior blocks up to this size are inverted densely (:class:`_InteriorFactor`).
-DENSE_INVERSE = 400
+DENSE_INVERSE = 200
 
 
 class TargetProjections:
@@ -86,7 +86,8 @@ class TargetProjections:
         return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
 
     def _cached(self, key, build):
-        """Per-space operators, kept while the searches revisit a space (at most 64)."""
+        """Operators that depend on the source's coefficients, kept while the searches
+        revisit a space (at most 64)."""
         if key not in self._cache:
             if len(self._cache) >= 64:
                 self._cache.clear()
@@ -97,20 +98,22 @@ class TargetProjections:
         """``<Phi_Tu|Phi_Su> P``, shape (k_tu, k_v, d)."""
         def build():
             p = self.coefficients
-            b = gram_matrix(space_u, self.surface.u_space)
+            b = _shared(("cross", space_u.key, self.surface.u_space.key),
+                        lambda: gram_matrix(space_u, self.surface.u_space))
             return (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
         return self._cached(("half", space_u.key), build)
 
-    def _gram(self, space):
+    @staticmethod
+    def _gram(space):
         """Gram matrix of a target space and its banded Cholesky factor."""
         def build():
             g = gram_matrix(space)
             return g, BandedSPD(g)
-        return self._cached(("gram", space.key), build)
+        return _shared(("gram", space.key), build)
 
     def _inner(self, space):
         """:func:`_held_ends` of a target's Gram matrix, kept per space."""
-        return self._cached(("inner", space.key), lambda: _held_ends(self._gram(space)[0]))
+        return _shared(("inner", space.key), lambda: _held_ends(self._gram(space)[0]))
 
     def _moments(self, tu, tv):
         r""":math:`\langle\Phi_{T_u}|\Phi_{S_u}\rangle P \langle\Phi_{T_v}|\Phi_{S_v}\rangle^T`,
@@ -121,7 +124,9 @@ class TargetProjections:
                            .reshape(tv.dimension, half.shape[0], -1), 0, 1)
 
     def _cross_v(self, tv):
-        return self._cached(("cross v", tv.key), lambda: gram_matrix(tv, self.surface.v_space))
+        """``<Phi_Tv|Phi_Sv>``, shared by the sources on one v space."""
+        sv = self.surface.v_space
+        return _shared(("cross", tv.key, sv.key), lambda: gram_matrix(tv, sv))
 
     def _weighted(self, tu, tv):
         """:class:`~cq_fairing.core.weighted.SpanWeightedProjection` onto ``tu x tv`` (the
@@ -230,6 +235,21 @@ class TargetProjections:
         w = net[..., -1]
         return BSplineSurface(net[..., :-1] / w[..., None], tu.knots, tv.knots, tu.degree,
                               tv.degree, w)
+
+
+_SHARED = {}
+
+
+def _shared(key, build):
+    """Operators that depend on spaces only (Gram matrices, their factors, the cross
+    Gram matrices of a target and a source space), shared by the projections of every
+    source while a search, or the next search of the same spaces, revisits them (at most
+    256, as :func:`cq_fairing.core.scale_search.project`'s operators)."""
+    if key not in _SHARED:
+        if len(_SHARED) >= 256:
+            _SHARED.clear()
+        _SHARED[key] = build()
+    return _SHARED[key]
 
 
 def _held_solve(factors, moments, ends):
