@@ -29,11 +29,10 @@ import math
 import numpy as np
 
 from ..errors import InvalidInputError, ToleranceNotMetError
-from .banded import BandedSPD
 from .geometry import BSplineSurface, fewest_spans, one_thread_product
-from .gram import gram_matrix
 from .plans import target_space
 from .results import cartesian_poles, homogeneous_coefficients
+from .target_projections import cross_gram, factored_gram
 
 __all__ = ["project", "search_scales", "max_scales", "target_degrees", "SurfaceSampler"]
 
@@ -49,8 +48,8 @@ def _operator(source, target):
     if key not in _OPERATORS:
         if len(_OPERATORS) > 256:
             _OPERATORS.clear()
-        cross = gram_matrix(target, source).toarray()
-        _OPERATORS[key] = BandedSPD(gram_matrix(target)).solve(cross)
+        cross = cross_gram(target, source).toarray()
+        _OPERATORS[key] = factored_gram(target)[1].solve(cross)
     return _OPERATORS[key]
 
 

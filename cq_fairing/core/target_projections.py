@@ -40,7 +40,7 @@ from .polish import _scaled_energy, net_lengths, variation_energy_matrix
 from .results import cartesian_poles
 from .weighted import SpanWeightedProjection
 
-__all__ = ["TargetProjections"]
+__all__ = ["TargetProjections", "factored_gram", "cross_gram"]
 
 #: Interior blocks up to this size are inverted densely (:class:`_InteriorFactor`).
 DENSE_INVERSE = 200
@@ -98,18 +98,14 @@ class TargetProjections:
         """``<Phi_Tu|Phi_Su> P``, shape (k_tu, k_v, d)."""
         def build():
             p = self.coefficients
-            b = _shared(("cross", space_u.key, self.surface.u_space.key),
-                        lambda: gram_matrix(space_u, self.surface.u_space))
+            b = cross_gram(space_u, self.surface.u_space)
             return (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
         return self._cached(("half", space_u.key), build)
 
     @staticmethod
     def _gram(space):
-        """Gram matrix of a target space and its banded Cholesky factor."""
-        def build():
-            g = gram_matrix(space)
-            return g, BandedSPD(g)
-        return _shared(("gram", space.key), build)
+        """:func:`factored_gram` of a target space."""
+        return factored_gram(space)
 
     def _inner(self, space):
         """:func:`_held_ends` of a target's Gram matrix, kept per space."""
@@ -125,8 +121,7 @@ class TargetProjections:
 
     def _cross_v(self, tv):
         """``<Phi_Tv|Phi_Sv>``, shared by the sources on one v space."""
-        sv = self.surface.v_space
-        return _shared(("cross", tv.key, sv.key), lambda: gram_matrix(tv, sv))
+        return cross_gram(tv, self.surface.v_space)
 
     def _weighted(self, tu, tv):
         """:class:`~cq_fairing.core.weighted.SpanWeightedProjection` onto ``tu x tv`` (the
@@ -250,6 +245,21 @@ def _shared(key, build):
             _SHARED.clear()
         _SHARED[key] = build()
     return _SHARED[key]
+
+
+def factored_gram(space):
+    """Gram matrix of ``space`` and its banded Cholesky factor
+    (:class:`~cq_fairing.core.banded.BandedSPD`), shared while searches revisit it."""
+    def build():
+        g = gram_matrix(space)
+        return g, BandedSPD(g)
+    return _shared(("gram", space.key), build)
+
+
+def cross_gram(target, source):
+    """``<Phi_T|Phi_S>`` of a target and a source space (sparse), shared while searches
+    revisit the pair."""
+    return _shared(("cross", target.key, source.key), lambda: gram_matrix(target, source))
 
 
 def _held_solve(factors, moments, ends):
