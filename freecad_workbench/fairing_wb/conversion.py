@@ -206,24 +206,33 @@ def is_uv_rectangle(face):
 
 
 def _along_box_sides(face):
-    """True when the p-curve of every edge of ``face`` is a straight line whose two ends
-    lie on one side of the face's UV box (``face.ParameterRange``, within 1e-9 of the
-    box's size): then the line runs along that side, and a face with one such wire is
-    the whole box."""
+    """True when the p-curve of every edge of ``face`` lies on one side of the face's UV
+    box (``face.ParameterRange``, within 1e-9 of the box's size): a straight line whose
+    two ends lie there, or a B-spline or Bezier p-curve whose poles all do (the curve
+    lies in their convex hull).  A face with one such wire is the whole box."""
     u0, u1, v0, v1 = face.ParameterRange
     near = 1e-9 * max(u1 - u0, v1 - v0)
     sides = (("x", u0), ("x", u1), ("y", v0), ("y", v1))
     for edge in face.Edges:
-        found = face.curveOnSurface(edge)
-        if not found or not isinstance(found[0], (Part.Geom2d.Line2d,
-                                                   Part.Geom2d.Line2dSegment)):
-            return False
-        curve, first, last = found
-        ends = [curve.value(first), curve.value(last)]
-        if not any(all(abs(getattr(end, axis) - at) <= near for end in ends)
-                   for axis, at in sides):
+        points = _pcurve_hull(face, edge)
+        if points is None or not any(all(abs(getattr(point, axis) - at) <= near
+                                         for point in points) for axis, at in sides):
             return False
     return True
+
+
+def _pcurve_hull(face, edge):
+    """Points whose convex hull holds the p-curve of ``edge`` on ``face``: a line's two
+    ends, a B-spline's or Bezier's poles; ``None`` for other curves."""
+    found = face.curveOnSurface(edge)
+    if not found:
+        return None
+    curve, first, last = found
+    if isinstance(curve, (Part.Geom2d.Line2d, Part.Geom2d.Line2dSegment)):
+        return [curve.value(first), curve.value(last)]
+    if isinstance(curve, (Part.Geom2d.BSplineCurve2d, Part.Geom2d.BezierCurve2d)):
+        return curve.getPoles()
+    return None
 
 
 def _wire_on_surface(face, wire, surface):

@@ -351,6 +351,28 @@ def test_a_face_with_nothing_to_fair_is_the_source_face(doc):
     assert result.shape.Area == pytest.approx(source.Area, rel=1e-12)
 
 
+def test_a_shell_of_patches_fairs_with_its_joins_held(doc):
+    """shell_patches (99 patches) at 0.083 mm with its joins held: Face28 (a collapsed
+    border) is faired with its neighbours and rebuilt from its UV box, where the whole
+    selection once failed on it; the result is valid, within the tolerance on every
+    face, and its held joins are closed."""
+    import re
+
+    source = fixtures.add_shape(doc, Part.read(str(fixtures.REAL / "shell_patches.brep")),
+                                "Patches")
+    subs = [f"Face{k + 1}" for k, face in enumerate(source.Shape.Faces)
+            if isinstance(face.Surface, Part.BSplineSurface)]
+    obj = make.make_fairing((source, subs), tolerance=0.083)
+    doc.recompute()
+    assert obj.isValid() and "Invalid" not in obj.State, obj.Status
+    assert obj.Status.startswith("OK") and obj.MaxDeviation.Value <= 0.083, obj.Status
+    held = re.search(r"joins: (\d+) \((\d+) held closed\), max gap ([0-9.e+-]+)", obj.Status)
+    assert held is not None and int(held[2]) > 0, obj.Status
+    faired = [k for k, (a, b) in enumerate(zip(obj.PolesBefore.split("; "),
+                                               obj.PolesAfter.split("; "))) if a != b]
+    assert faired and 27 in faired and obj.Shape.isValid()
+
+
 @pytest.mark.parametrize("sub", ["Face84", "Face155"])
 def test_trimmed_impeller_face_fairs_within_tolerance(doc, sub):
     """IGES trims whose edges meet within 0.15 mm were rebuilt with 1e-7 and failed
