@@ -33,7 +33,9 @@ from fairing_wb import make  # noqa: E402
 
 TARGET = 0.5   # seconds, the Preview target
 SETTINGS = (("target 18 x 26", dict(target=(18, 26))),
-            ("Tolerance 0.05 mm, defaults (search local)", dict(tolerance=0.05)),
+            ("Tolerance 0.05 mm, defaults (search local, borders auto)",
+             dict(tolerance=0.05)),
+            ("Tolerance 0.05 mm, borders free", dict(tolerance=0.05, borders="free")),
             ("Tolerance 0.05 mm, search linear", dict(tolerance=0.05, search="linear")),
             ("Tolerance 0.05 mm, energy", dict(tolerance=0.05, method="energy")))
 
