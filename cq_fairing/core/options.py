@@ -54,7 +54,7 @@ The options
     the fewer poles winning; ``"uniform"``: quasi-uniform targets only, the method's own
     :math:`V_n`.  In a model a face that shares a held join with another face searches
     quasi-uniform targets, whose knots its neighbours share along the join.  Refused
-    with ``n``.  The command line's ``--grading``; the workbench uses the default.
+    with ``n``.  The command line's ``--grading``, the workbench's ``Grading``.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
 ``measure`` : {"geometric", "parametric"}, default "geometric"

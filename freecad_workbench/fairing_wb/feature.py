@@ -16,9 +16,9 @@ from . import conversion, make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 6  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
+VERSION = 7  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
 # 4: the Joins and AngleTolerance properties; 5: Search "local", the default; 6: Measure
-# "geometric", the default
+# "geometric", the default; 7: the Grading property
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -40,6 +40,10 @@ PROPERTIES = (
      "adaptive method, and wavelet in Tolerance mode: auto (borders pinned to the face's "
      "border curves where that gives fewer control points), free (plain projection) or "
      "pinned", False),
+    ("App::PropertyEnumeration", "Grading", "Fairing",
+     "wavelet method in Tolerance mode: auto (targets graded like a face's knot spans "
+     "too, where they give fewer control points) or uniform (quasi-uniform targets "
+     "only)", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Joins", "Fairing",
@@ -65,7 +69,8 @@ PROPERTIES = (
     ("App::PropertyString", "Status", "Figures", "Outcome of the last recompute", True),
 )
 ENUMERATIONS = {"Mode": make.MODES, "Method": make.METHODS, "Objective": make.OBJECTIVES,
-                "Borders": make.BORDERS, "Boundary": make.BOUNDARIES, "Search": make.SEARCHES,
+                "Borders": make.BORDERS, "Grading": make.GRADINGS, "Boundary": make.BOUNDARIES,
+                "Search": make.SEARCHES,
                 "Measure": make.MEASURES, "Joins": make.JOINS}
 
 # Values of newly added properties other than FreeCAD's zero (saved values are kept).
@@ -237,10 +242,15 @@ class Fairing:
     @staticmethod
     def face_settings(obj):
         """Keyword arguments of :func:`make.fair_face` that faces have and edges do not:
-        ``boundary``, and ``borders`` where it applies (:func:`make.borders_apply`: the
-        adaptive method, the wavelet method in tolerance mode; ``"auto"`` otherwise)."""
-        applies = make.borders_apply(obj.Method, obj.Mode == "Tolerance")
-        return {"boundary": obj.Boundary, "borders": obj.Borders if applies else "auto"}
+        ``boundary``, and ``borders`` and ``grading`` where they apply
+        (:func:`make.borders_apply`: the adaptive method, the wavelet method in
+        tolerance mode; ``grading``: the wavelet method in tolerance mode; ``"auto"``
+        otherwise)."""
+        by_tolerance = obj.Mode == "Tolerance"
+        applies = make.borders_apply(obj.Method, by_tolerance)
+        graded = obj.Method == "wavelet" and by_tolerance
+        return {"boundary": obj.Boundary, "borders": obj.Borders if applies else "auto",
+                "grading": obj.Grading if graded else "auto"}
 
     def _fair(self, obj):
         if obj.Source is None:

@@ -31,6 +31,7 @@ from cq_fairing.core.joint_projection import joined_faces, unholdable
 from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
+    GRADINGS,  # "auto" first: the default
     JOIN_CONTINUITY,
     MEASURES,  # "geometric" first: the default
     check_applies,
@@ -54,7 +55,8 @@ from .pinned import pin_faces
 __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_elements",
            "neighbour_faces", "fair_shapes", "error_sentence",
            "FairedShape", "FairedShapes", "MODES", "METHODS",
-           "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES", "MEASURES", "JOINS"]
+           "OBJECTIVES", "BORDERS", "GRADINGS", "BOUNDARIES", "SEARCHES", "MEASURES",
+           "JOINS"]
 
 MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
@@ -119,9 +121,11 @@ def _check_tolerance(tolerance):
     return float(tolerance)
 
 
-def _core_keywords(method, objective="compact", tolerance=None, borders=None):
+def _core_keywords(method, objective="compact", tolerance=None, borders=None,
+                   grading="auto"):
     """Keyword arguments of the core selecting ``method``, ``objective`` and, for a
-    surface, ``borders`` (``None`` for a curve).
+    surface, ``borders`` (``None`` for a curve); ``grading`` is validated with them
+    (:func:`_check_method_options`).
 
     ``energy`` keeps the net and ``adaptive`` chooses its (non-uniform) targets itself:
     both need a tolerance, so target mode is refused in plain words.  ``objective``
@@ -139,7 +143,7 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None):
             f"{method!r} and {objective!r}.")
     if borders is not None and borders not in BORDERS:
         raise cf.InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
-    _check_method_options(method, objective, borders, tolerance is not None)
+    _check_method_options(method, objective, borders, tolerance is not None, grading)
     if method == "wavelet":
         return {}
     if tolerance is None:
@@ -164,9 +168,12 @@ def borders_apply(method, by_tolerance):
     return method == "adaptive" or method == "wavelet" and by_tolerance
 
 
-def _check_method_options(method, objective, borders, by_tolerance=True):
+def _check_method_options(method, objective, borders, by_tolerance=True, grading="auto"):
     """``objective`` other than its default needs the adaptive method, ``borders`` the
-    adaptive method or the wavelet method's tolerance search (:func:`borders_apply`)."""
+    adaptive method or the wavelet method's tolerance search (:func:`borders_apply`),
+    ``grading`` (one of :data:`GRADINGS`) the wavelet method's tolerance search."""
+    if grading not in GRADINGS:
+        raise cf.InvalidInputError(f"grading must be one of {GRADINGS}, got {grading!r}.")
     if method != "adaptive" and objective not in (None, "compact"):
         raise cf.InvalidInputError(
             f"objective {objective!r} applies to the adaptive method only, got method "
@@ -177,6 +184,11 @@ def _check_method_options(method, objective, borders, by_tolerance=True):
             f"method's tolerance search only, got method {method!r} in "
             f"{'tolerance' if by_tolerance else 'target'} mode; choose Tolerance mode with "
             "the wavelet or adaptive method, or borders 'auto'.")
+    if not (method == "wavelet" and by_tolerance) and grading not in (None, "auto"):
+        raise cf.InvalidInputError(
+            f"grading {grading!r} applies to the wavelet method's tolerance search only, got "
+            f"method {method!r} in {'tolerance' if by_tolerance else 'target'} mode; choose "
+            "Tolerance mode with the wavelet method, or grading 'auto'.")
 
 
 def _require_accuracy_control():
@@ -429,10 +441,11 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     domain : conversion.FaceDomain, optional
         That of ``face`` where already read (none: read here).
     grading : {"auto", "uniform"}
-        The wavelet method's bisections on the face's samples try quasi-uniform targets
-        and, on a face whose knot spans are graded, targets graded like them
-        (``auto``), or quasi-uniform ones only (``uniform``: a face that shares a held
-        join with another, :func:`fair_shapes`), as :func:`cq_fairing.occ.fair_face`.
+        The wavelet method's bisections on the face's samples (Tolerance mode) try
+        quasi-uniform targets and, on a face whose knot spans are graded, targets graded
+        like them (``auto``), or quasi-uniform ones only (``uniform``; with ``auto`` a
+        face that shares a held join with another searches those, :func:`fair_shapes`),
+        as :func:`cq_fairing.occ.fair_face`; the feature's ``Grading``.
 
     Raises
     ------
@@ -448,7 +461,7 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or target control points (u, v), not both/neither.")
-    _core_keywords(method, objective, tolerance, borders)
+    _core_keywords(method, objective, tolerance, borders, grading)
     note = ""
     domain = conversion.FaceDomain(face) if domain is None else domain
     if tolerance is not None:
@@ -694,8 +707,7 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                                                                                    element)
             try:
                 result = fair_face(element, **_plain(face_settings, done in plain),
-                                   **{**settings, "target": own}, domain=domains[sub],
-                                   grading="uniform" if done in plain else "auto")
+                                   **{**settings, "target": own}, domain=domains[sub])
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
@@ -820,11 +832,14 @@ def _nothing_faired(source, surface, method):
 
 
 def _plain(face_settings, joined):
-    """``face_settings`` of a face; one that shares a held join keeps ``borders="auto"``
-    as free borders (:func:`fair_shapes`)."""
-    if joined and face_settings.get("borders") == "auto":
-        return {**face_settings, "borders": "free"}
-    return face_settings
+    """``face_settings`` of a face; one that shares a held join searches free borders
+    and quasi-uniform targets where ``borders`` and ``grading`` are ``"auto"``
+    (:func:`fair_shapes`)."""
+    if not joined:
+        return face_settings
+    plain = {name: value for name, value in (("borders", "free"), ("grading", "uniform"))
+             if face_settings.get(name, "auto") == "auto"}
+    return {**face_settings, **plain}
 
 
 def _kept_by_joins(element, why, tolerance):
@@ -906,7 +921,8 @@ def _source_link(source):
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
                  search="local", measure=MEASURES[0], objective="compact", name="Fairing",
-                 doc=None, borders="auto", joins="smooth", angle_tolerance=1.0):
+                 doc=None, borders="auto", joins="smooth", angle_tolerance=1.0,
+                 grading="auto"):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.
 
     Parameters
@@ -924,8 +940,8 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
     boundary : {"free", "corners", "edges"}
     search, measure : str
         Accuracy control of tolerance mode, see :func:`fair_face`.
-    objective, borders : str
-        Of the adaptive method, see :func:`fair_face`.
+    objective, borders, grading : str
+        See :func:`fair_face`.
     joins : {"smooth", "closed", "free"}
         How several faces of the source, or one face and its neighbours, stay together
         along the edges they share, see :func:`fair_shapes`.
@@ -943,7 +959,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         raise cf.InvalidInputError(
             f"give either a tolerance (mm) or target control points, not both; got "
             f"tolerance {tolerance!r} and target {target!r}.")
-    _check_method_options(method, objective, borders)
+    _check_method_options(method, objective, borders, target is None, grading)
     _check_search(search, measure, method)
     check_joins(joins, angle_tolerance)
     obj_source, subs = _source_link(source)
@@ -963,7 +979,7 @@ def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary
         obj.Tolerance = (tolerance if tolerance is not None
                          else preferences.default_tolerance(obj_source.Shape))
     obj.Method, obj.Boundary, obj.Search, obj.Measure = method, boundary, search, measure
-    obj.Objective, obj.Borders = objective, borders
+    obj.Objective, obj.Borders, obj.Grading = objective, borders, grading
     obj.Joins, obj.AngleTolerance = joins, angle_tolerance
     obj_source.Visibility = False  # App-level property: undo shows the source again
     if FreeCAD.GuiUp:

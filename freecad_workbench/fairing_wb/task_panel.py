@@ -2,7 +2,7 @@
 
 Widgets carry objectNames (``fairing_tolerance``, ``fairing_mode``, ``fairing_target_u``,
 ``fairing_target_v``, ``fairing_method``, ``fairing_objective``, ``fairing_borders``,
-``fairing_boundary``, ``fairing_search``, ``fairing_measure``, ``fairing_preview``,
+``fairing_grading``, ``fairing_boundary``, ``fairing_search``, ``fairing_measure``, ``fairing_preview``,
 ``fairing_progress``, ``fairing_cancel``, ``fairing_figures``, ``fairing_error``,
 ``fairing_faces``, ``fairing_level``) so scripts and GUI tests can find them with
 ``Gui.getMainWindow().findChild``.
@@ -43,8 +43,9 @@ def _is_bspline(element):
 
 def make_call(link, settings, face, joins=None):
     """The scriptable ``make_fairing(...)`` line for a source link, settings, face
-    settings (``boundary``, ``borders``) and join settings (``joins``,
-    ``angle_tolerance``, named only where they differ from the defaults)."""
+    settings (``boundary``, ``borders``, ``grading``: those two named only where they
+    apply) and join settings (``joins``, ``angle_tolerance``, named only where they
+    differ from the defaults)."""
     obj, subs = link
     args = [f"(App.ActiveDocument.getObject({obj.Name!r}), {subs!r})"]
     if settings["target"] is not None:
@@ -56,7 +57,8 @@ def make_call(link, settings, face, joins=None):
         args.append(f"tolerance={settings['tolerance']!r}")
     else:
         args += [f"tolerance={settings['tolerance']!r}", f"search={settings['search']!r}",
-                 f"measure={settings['measure']!r}"]
+                 f"measure={settings['measure']!r}", f"borders={face['borders']!r}",
+                 f"grading={face.get('grading', 'auto')!r}"]
     args += [f"method={settings['method']!r}", f"boundary={face['boundary']!r}"]
     defaults = {"joins": make.JOINS[0], "angle_tolerance": 1.0}
     args += [f"{key}={value!r}" for key, value in (joins or {}).items() if value != defaults[key]]
@@ -110,7 +112,7 @@ class FairSurfacePanel:
     OK / Cancel.
 
     Objective is enabled for the adaptive method only, borders also for the wavelet
-    method in Tolerance mode; search and measure for the
+    method in Tolerance mode; grading, search and measure for the
     wavelet method in tolerance mode (the adaptive method checks the true distance itself,
     energy keeps the net).
     """
@@ -163,6 +165,11 @@ class FairSurfacePanel:
         self.borders.setToolTip("wavelet (Tolerance mode) and adaptive: auto = borders "
                                 "pinned to the face's border curves where that gives fewer "
                                 "control points; free = plain projection; pinned = always")
+        self.grading = _row(layout, "Grading:", QtWidgets.QComboBox(), "fairing_grading")
+        self.grading.addItems(list(make.GRADINGS))
+        self.grading.setToolTip("wavelet, Tolerance mode: auto = also targets graded like "
+                                "the face's knot spans, where they give fewer control "
+                                "points; uniform = quasi-uniform targets only")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")
@@ -222,6 +229,7 @@ class FairSurfacePanel:
             self.method.setCurrentText(f.Method)
             self.objective.setCurrentText(f.Objective)
             self.borders.setCurrentText(f.Borders)
+            self.grading.setCurrentText(f.Grading)
             self.boundary.setCurrentText(f.Boundary)
             self.search.setCurrentText(f.Search)
             self.measure.setCurrentText(f.Measure)
@@ -237,6 +245,7 @@ class FairSurfacePanel:
         self.objective.setEnabled(adaptive)
         self.borders.setEnabled(make.borders_apply(self.method.currentText(), by_tolerance)
                                 and self.kind == "Face")
+        self.grading.setEnabled(by_tolerance and wavelet and self.kind == "Face")
         self.search.setEnabled(by_tolerance and wavelet)
         self.measure.setEnabled(by_tolerance and wavelet and not self._local())
         self.target_u.setEnabled(not by_tolerance)
@@ -266,11 +275,15 @@ class FairSurfacePanel:
                 **common}
 
     def face_settings(self):
-        """Keyword arguments of :func:`make.fair_face` that edges do not take: ``boundary``
-        and ``borders`` where it applies (:func:`make.borders_apply`)."""
-        applies = make.borders_apply(self.method.currentText(), self.mode.currentIndex() == 0)
+        """Keyword arguments of :func:`make.fair_face` that edges do not take: ``boundary``,
+        and ``borders`` and ``grading`` where they apply (:func:`make.borders_apply`;
+        ``grading``: the wavelet method in Tolerance mode)."""
+        by_tolerance = self.mode.currentIndex() == 0
+        applies = make.borders_apply(self.method.currentText(), by_tolerance)
+        graded = by_tolerance and self.method.currentText() == "wavelet"
         return {"boundary": self.boundary.currentText(),
-                "borders": self.borders.currentText() if applies else "auto"}
+                "borders": self.borders.currentText() if applies else "auto",
+                "grading": self.grading.currentText() if graded else "auto"}
 
     def join_settings(self):
         """Keyword arguments of :func:`make.fair_shapes` for the joins (the feature's
@@ -398,7 +411,8 @@ class FairSurfacePanel:
                                  f"{s['target'][0]}, {s['target'][1]}")
         FreeCADGui.doCommand(
             f"fairing.Method = {s['method']!r}; fairing.Objective = {s['objective']!r}; "
-            f"fairing.Borders = {face['borders']!r}; fairing.Boundary = {face['boundary']!r}; "
+            f"fairing.Borders = {face['borders']!r}; fairing.Grading = {face['grading']!r}; "
+            f"fairing.Boundary = {face['boundary']!r}; "
             f"fairing.Search = {s['search']!r}; fairing.Measure = {s['measure']!r}; "
             f"fairing.Joins = {self.joins.currentText()!r}")
 
@@ -496,7 +510,7 @@ class LevelsPanel:
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
                                      "search": make.SEARCHES[0], "measure": make.MEASURES[0],
                                      "objective": "compact"},
-                         {"boundary": "free", "borders": "auto"})
+                         {"boundary": "free", "borders": "auto", "grading": "auto"})
         before = {o.Name for o in doc.Objects}
         try:
             with undo.transaction(doc, "Fairing level"):

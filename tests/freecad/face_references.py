@@ -15,8 +15,9 @@ workbench tests (:func:`noisy_blade_net`) at 0.05 mm, a 20 x 30 rational one
 (:func:`rational_blade_net`) at 0.05 mm, and the IEA blade's main face (its spanwise
 spans graded 74 to 1) at 0.12 m; the settings (:data:`SETTINGS`): the defaults on
 the fuselage, the noisy face and the blade face, ``method="adaptive"`` on the fuselage,
-``method="energy"`` on all three (it keeps the rational face with its reason), and
-``method="adaptive", borders="free"`` on the noisy face.  A case is named
+``method="energy"`` on all three (it keeps the rational face with its reason),
+``method="adaptive", borders="free"`` and ``borders="free"`` on the noisy face, and
+``grading="uniform"`` on the blade face.  A case is named
 ``"<setting>/<face>"`` (``"energy/fuselage/3"``, ``"wavelet/noisy"``).  This module
 imports numpy only; :func:`computed` imports the OCP layer.
 """
@@ -36,7 +37,9 @@ BLADE = ("IEA_15MW_CFD.stp", 1, 0.12)
 SETTINGS = {"wavelet": ({}, ("fuselage", "noisy", "blade")),
             "adaptive": ({"method": "adaptive"}, ("fuselage",)),
             "energy": ({"method": "energy"}, ("fuselage", "noisy", "rational")),
-            "adaptive-free": ({"method": "adaptive", "borders": "free"}, ("noisy",))}
+            "adaptive-free": ({"method": "adaptive", "borders": "free"}, ("noisy",)),
+            "wavelet-free": ({"borders": "free"}, ("noisy",)),
+            "wavelet-uniform": ({"grading": "uniform"}, ("blade",))}
 
 
 def noisy_blade_net(n_u=50, n_v=80, noise=0.02, seed=3):

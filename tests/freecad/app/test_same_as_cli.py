@@ -182,3 +182,33 @@ def test_measure_is_refused_with_the_local_search(doc):
     doc.recompute()
     assert not obj.isValid() or "Invalid" in obj.State
     assert obj.Status.startswith("Error: measure 'parametric' applies to the core's searches")
+
+
+def test_grading_belongs_to_the_wavelet_tolerance_search_and_older_documents_get_it(
+        doc, tmp_path):
+    """``Grading`` (the command line's ``--grading``) is refused outside the wavelet
+    method's Tolerance mode and outside its values; a document saved before the property
+    existed opens with ``auto`` and gives the command line's net for each value."""
+    source, sub = _source(doc, "wavelet/blade")
+    face = source.Shape.getElement(sub)
+    tol = face_references.BLADE[2]
+    with pytest.raises(cf.InvalidInputError, match="wavelet method's tolerance search only"):
+        make.fair_face(face, target=(10, 10), grading="uniform")
+    with pytest.raises(cf.InvalidInputError, match="wavelet method's tolerance search only"):
+        make.fair_face(face, tolerance=tol, method="energy", grading="uniform")
+    with pytest.raises(cf.InvalidInputError, match="grading must be one of"):
+        make.fair_face(face, tolerance=tol, grading="graded")
+    obj = make.make_fairing((source, [sub]), tolerance=tol, joins="free")
+    obj.removeProperty("Grading")   # as saved before version 7
+    obj.Proxy.Version = 6
+    name = obj.Name
+    with fixtures.reopened(doc, tmp_path / "before_grading.FCStd") as reopened:
+        again = reopened.getObject(name)
+        assert again.getEnumerationsOfProperty("Grading") == list(make.GRADINGS)
+        assert again.Grading == "auto" and again.Proxy.Version == feature.VERSION
+        for grading, case in (("auto", "wavelet/blade"), ("uniform", "wavelet-uniform/blade")):
+            again.Grading = grading
+            reopened.recompute()
+            assert again.isValid(), again.Status
+            shape = REFERENCES[case]["poles"].shape[:2]
+            assert again.PolesAfter == " x ".join(map(str, shape)), (grading, again.Status)

@@ -207,15 +207,18 @@ def check_adaptive_panel(doc, source):
     Gui.Selection.addSelection(source, "Face1")
     open_panel("Fairing_FairSurface")
     find("fairing_tolerance").setProperty("rawValue", 0.05)
-    check("objective disabled, borders enabled for wavelet in tolerance mode",
-          not find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled())
+    check("objective disabled, borders and grading enabled for wavelet in tolerance mode",
+          not find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled()
+          and find("fairing_grading").isEnabled())
     find("fairing_mode").setCurrentIndex(1)
-    check("borders disabled for wavelet in target mode", not find("fairing_borders").isEnabled())
+    check("borders and grading disabled for wavelet in target mode",
+          not find("fairing_borders").isEnabled() and not find("fairing_grading").isEnabled())
     find("fairing_mode").setCurrentIndex(0)
     _, _, _, wavelet_text = preview_poles()
     find("fairing_method").setCurrentText("adaptive")
-    check("objective and borders enabled for adaptive, search and measure not",
+    check("objective and borders enabled for adaptive, grading, search and measure not",
           find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled()
+          and not find("fairing_grading").isEnabled()
           and not find("fairing_search").isEnabled()
           and not find("fairing_measure").isEnabled())
     find("fairing_objective").setCurrentText("faithful")
