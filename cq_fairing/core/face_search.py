@@ -402,7 +402,7 @@ def _explicit(source, pieces):
     if all(borders == "pinned" for _, borders in pieces.families):
         spaces = [None if t is None else direction_target(s, t, p) for t, s, p in
                   zip(pair, (source.u_space, source.v_space), pieces.degree)]
-        surface = TargetProjections(source, "pinned").projected(*spaces)
+        surface = pieces.pinned_projection(source).projected(*spaces)
         return _Candidate(pair, pieces.finish(surface), result, (PINNED_NOTE,))
     return _Candidate(pair, pieces.finish(result.surface), result)
 

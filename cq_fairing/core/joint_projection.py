@@ -60,6 +60,7 @@ from .spaces import SplineSpace
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
            "held_joins", "joint_targets", "locate_side", "refined_targets", "joined_faces",
+           "plain_target_options",
            "SOURCE_GAP", "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
@@ -270,10 +271,20 @@ def border_gap(first, side_first, second, side_second, reversed_, samples=33, kn
 
 def joined_faces(joins):
     """The faces that meet another face in ``joins`` (a face's join with itself, a
-    closed seam, does not count).  With their joins held they search quasi-uniform
-    targets (``grading="uniform"``), whose knots a neighbour searching the same family
-    shares along the join."""
+    closed seam, does not count).  With their joins held they search the targets of
+    :func:`plain_target_options`."""
     return {face for join in joins if join.faces[0] != join.faces[1] for face in join.faces}
+
+
+def plain_target_options(grading="auto", borders="auto"):
+    """The face options of a face that shares a held join (:func:`joined_faces`):
+    quasi-uniform targets (``grading="uniform"``), whose knots a neighbour searching
+    the same family shares along the join, with free borders (``borders="free"``),
+    which the joint projection sets, each where its option is ``"auto"`` (a value given
+    explicitly is kept)."""
+    return {name: plain for name, plain, given in (("grading", "uniform", grading),
+                                                    ("borders", "free", borders))
+            if given == "auto"}
 
 
 def joint_targets(sources, faired):

@@ -102,26 +102,17 @@ class TargetProjections:
             return (b @ p.reshape(p.shape[0], -1)).reshape((-1,) + p.shape[1:])
         return self._cached(("half", space_u.key), build)
 
-    @staticmethod
-    def _gram(space):
-        """:func:`factored_gram` of a target space."""
-        return factored_gram(space)
-
     def _inner(self, space):
         """:func:`_held_ends` of a target's Gram matrix, kept per space."""
-        return _shared(("inner", space.key), lambda: _held_ends(self._gram(space)[0]))
+        return _shared(("inner", space.key), lambda: _held_ends(factored_gram(space)[0]))
 
     def _moments(self, tu, tv):
         r""":math:`\langle\Phi_{T_u}|\Phi_{S_u}\rangle P \langle\Phi_{T_v}|\Phi_{S_v}\rangle^T`,
         shape (k_tu, k_tv, d)."""
         half = self._half(tu)
-        bv = self._cross_v(tv)
+        bv = cross_gram(tv, self.surface.v_space)
         return np.swapaxes((bv @ np.swapaxes(half, 0, 1).reshape(half.shape[1], -1))
                            .reshape(tv.dimension, half.shape[0], -1), 0, 1)
-
-    def _cross_v(self, tv):
-        """``<Phi_Tv|Phi_Sv>``, shared by the sources on one v space."""
-        return cross_gram(tv, self.surface.v_space)
 
     def _weighted(self, tu, tv):
         """:class:`~cq_fairing.core.weighted.SpanWeightedProjection` onto ``tu x tv`` (the
@@ -132,7 +123,7 @@ class TargetProjections:
     def _mass(self, tu, tv, weights):
         r""":math:`G_u\otimes G_v`, or its span-weighted sum."""
         if weights is None:
-            return sp.kron(self._gram(tu)[0], self._gram(tv)[0]).tocsr()
+            return sp.kron(factored_gram(tu)[0], factored_gram(tv)[0]).tocsr()
         return self._weighted(tu, tv).matrix(weights)
 
     def project(self, tu, tv, lam=0.0, weights=None, edge_lam=None):
@@ -149,7 +140,7 @@ class TargetProjections:
                 net[1:-1, 1:-1] = interior
             return net
         if lam <= 0.0 and weights is None:
-            return kron_solve(self._gram(tu)[1], self._gram(tv)[1], rhs)
+            return kron_solve(factored_gram(tu)[1], factored_gram(tv)[1], rhs)
         a = self._mass(tu, tv, weights) + lam * self._energy(tu, tv)
         shape = (tu.dimension, tv.dimension)
         return _net_solve(a, rhs.reshape(shape[0] * shape[1], -1), shape).reshape(rhs.shape)
@@ -159,7 +150,7 @@ class TargetProjections:
         (trace against trace) at ``lam = 1``, kept per target pair."""
         def build():
             k = variation_energy_matrix(tu, tv, self.lengths)
-            mass = self._gram(tu)[0].diagonal().sum() * self._gram(tv)[0].diagonal().sum()
+            mass = factored_gram(tu)[0].diagonal().sum() * factored_gram(tv)[0].diagonal().sum()
             return k * (mass / max(k.diagonal().sum(), 1e-300))
         return self._cached(("energy", tu.key, tv.key), build)
 
@@ -179,7 +170,7 @@ class TargetProjections:
         along_u = self._edge_factors(tu, lam)
         for j in (0, -1):
             net[:, j] = _held_solve(along_u, half[:, j], p[[0, -1], j])
-        bv = self._cross_v(tv)
+        bv = cross_gram(tv, self.surface.v_space)
         along_v = self._edge_factors(tv, lam)
         for i in (0, -1):
             net[i, :] = _held_solve(along_v, bv @ p[i], p[i, [0, -1]])
@@ -195,7 +186,7 @@ class TargetProjections:
         if lam <= 0.0:
             return self._inner(space)
         energy = self._cached(("edge energy", space.key), lambda: _scaled_energy(space, 3))
-        return _held_ends(self._gram(space)[0] + lam * energy)
+        return _held_ends(factored_gram(space)[0] + lam * energy)
 
     def _interior(self, tu, tv, rhs, border, lam, weights=None):
         r"""Interior net of the (penalised, weighted) projection with the border rows held:
@@ -207,7 +198,7 @@ class TargetProjections:
         if ku <= 2 or kv <= 2:
             return None
         if lam <= 0.0 and weights is None:
-            (gu, _), (gv, _) = self._gram(tu), self._gram(tv)
+            (gu, _), (gv, _) = factored_gram(tu), factored_gram(tv)
             along_u = (gu @ border.reshape(ku, -1)).reshape(ku, kv, d)
             held = np.swapaxes((gv @ np.swapaxes(along_u, 0, 1).reshape(kv, -1))
                                .reshape(kv, ku, d), 0, 1)
@@ -239,7 +230,7 @@ def _shared(key, build):
     """Operators that depend on spaces only (Gram matrices, their factors, the cross
     Gram matrices of a target and a source space), shared by the projections of every
     source while a search, or the next search of the same spaces, revisits them (at most
-    256, as :func:`cq_fairing.core.scale_search.project`'s operators)."""
+    256, as the plain projection's operators in :mod:`cq_fairing.core.scale_search`)."""
     if key not in _SHARED:
         if len(_SHARED) >= 256:
             _SHARED.clear()

@@ -43,7 +43,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
-from ..core.joint_projection import joined_faces
+from ..core.joint_projection import joined_faces, plain_target_options
 from ..core.options import check_face_options, check_joins
 from ..errors import InvalidInputError
 from .adjacency import find_joins
@@ -358,9 +358,7 @@ class _Job:
         meets another face in ``adjacency``
         (:func:`~cq_fairing.core.joint_projection.joined_faces`): the joint projection
         shares those targets' knots along the joins and sets the borders."""
-        plain = {name: value for name, value, auto in (("grading", "uniform", grading),
-                                                        ("borders", "free", borders))
-                 if auto == "auto"}
+        plain = plain_target_options(grading, borders)
         for face in joined_faces(adjacency.joins):
             self.face_options[face] = plain
 

@@ -27,7 +27,7 @@ from cq_fairing.core.face_search import (
     search_face,
     uv_window,
 )
-from cq_fairing.core.joint_projection import joined_faces, unholdable
+from cq_fairing.core.joint_projection import joined_faces, plain_target_options, unholdable
 from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
@@ -832,14 +832,12 @@ def _nothing_faired(source, surface, method):
 
 
 def _plain(face_settings, joined):
-    """``face_settings`` of a face; one that shares a held join searches free borders
-    and quasi-uniform targets where ``borders`` and ``grading`` are ``"auto"``
-    (:func:`fair_shapes`)."""
+    """``face_settings`` of a face; one that shares a held join searches the targets of
+    :func:`~cq_fairing.core.joint_projection.plain_target_options` (:func:`fair_shapes`)."""
     if not joined:
         return face_settings
-    plain = {name: value for name, value in (("borders", "free"), ("grading", "uniform"))
-             if face_settings.get(name, "auto") == "auto"}
-    return {**face_settings, **plain}
+    return {**face_settings, **plain_target_options(face_settings.get("grading", "auto"),
+                                                    face_settings.get("borders", "auto"))}
 
 
 def _kept_by_joins(element, why, tolerance):
