@@ -582,6 +582,52 @@ class _RowBound:
         return tuple(np.concatenate(part) for part in zip(*parts))
 
 
+class BoundWalk:
+    r"""Samples in decreasing order of an upper bound of their values, handed out in
+    doubling batches: the walk behind a maximum measured only where it can be reached.
+
+    Every sample passed over has a value at most its bound, so once :attr:`next_bound`
+    is at most the largest value measured, the maximum over all samples is known
+    without measuring the rest.
+
+    Parameters
+    ----------
+    bound : ndarray, shape (q,)
+        An upper bound of each sample's value.
+    first : int, optional
+        Size of the first batch; each next batch is twice the last.
+    order : ndarray of int, optional
+        ``np.argsort(bound)[::-1]`` if already at hand.
+    """
+
+    def __init__(self, bound, first=256, order=None):
+        self.bound = bound
+        self.order = np.argsort(bound)[::-1] if order is None else order
+        self._start, self._batch = 0, first
+
+    @property
+    def next_bound(self):
+        """The largest bound not yet handed out (``-inf`` once all are)."""
+        if self._start >= self.order.size:
+            return -np.inf
+        return float(self.bound[self.order[self._start]])
+
+    def take(self):
+        """The next batch of sample indices, in decreasing order of their bounds."""
+        batch = self.order[self._start:self._start + self._batch]
+        self._start += batch.size
+        self._batch *= 2
+        return batch
+
+    def taken(self):
+        """Every sample index handed out so far."""
+        return self.order[:self._start]
+
+    def rest(self):
+        """Every sample index not handed out."""
+        return self.order[self._start:]
+
+
 def _pruned_max(bound, exact, tol):
     """Max of the true distance over all samples, computing it only where ``bound`` can win.
 
@@ -612,27 +658,20 @@ def _pruned_max(bound, exact, tol):
         candidates, values = bound.above(best)
         keep = ~np.isin(candidates, top)
         candidates, values = candidates[keep], values[keep]
-    by_bound = np.argsort(values)[::-1]
-    order, values = candidates[by_bound], values[by_bound]
-    start, batch = 0, 256
-    while start < order.size:
-        next_bound = float(values[start])
-        if next_bound <= best:
-            break
-        if tol is not None and next_bound <= tol:
-            return max(best, next_bound), best_i
-        idx = order[start:start + batch]
+    walk = BoundWalk(values)
+    while walk.next_bound > best:
+        if tol is not None and walk.next_bound <= tol:
+            return max(best, walk.next_bound), best_i
+        idx = candidates[walk.take()]
         d = exact(idx, best if tol is None else max(best, tol))
         k = int(np.argmax(d))
         if d[k] > best:
             best, best_i = float(d[k]), int(idx[k])
         if tol is not None and best > tol:
             return best, best_i
-        start += batch
-        batch *= 2
     if tol is not None and best <= tol:
-        rest = float(values[start]) if start < order.size else tol
-        return max(best, min(rest, tol)), best_i
+        rest = walk.next_bound if walk.rest().size else tol   # all measured: the others'
+        return max(best, min(rest, tol)), best_i              # bounds are at most tol
     return best, best_i
 
 

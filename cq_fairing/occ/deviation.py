@@ -11,8 +11,8 @@ onto one cubic span in u was 0.0082 from every original sample but 0.070 away at
 own samples (tol 0.01).  The *parametric* distance :math:`|S_1(u_i, v_i) - p_i|` is an
 upper bound of :math:`d_i` (fairing keeps the parameter domain).
 
-**Batched, then judged by OCCT.**  On B-spline faces (``projection="local"``) every
-sample is measured at once by the core's vectorized Newton iteration
+**Batched, then judged by OCCT.**  On B-spline faces (``projection="local"``) the
+samples are measured in batches by the core's vectorized Newton iteration
 (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`: started at the
 sample's own parameters, where both surfaces share their parametrization, and again
 from the nearest of a coarse sampling where that is nearer): each value is the
@@ -24,8 +24,11 @@ value down (:func:`_judge`), every sample whose batched value is at least
 projection (``Extrema_GenLocateExtPS``) started there; the largest are measured once
 more with the global projection and the border curves (:func:`_refine_largest`).  The
 maximum is therefore an OCCT measurement, and every sample left to the batched value is
-below ``JUDGED_FRACTION`` of it.  Where OCCT's points differ from the core's (a face the
-core reads differently), every sample is measured by OCCT, as for other faces.
+below ``JUDGED_FRACTION`` of it.  The samples are taken in decreasing order of their
+parametric distance, and those whose parametric distance is below that share of the
+maximum, which neither way can bring to it, are measured only when the per-sample
+field is read (:class:`FaceDeviation`).  Where OCCT's points differ from the core's (a
+face the core reads differently), every sample is measured by OCCT, as for other faces.
 
 **OCCT at every sample** (non-B-spline faces, ``projection="global"``): the point and
 normal from ``BRepAdaptor_Surface`` and the distance from ``Extrema_GenLocateExtPS``
@@ -44,6 +47,7 @@ orientation applied).
 """
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 from OCP.BRep import BRep_Tool
@@ -56,8 +60,9 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 from OCP.TopAbs import TopAbs_REVERSED
 
-from ..core.closest_points import closest_points_surface_restarted
+from ..core.closest_points import RestartSamples, closest_points_surface_restarted
 from ..core.evaluation import surface_derivatives
+from ..core.probes import BoundWalk
 from ..errors import InvalidInputError, UnsupportedGeometryError
 from .convert import as_face, face_info, face_to_surface
 from .trims import face_region
@@ -68,7 +73,8 @@ DEFAULT_DENSITY = 40
 JUDGED_FRACTION = 0.9   # OCCT measures again every sample at least this share of the maximum
 JUDGED_BLOCK = 64       # samples OCCT measures again per step of the walk down from the largest
 SAME_GEOMETRY = 1e-9    # the core's and OCCT's points agree within this share of the size
-PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured before a full check
+PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured first
+ROUNDING = 1e-12         # share of the size by which evaluation routes may differ
 
 
 def _density(density):
@@ -196,23 +202,71 @@ def deviation_on_grid(original_face, faired_face, grid, projection="local", refe
         surfaces = _core_surface(original_face), _core_surface(faired_face)
     uv, points, normals = reference or reference_samples(
         original_face, grid, surface=surfaces[0] if surfaces else None)
-    measured = None
     if projection == "local" and None not in surfaces:
-        try:
-            measured = _batched(original_face, faired_face, surfaces, uv, points)
-        except _NotTheSameGeometry:
-            points, normals = _points_and_normals(original_face, uv)
-    if measured is None:
-        measured = _by_occt(original_face, faired_face, uv, points, projection == "global")
-    faired_points, parametric, (distance, projected), (back, _) = measured
+        return BatchedCheck(original_face, faired_face, surfaces, (uv, points, normals)).deviation()
+    return _occt_deviation(original_face, faired_face, uv, points, normals,
+                           projection == "global")
+
+
+def _occt_deviation(original_face, faired_face, uv, points, normals, use_global):
+    """The :class:`FaceDeviation` of OCCT's measure at every sample (:func:`_by_occt`)."""
+    faired_points, parametric, there, back = _by_occt(original_face, faired_face, uv, points,
+                                                      use_global)
+    known = _known(uv, points, faired_points, normals, parametric)
+    known["max"] = float(max(there[0].max(), back[0].max()))
+    return FaceDeviation(known, lambda: _field(points, normals, there, back))
+
+
+FIELD = ("distance", "distance_back", "signed", "mean", "rms")
+
+
+class FaceDeviation(Mapping):
+    """The samples and figures of a deviation check, the keys of
+    :func:`sample_face_deviation`'s result.
+
+    The maximum is measured at once; the per-sample field (``distance``,
+    ``distance_back``, ``signed``, ``mean``, ``rms``: a map's values, a report's
+    figures) is completed on first read, where the batched check left samples that
+    cannot reach the maximum unmeasured (:func:`_batched`).  Pickled as a plain dict,
+    field included.
+    """
+
+    def __init__(self, known, complete):
+        self._values, self._complete = known, complete
+
+    def __getitem__(self, key):
+        if key in FIELD and self._complete is not None:
+            self._values.update(self._complete())
+            self._complete = None
+        return self._values[key]
+
+    def __iter__(self):
+        return iter(KEYS)
+
+    def __len__(self):
+        return len(KEYS)
+
+    def __reduce__(self):
+        return dict, (dict(self),)
+
+
+KEYS = ("uv", "points", "faired_points", "normals", "parametric", "max", "max_parametric") \
+    + FIELD
+
+
+def _known(uv, points, faired_points, normals, parametric):
+    """The entries of a :class:`FaceDeviation` known before any closest point."""
+    return {"uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
+            "parametric": parametric, "max_parametric": float(parametric.max())}
+
+
+def _field(points, normals, there, back):
+    """The per-sample entries of a :class:`FaceDeviation` from both ways'
+    ``(distance, nearest points)``."""
+    (distance, projected), (back_distance, _) = there, back
     sign = np.sign(np.einsum("ij,ij->i", projected - points, normals))
-    return {
-        "uv": uv, "points": points, "faired_points": faired_points, "normals": normals,
-        "distance": distance, "distance_back": back, "parametric": parametric,
-        "signed": sign * distance, "max": float(max(distance.max(), back.max())),
-        "mean": float(distance.mean()), "rms": float(np.sqrt(np.mean(distance ** 2))),
-        "max_parametric": float(parametric.max()),
-    }
+    return {"distance": distance, "distance_back": back_distance, "signed": sign * distance,
+            "mean": float(distance.mean()), "rms": float(np.sqrt(np.mean(distance ** 2)))}
 
 
 class _NotTheSameGeometry(Exception):
@@ -250,20 +304,147 @@ def _core_points_and_normals(surface, face, uv):
     return d[(0, 0)], normals
 
 
-def _batched(original_face, faired_face, surfaces, uv, points):
-    """Both ways by the core's batched projection, OCCT judging the maxima
-    (:func:`_judged_distances`); ``(faired_points, parametric, (distance, projected),
-    (back, projected_back))``."""
-    original, faired = surfaces
-    faired_points = _core_points(faired, uv)
-    parametric = np.linalg.norm(faired_points - points, axis=1)
-    there = _judged_distances(faired_face, faired, original_face, points, uv)
-    back = _judged_distances(original_face, original, faired_face, faired_points, uv)
-    return faired_points, parametric, there, back
+class BatchedCheck:
+    r"""The check of one faired face against its original on fixed samples, by the
+    core's batched projection both ways, measured only where the maximum can be, OCCT
+    judging the samples near it.
+
+    Each way's batched distance at a sample is at most the parametric distance
+    :math:`|S_1(u_i, v_i) - p_i|` (its Newton run starts at the sample's parameters and
+    only takes steps that bring it nearer), so the samples are measured in decreasing
+    order of it (:class:`~cq_fairing.core.probes.BoundWalk`) down to ``JUDGED_FRACTION``
+    of the largest batched value, OCCT's judge (:func:`_judge`) runs on them, and the
+    walk goes on down to that share of the judged maximum (judged again) where that is
+    lower.  No sample passed over can reach the maximum, nor be within
+    ``JUDGED_FRACTION`` of it: the maximum is the one of measuring every sample.  The
+    samples passed over are measured by the batched projection when the field is first
+    read.  Where OCCT's points differ from the core's, every sample is measured by OCCT
+    (:func:`_by_occt`).
+
+    Parameters
+    ----------
+    original_face, faired_face : TopoDS_Face
+    surfaces : (BSplineSurface, BSplineSurface)
+        The core surfaces of both faces (the faired one as built into ``faired_face``).
+    reference : (ndarray, ndarray, ndarray)
+        :func:`reference_samples` of the original.
+    """
+
+    def __init__(self, original_face, faired_face, surfaces, reference):
+        original, faired = surfaces
+        self.faces, self.reference = (original_face, faired_face), reference
+        uv, points, _ = reference
+        self.faired_points = _core_points(faired, uv)
+        self.parametric = np.linalg.norm(self.faired_points - points, axis=1)
+        self.ways = (_Way(faired_face, faired, original_face, points, uv),
+                     _Way(original_face, original, faired_face, self.faired_points, uv))
+        self.slack = ROUNDING * max(original.size, faired.size)
+        self.walk = BoundWalk(self.parametric, PREFILTER_SAMPLES)
+        self.level, self.judged = 0.0, None
+
+    def exceeds(self, tol):
+        """True when the check's maximum is certain to exceed ``tol``, found on the
+        ``PREFILTER_SAMPLES`` samples of largest parametric distance (their judged
+        maximum is a lower bound of the full one).  ``False`` says nothing."""
+        if self.walk.taken().size == 0:
+            if self.walk.next_bound <= tol:
+                return False
+            self._take()
+        if self.level <= tol:
+            return False
+        try:
+            return self._judge() > tol
+        except _NotTheSameGeometry:
+            return False
+
+    def deviation(self):
+        """The :class:`FaceDeviation` of the faired face."""
+        uv, points, normals = self.reference
+        try:
+            while self.judged is None or self._below_next():
+                while self._below_next():
+                    self._take()
+                self._judge()
+        except _NotTheSameGeometry:
+            points, normals = _points_and_normals(self.faces[0], uv)
+            return _occt_deviation(*self.faces, uv, points, normals, False)
+        known = _known(uv, points, self.faired_points, normals, self.parametric)
+        known["max"] = self.judged
+
+        def field():
+            rest = self.walk.rest()
+            return _field(points, normals, *(way.completed(rest) for way in self.ways))
+
+        return FaceDeviation(known, field)
+
+    def _below_next(self):
+        """Whether the next sample's parametric distance reaches ``JUDGED_FRACTION`` of
+        the level (the largest batched value, then the judged maximum)."""
+        return self.walk.next_bound > JUDGED_FRACTION * self.level - self.slack
+
+    def _take(self):
+        """Measure the walk's next batch both ways; before any judging the level follows
+        the largest batched value."""
+        index = self.walk.take()
+        batched = max(float(way.measure(index).max()) for way in self.ways)
+        if self.judged is None:
+            self.level = max(self.level, batched)
+
+    def _judge(self):
+        """OCCT's judge on every sample measured; the judged maximum becomes the level."""
+        taken = self.walk.taken()
+        self.level = self.judged = max(way.judge(taken) for way in self.ways)
+        return self.judged
+
+
+class _Way:
+    """One way of the batched check: the distances of ``points`` (``source_face``'s points
+    at ``uv``) to ``target_face``'s surface (the core's ``target``), measured a batch of
+    samples at a time."""
+
+    def __init__(self, target_face, target, source_face, points, uv):
+        self.target_face, self.target, self.source_face = target_face, target, source_face
+        self.points, self.uv = points, uv
+        self.distance = np.zeros(len(points))
+        self.feet = np.zeros((len(points), 2))
+        self.projected = np.zeros_like(points)
+        self._restarts = None
+        self._judged = None
+
+    def measure(self, index):
+        """The batched distances at samples ``index``, kept with their foot points
+        (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`)."""
+        if self._restarts is None:
+            self._restarts = RestartSamples(self.target)
+        uv = self.uv[index]
+        s, t, distance = closest_points_surface_restarted(
+            self.target, self.points[index], uv[:, 0], uv[:, 1], samples=self._restarts)
+        self.distance[index], self.feet[index] = distance, np.column_stack([s, t])
+        self.projected[index] = _core_points(self.target, self.feet[index])
+        return distance
+
+    def judge(self, index):
+        """OCCT's judge (:func:`_judge`) on the measured samples ``index``; their maximum."""
+        distance, projected = self.distance[index], self.projected[index]
+        _judge(self.target_face, self.source_face, self.uv[index], self.feet[index],
+               self.points[index], distance, projected, self.target.size)
+        self._judged = index, distance, projected
+        return float(distance.max())
+
+    def completed(self, rest):
+        """``(distance, nearest points)`` at every sample: the judged values where judged,
+        the batched ones elsewhere, ``rest`` (the samples not measured yet) measured."""
+        if rest.size:
+            self.measure(rest)
+        distance, projected = self.distance.copy(), self.projected.copy()
+        index, judged, nearest = self._judged
+        distance[index], projected[index] = judged, nearest
+        return distance, projected
 
 
 def _by_occt(original_face, faired_face, uv, points, use_global):
-    """Both ways by OCCT at every sample; the same tuple as :func:`_batched`."""
+    """Both ways by OCCT at every sample: ``(faired_points, parametric, (distance,
+    nearest points), (distance back, nearest points back))``."""
     faired_points, _ = _points_and_normals(faired_face, uv, normals=False)
     parametric = np.linalg.norm(faired_points - points, axis=1)
     there = _distances_to(faired_face, points, uv, faired_points, parametric, use_global)
@@ -271,71 +452,11 @@ def _by_occt(original_face, faired_face, uv, points, use_global):
     return faired_points, parametric, there, back
 
 
-def _judged_distances(target_face, target, source_face, points, uv):
-    """Distances of ``points`` (``source_face``'s points at ``uv``) to ``target_face``'s
-    surface (the core's ``target``) and the nearest points found.
-
-    The core's batched Newton projection from ``uv``, restarted from a coarse sample
-    where one is nearer (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`),
-    gives every sample an upper bound; OCCT then judges the samples near the maximum
-    (:func:`_judge`).
-    """
-    distance, feet, projected = _batched_distances(target, points, uv)
-    _judge(target_face, source_face, uv, feet, points, distance, projected, target.size)
-    return distance, projected
-
-
-def _batched_distances(target, points, uv):
-    """The core's distances of ``points`` to ``target`` from ``uv`` (restarted Newton,
-    :func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`), their foot
-    parameters and foot points."""
-    s, t, distance = closest_points_surface_restarted(target, points, uv[:, 0], uv[:, 1])
-    feet = np.column_stack([s, t])
-    return distance, feet, _core_points(target, feet)
-
-
-def exceeds_on_widest(original_face, faired_face, surfaces, reference, tol,
-                      samples=PREFILTER_SAMPLES):
-    r"""True when a lower bound of :func:`deviation_on_grid`'s ``max`` (batched, on the
-    same ``reference`` and ``surfaces``) exceeds ``tol``: a candidate certain to fail
-    the full check, found at a fraction of its cost.
-
-    Only a sample whose parametric distance :math:`|S_1(u_i, v_i) - p_i|` exceeds ``tol``
-    can exceed it either way (every distance of the check is at most the parametric
-    one).  The ``samples`` of them with the largest parametric distance are measured as
-    the check measures them: the core's batched projection both ways, and where one
-    exceeds ``tol``, OCCT's judge (:func:`_judge`) on those samples.  Each sample's value
-    in the full check comes from the same per-sample steps, each taking the nearer point
-    (the batched value, OCCT's Newton projection from its foot, the global projection and
-    the border curves), and the judge leaves the subset's maximum measured by all of
-    them: no value of the full check at that sample is below it, so the full check's
-    maximum is at least the subset's (the batched check's, which is the check wherever
-    OCCT's points agree with the core's).  ``False`` says nothing (the full check
-    decides), as where the judge finds that OCCT's points differ from the core's.
-    """
-    uv, points, _ = reference
-    original, faired = surfaces
-    faired_points = _core_points(faired, uv)
-    parametric = np.linalg.norm(faired_points - points, axis=1)
-    widest = np.argsort(parametric)[::-1][:samples]
-    widest = widest[parametric[widest] > tol]
-    if widest.size == 0:
-        return False
-    uv = uv[widest]
-    ways = ((faired_face, faired, original_face, points[widest]),
-            (original_face, original, faired_face, faired_points[widest]))
-    for target_face, target, source_face, from_points in ways:
-        distance, feet, projected = _batched_distances(target, from_points, uv)
-        if distance.max() <= tol:
-            continue
-        try:
-            _judge(target_face, source_face, uv, feet, from_points, distance, projected,
-                   target.size)
-        except _NotTheSameGeometry:
-            return False
-        if distance.max() > tol:
-            return True
-    return False
+def exceeds_on_widest(original_face, faired_face, surfaces, reference, tol):
+    """:meth:`BatchedCheck.exceeds` of a new check: true when the full check's maximum
+    (:func:`deviation_on_grid` on the same ``reference`` and ``surfaces``) is certain
+    to exceed ``tol``."""
+    return BatchedCheck(original_face, faired_face, surfaces, reference).exceeds(tol)
 
 
 def _judge(target_face, source_face, uv, feet, points, distance, projected, size):

@@ -5,7 +5,7 @@ Pipeline: classify the face; convert it to NURBS on request; take its net
 (:func:`cq_fairing.core.face_search.search_face`, the same search the FreeCAD
 workbench runs) with OCCT's pieces: the face's UV samples classified inside its trim,
 and OCCT's two-sided check of each candidate put under the face's own trim
-(:func:`~cq_fairing.occ.surface_to_face`, :func:`~cq_fairing.occ.deviation.deviation_on_grid`).
+(:func:`~cq_fairing.occ.surface_to_face`, :class:`~cq_fairing.occ.deviation.BatchedCheck`).
 The search chooses the target (explicit ``n`` or the fewest poles within ``tol``,
 :mod:`cq_fairing.core.scale_search`, the core's :func:`cq_fairing.fair_surface`), or
 with ``method="adaptive"`` lets the core choose non-uniform targets within ``tol``
@@ -47,7 +47,7 @@ from ..core.results import SurfaceFairResult
 from ..errors import UnsupportedGeometryError
 from .builders import face_uv_box
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
-from .deviation import deviation_on_grid, exceeds_on_widest, face_uv_grid, reference_samples
+from .deviation import BatchedCheck, face_uv_grid, reference_samples
 from .trims import face_region
 
 if TYPE_CHECKING:
@@ -309,22 +309,25 @@ class _OcctCheck:
     ``exceeds`` of :func:`~cq_fairing.core.face_search.search_face`.
 
     Each candidate is put under the face's trim (:func:`~cq_fairing.occ.surface_to_face`,
-    once) and measured by :func:`~cq_fairing.occ.deviation.deviation_on_grid` on the
+    once) and measured by one :class:`~cq_fairing.occ.deviation.BatchedCheck` on the
     search grid plus the centres of its cells (:func:`_check_samples`: the check sees
-    between the samples); ``exceeds`` is the cheap lower bound
-    :func:`~cq_fairing.occ.deviation.exceeds_on_widest` on the same samples.
+    between the samples): ``exceeds`` is its cheap lower bound, and the full check goes
+    on from the samples that bound measured.
     """
 
     def __init__(self, face, surface, grid, trimmed):
         self.face, self.surface, self.grid, self.trimmed = face, surface, grid, trimmed
         self._reference = None
-        self._faces, self._deviations = {}, {}
+        self._checks, self._deviations = {}, {}
 
-    def _rebuilt(self, faired):
+    def _check(self, faired):
+        """The candidate's face and :class:`~cq_fairing.occ.deviation.BatchedCheck`."""
         key = id(faired)
-        if key not in self._faces:   # the candidate is kept with its face: ids stay unique
-            self._faces[key] = (faired, surface_to_face(faired, self.face))
-        return self._faces[key][1]
+        if key not in self._checks:   # the candidate is kept with its check: ids stay unique
+            face = surface_to_face(faired, self.face)
+            self._checks[key] = (faired, face, BatchedCheck(
+                self.face, face, (self.surface, faired), self._samples()))
+        return self._checks[key][1:]
 
     def _samples(self):
         if self._reference is None:
@@ -334,20 +337,17 @@ class _OcctCheck:
 
     def exceeds(self, faired, tol):
         """True when the check of ``faired`` is certain to exceed ``tol``."""
-        return exceeds_on_widest(self.face, self._rebuilt(faired), (self.surface, faired),
-                                 self._samples(), tol)
+        return self._check(faired)[1].exceeds(tol)
 
     def __call__(self, faired):
         """OCCT's two-sided maximum distance of ``faired`` under the face's trim."""
-        deviation = deviation_on_grid(self.face, self._rebuilt(faired), None,
-                                      reference=self._samples(),
-                                      surfaces=(self.surface, faired))
+        deviation = self._check(faired)[1].deviation()
         self._deviations[id(faired)] = deviation
         return deviation["max"]
 
     def measured(self, faired):
-        """``(face, deviation dict)`` of a candidate already checked."""
-        return self._rebuilt(faired), self._deviations[id(faired)]
+        """``(face, deviation)`` of a candidate already checked."""
+        return self._check(faired)[0], self._deviations[id(faired)]
 
 
 def _check_samples(face, grid, trimmed, surface):

@@ -22,6 +22,7 @@ from cq_fairing.core.closest_points import (
 )
 from cq_fairing.core.evaluation import surface_derivatives
 from cq_fairing.core.fairness import grid_curvatures
+from cq_fairing.core.probes import BoundWalk
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "SampledDeviation", "curvature", "points_and_normals",
@@ -198,10 +199,9 @@ class SampledDeviation:
         the maximum is the full one."""
         _, parametric, order, _ = self._candidate(faired)
         slack = ROUNDING * self.source.size
-        best, start, batch = 0.0, 0, PREFILTER_SAMPLES
-        while start < order.size and parametric[order[start]] > best - slack:
-            best = max(best, float(self.distances(faired, order[start:start + batch]).max()))
-            start, batch = start + batch, 2 * batch
+        walk, best = BoundWalk(parametric, PREFILTER_SAMPLES, order), 0.0
+        while walk.next_bound > best - slack:
+            best = max(best, float(self.distances(faired, walk.take()).max()))
         return best
 
     def exceeds(self, faired, tol, samples=PREFILTER_SAMPLES):

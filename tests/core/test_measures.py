@@ -194,6 +194,32 @@ class _ArrayBlocks:
         return self.values[self.rows_of(b)]
 
 
+@given(seed=st.integers(0, 2**31 - 1), size=st.integers(1, 3000), first=st.integers(1, 300),
+       levels=st.integers(1, 50))
+@settings(max_examples=80, deadline=None)
+def test_a_walk_by_bound_finds_the_maximum_and_hands_out_each_sample_once(seed, size, first,
+                                                                          levels):
+    """Values below their bounds (few levels, so ties are common): walking down the
+    bounds until the next one is at most the largest value taken gives the maximum of
+    all values; the batches come in decreasing order of bound, double in size, and the
+    samples taken and the rest split the samples."""
+    rng = np.random.default_rng(seed)
+    bound = rng.integers(0, levels + 1, size=size) / levels
+    values = bound * rng.uniform(0.5, 1.0, size=size)
+    walk = probes.BoundWalk(bound, first)
+    best, sizes, last = -np.inf, [], np.inf
+    while walk.next_bound > best:
+        batch = walk.take()
+        assert bound[batch[0]] <= last and np.all(np.diff(bound[batch]) <= 0)
+        best, last = max(best, float(values[batch].max())), float(bound[batch[-1]])
+        sizes.append(batch.size)
+    assert best == values.max()
+    assert all(b == first * 2 ** k for k, b in enumerate(sizes[:-1]))
+    taken, rest = walk.taken(), walk.rest()
+    assert np.array_equal(np.sort(np.r_[taken, rest]), np.arange(size))
+    assert rest.size == 0 or bound[rest].max() <= best
+
+
 @given(seed=st.integers(0, 2**31 - 1), shape=st.tuples(st.integers(1, 40), st.integers(1, 30)),
        step=st.integers(1, 50), levels=st.integers(2, 1000))
 @settings(max_examples=60, deadline=None)

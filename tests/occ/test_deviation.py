@@ -150,6 +150,58 @@ def test_batched_distances_agree_with_a_naive_dense_search(real, label):
     assert np.all(samples["distance"] >= nearest - spacing)
 
 
+@pytest.mark.parametrize("label", list(REAL_FACES))
+def test_the_check_measures_where_the_maximum_can_be_and_finds_every_samples_maximum(real,
+                                                                                      label):
+    """The check walks the samples down their parametric distance and stops where none
+    left can reach the maximum.  Against measuring every sample both ways (the core's
+    batched projection for all, OCCT's judge on all): the same maximum to the bit, every
+    sample passed over below the share of it the judge looks at (on the IEA face, most
+    samples); the field, completed when read, agrees at every sample; and the result
+    pickles as a plain dict with its field."""
+    import pickle
+
+    from cq_fairing.core.closest_points import closest_points_surface_restarted
+    from cq_fairing.core.evaluation import surface_derivatives
+    from cq_fairing.occ import face_to_surface
+    from cq_fairing.occ.deviation import (
+        JUDGED_FRACTION,
+        BatchedCheck,
+        _judge,
+        face_uv_grid,
+        reference_samples,
+    )
+
+    name, pick, tol = REAL_FACES[label]
+    face, report = _real_faired(real, name, pick, tol)
+    surfaces = face_to_surface(face)[0], report.surface
+    reference = reference_samples(face, face_uv_grid(face, 40), surface=surfaces[0])
+    check = BatchedCheck(face, report.face, surfaces, reference)
+    deviation = check.deviation()
+    measured = check.walk.taken().size
+    uv, points, _ = reference
+    faired_points = surface_derivatives(surfaces[1], uv[:, 0], uv[:, 1], 0)[(0, 0)]
+    every = []
+    for target_face, target, source_face, start in (
+            (report.face, surfaces[1], face, points),
+            (face, surfaces[0], report.face, faired_points)):
+        s, t, distance = closest_points_surface_restarted(target, start, uv[:, 0], uv[:, 1])
+        projected = surface_derivatives(target, s, t, 0)[(0, 0)]
+        _judge(target_face, source_face, uv, np.column_stack([s, t]), start, distance,
+               projected, target.size)
+        every.append(distance)
+    assert deviation["max"] == max(d.max() for d in every)
+    passed_over = check.parametric[check.walk.rest()]
+    assert np.all(passed_over <= JUDGED_FRACTION * deviation["max"] * (1 + 1e-9))
+    if label == "IEA main face":     # a projection keeps the parametrization: few to measure
+        assert measured < 0.25 * uv.shape[0]
+    for key, whole in zip(("distance", "distance_back"), every):
+        np.testing.assert_allclose(deviation[key], whole, rtol=0, atol=1e-6 * tol)
+    copied = pickle.loads(pickle.dumps(deviation))
+    assert type(copied) is dict and set(copied) == set(deviation)
+    np.testing.assert_array_equal(copied["distance"], deviation["distance"])
+
+
 def test_surfaces_at_hand_measure_as_the_faces_read_again(real):
     """The core surfaces passed in (the source's, and the faired one as built into the
     face) give the samples and distances that reading both faces again gives, bit for
