@@ -75,9 +75,11 @@ def add_fairing_options(parser):
                              "free), free = plain projection, pinned = always")
     parser.add_argument("--grading", choices=GRADINGS,
                         help="with --method wavelet and --tol: auto = also targets graded "
-                             "like a face's knot spans, where they give fewer poles "
-                             "(default; a face that shares a held join keeps uniform ones), "
-                             "uniform = uniform targets only")
+                             "like a face's knot spans, and where uniform ones keep more "
+                             "than a quarter of its poles targets graded by the error (the "
+                             "adaptive method's knots); the fewest poles win (default; a "
+                             "face that shares a held join keeps uniform ones), uniform = "
+                             "uniform targets only")
     parser.add_argument("--joins", choices=JOINS, default=JOINS[0],
                         help="smooth = faces that meet along whole borders are faired together, "
                              "joins closed and tangent where the source was (default); "

@@ -51,7 +51,10 @@ The options
     Occ faces only: the targets of the bisections on a face's samples (``"wavelet"``
     with ``tol``).  ``"auto"``: quasi-uniform targets and, on a face whose knot spans
     are graded, targets graded like them (:func:`~cq_fairing.core.plans.graded_space`),
-    the fewer poles winning; ``"uniform"``: quasi-uniform targets only, the method's own
+    and, in the local search, where such a target keeps more than a quarter of the
+    face's poles (and more than 100), targets graded by the error: the adaptive method's compact fit with the
+    same ``borders`` (:func:`~cq_fairing.core.face_search.search_face`); the fewest
+    poles win; ``"uniform"``: quasi-uniform targets only, the method's own
     :math:`V_n`.  In a model a face that shares a held join with another face searches
     quasi-uniform targets, whose knots its neighbours share along the join.  Refused
     with ``n``.  The command line's ``--grading``, the workbench's ``Grading``.

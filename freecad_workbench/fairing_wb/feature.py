@@ -42,8 +42,8 @@ PROPERTIES = (
      "pinned", False),
     ("App::PropertyEnumeration", "Grading", "Fairing",
      "wavelet method in Tolerance mode: auto (targets graded like a face's knot spans "
-     "too, where they give fewer control points) or uniform (quasi-uniform targets "
-     "only)", False),
+     "too, and by the error where quasi-uniform ones keep more than a quarter of the "
+     "control points; the fewest win) or uniform (quasi-uniform targets only)", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Joins", "Fairing",

@@ -168,8 +168,10 @@ class FairSurfacePanel:
         self.grading = _row(layout, "Grading:", QtWidgets.QComboBox(), "fairing_grading")
         self.grading.addItems(list(make.GRADINGS))
         self.grading.setToolTip("wavelet, Tolerance mode: auto = also targets graded like "
-                                "the face's knot spans, where they give fewer control "
-                                "points; uniform = quasi-uniform targets only")
+                                "the face's knot spans, and where quasi-uniform ones keep "
+                                "more than a quarter of its control points targets graded "
+                                "by the error (the adaptive method's knots); the fewest "
+                                "control points win; uniform = quasi-uniform targets only")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")

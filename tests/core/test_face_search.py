@@ -11,6 +11,8 @@ import pytest
 import cq_fairing as cf
 from cq_fairing.core.closest_points import closest_points_surface_restarted
 from cq_fairing.core.face_search import (
+    ERROR_GRADED_NOTE,
+    ERROR_GRADED_SHARE,
     MARGIN,
     PINNED_NOTE,
     CoreSearch,
@@ -66,7 +68,8 @@ def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
     source = _noisy()
     grid = _grid(source)
     check = TwoSided(source, grid)
-    outcome = search_face(source, TOL, grid, face_finisher(source), check, borders="free")
+    outcome = search_face(source, TOL, grid, face_finisher(source), check, borders="free",
+                          grading="uniform")
     assert outcome.status == "faired" and outcome.notes == ()
     assert outcome.deviation == check.log[-1][1] <= TOL
     assert outcome.surface.shape[0] * outcome.surface.shape[1] < 30 * 40
@@ -78,7 +81,7 @@ def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
 def test_a_failing_check_moves_on_to_the_next_attempt():
     """A check that refuses everything sees the attempts in order (local bisection, core
     search, parametric bisection at MARGIN * tol, then at tol; one candidate each with
-    free borders only) and the error names the judge and the best value it measured."""
+    quasi-uniform, free-border targets only) and the error names the judge and the best value it measured."""
     source = _noisy()
     grid = _grid(source)
     measured = TwoSided(source, grid)
@@ -88,9 +91,35 @@ def test_a_failing_check_moves_on_to_the_next_attempt():
 
     with pytest.raises(cf.ToleranceNotMetError, match="by the judge's measure") as error:
         search_face(source, TOL, grid, face_finisher(source), strict, judge="the judge",
-                    borders="free")
+                    borders="free", grading="uniform")
     assert len(measured.log) == 4
     assert error.value.best_deviation == pytest.approx(min(d for _, d in measured.log) + 1.0)
+
+
+def test_error_graded_targets_where_uniform_ones_keep_many_poles():
+    """With free borders the uniform targets of the noisy net keep more than a quarter
+    of its poles.  By default the search then tries the adaptive method's targets,
+    whose knots follow the error: they win with fewer poles (the note says so), their
+    net is the core's adaptive fit at tol, and a denser measure keeps it within tol.
+    With ``grading="uniform"`` the search keeps to quasi-uniform targets."""
+    source = _noisy()
+    grid = _grid(source)
+    uniform = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
+                          borders="free", grading="uniform")
+    poles = uniform.surface.shape[0] * uniform.surface.shape[1]
+    assert poles > ERROR_GRADED_SHARE * 30 * 40 and uniform.notes == ()
+    check = TwoSided(source, grid)
+    outcome = search_face(source, TOL, grid, face_finisher(source), check, borders="free")
+    assert outcome.notes == (ERROR_GRADED_NOTE,)
+    assert outcome.surface.shape[0] * outcome.surface.shape[1] < poles
+    assert outcome.deviation == check.log[-1][1] <= TOL
+    adaptive = cf.fair_surface(source.poles, tol=TOL, u_knots=source.u_knots,
+                               v_knots=source.v_knots, degree=(3, 3), method="adaptive",
+                               borders="free")
+    np.testing.assert_array_equal(outcome.surface.poles, adaptive.surface.poles)
+    assert not all(s.is_quasi_uniform for s in (outcome.surface.u_space,
+                                                outcome.surface.v_space))
+    assert _dense_two_sided(source, outcome.surface) <= TOL * 1.02
 
 
 def test_a_prefiltered_candidate_is_measured_only_when_every_attempt_fails():

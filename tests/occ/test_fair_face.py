@@ -334,12 +334,14 @@ def test_graded_spans_get_graded_targets_where_they_need_fewer_poles(real):
 def test_pinned_borders_where_the_free_projection_moves_the_corners():
     """The noisy 50 x 80 blade (poles evenly spaced on clamped uniform knots, so its
     parametric speed changes within its end spans): the plain projection of every size
-    the search tries moves the face's corners along the surface, and free-border targets
-    need 38 x 65 poles at 0.05 mm.  By default the search also pins the target's borders
+    the search tries moves the face's corners along the surface, and quasi-uniform
+    free-border targets need 38 x 65 poles at 0.05 mm.  By default the search also pins the target's borders
     to the source's border curves and keeps far fewer poles (its report says so), within
     tol by OCCT's projection, with the source's corners kept to round-off by OCCT's
     evaluation of both faces; the free net of the same size (explicit ``n``) deviates
-    more than tol, the pinned one (``borders="pinned"``) does not."""
+    more than tol, the pinned one (``borders="pinned"``) does not.  With free borders
+    and ``grading="auto"`` the uniform targets keep more than a quarter of the poles,
+    and targets graded by the error win with fewer, within tol by OCCT's check."""
     from cq_fairing.core.geometry import make_surface
     from cq_fairing.occ.builders import surface_to_natural_face
     from tests.freecad.face_references import NOISY, noisy_blade_net
@@ -349,8 +351,12 @@ def test_pinned_borders_where_the_free_projection_moves_the_corners():
     tol = NOISY[1]
     report = fair_face(face, tol=tol, details=False)
     check_within(report, face, tol)
-    free = fair_face(face, tol=tol, borders="free", details=False)
+    free = fair_face(face, tol=tol, borders="free", grading="uniform", details=False)
     assert np.prod(report.poles_after) * 4 < np.prod(free.poles_after)
+    error_graded = fair_face(face, tol=tol, borders="free", details=False)
+    check_within(error_graded, face, tol)
+    assert "targets graded by the error" in error_graded.message
+    assert np.prod(error_graded.poles_after) < np.prod(free.poles_after)
     assert "pinned to the source's border curves" in report.message
     corners = [0.0, 1.0]
     np.testing.assert_allclose(occ_points(report.face, corners, corners),
