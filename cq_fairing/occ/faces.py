@@ -214,8 +214,8 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         ``method="wavelet"`` with ``tol``: the targets of the bisections on the face's
         samples.  ``"auto"``: quasi-uniform ones and, where the face's knot spans are
         graded, ones graded like them, and where those keep more than a quarter of the
-        face's poles, ones graded by the error (the adaptive method's compact fit with
-        ``borders``); the fewest poles win (the report's message says when graded ones
+        face's poles, ones graded by the error (the adaptive method's compact fit, with
+        free borders unless ``borders="pinned"``); the fewest poles win (the report's message says when graded ones
         won); ``"uniform"``: quasi-uniform ones only.
 
     Returns
