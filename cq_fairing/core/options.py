@@ -54,9 +54,10 @@ The options
     and, in the local search, where such a target keeps more than a quarter of the
     face's poles (and more than 100), targets graded by the error: the adaptive
     method's compact fit, with free borders unless ``borders="pinned"``
-    (:func:`~cq_fairing.core.face_search.search_face`); the fewest poles win; ``"uniform"``: quasi-uniform targets only, the method's own
-    :math:`V_n`.  In a model a face that shares a held join with another face searches
-    quasi-uniform targets, whose knots its neighbours share along the join.  Refused
+    (:func:`~cq_fairing.core.face_search.search_face`); the fewest poles win;
+    ``"uniform"``: quasi-uniform targets only, the method's own :math:`V_n`.  In a model
+    a face that shares a held join with another face searches quasi-uniform targets,
+    whose knots its neighbours share along the join.  Refused
     with ``n``.  The command line's ``--grading``, the workbench's ``Grading``.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
