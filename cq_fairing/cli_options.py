@@ -77,9 +77,10 @@ def add_fairing_options(parser):
                         help="with --method wavelet and --tol: auto = also targets graded "
                              "like a face's knot spans, and where uniform ones keep more "
                              "than a quarter of its poles targets graded by the error (the "
-                             "adaptive method's knots); the fewest poles win (default; a "
-                             "face that shares a held join keeps uniform ones), uniform = "
-                             "uniform targets only")
+                             "adaptive method's knots); the fewest poles win (default; in "
+                             "a model of several faces: spans; a face that shares a held "
+                             "join keeps uniform ones), spans = uniform and span-graded "
+                             "targets, uniform = uniform targets only")
     parser.add_argument("--joins", choices=JOINS, default=JOINS[0],
                         help="smooth = faces that meet along whole borders are faired together, "
                              "joins closed and tangent where the source was (default); "

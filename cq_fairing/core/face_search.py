@@ -222,9 +222,10 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
         Compute the wavelet details of a local search's winner with the core.
     judge : str
         Who owns ``check``, for the error message: ``"OCCT"`` says "by OCCT's measure".
-    grading : {"auto", "uniform"}
-        The bisections' targets (:func:`_bisected`): with ``"auto"`` also targets graded
-        like the source's spans where they are graded and, in the local search at
+    grading : {"auto", "spans", "uniform"}
+        The bisections' targets (:func:`_bisected`): with ``"spans"`` also targets graded
+        like the source's spans where they are graded; with ``"auto"`` those and, in the
+        local search at
         ``tol``, targets graded by the error (the adaptive method's compact fit, with
         free borders unless ``borders="pinned"``) in place of a candidate that keeps
         many poles (:func:`_error_graded`).
@@ -255,8 +256,8 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     if None in scales:  # the core's uniform search coarsens both directions or none
         attempts = [a for a in attempts if not isinstance(a[0], CoreSearch)]
     sampler = SurfaceSampler(grid, surface)
-    graded = grading == "auto" and any(has_graded_spans(s)
-                                       for s in (surface.u_space, surface.v_space))
+    graded = grading != "uniform" and any(has_graded_spans(s)
+                                          for s in (surface.u_space, surface.v_space))
     gradings = ("uniform", "source") if graded else ("uniform",)
     sides = {"auto": ("free",) if n is not None else ("free", "pinned"),
              "free": ("free",), "pinned": ("pinned",)}[borders]

@@ -60,7 +60,7 @@ from .spaces import SplineSpace
 __all__ = ["JoinSide", "Join", "JointProjection", "border_joins", "project_jointly",
            "is_border_join", "runs_reversed", "join_tolerance", "surface_key", "unholdable",
            "held_joins", "joint_targets", "locate_side", "refined_targets", "joined_faces",
-           "plain_target_options",
+           "plain_target_options", "model_grading",
            "SOURCE_GAP", "REFINEMENTS"]
 
 SOURCE_GAP = 0.5   # borders further apart than this x tol (at equal parameters) stay apart
@@ -285,6 +285,18 @@ def plain_target_options(grading="auto", borders="auto"):
     return {name: plain for name, plain, given in (("grading", "uniform", grading),
                                                     ("borders", "free", borders))
             if given == "auto"}
+
+
+def model_grading(grading, several):
+    """The ``grading`` of the wavelet method's tolerance search on the faces of a model
+    (``several``: more than one face): ``"auto"`` becomes ``"spans"`` there, without
+    targets graded by the error.  Such
+    a net places its own knots and slides along its surface, while an edge a face
+    shares with a neighbour faired alone keeps its p-curve, so the joins open: the
+    testtoler shell faired face by face at 0.01 kept 10 faces faired with 11 430 poles
+    in 32.7 s that way, against 11 322 poles in 4.7 s (``method="adaptive"``
+    projects those p-curves anew)."""
+    return "spans" if several and grading == "auto" else grading
 
 
 def joint_targets(sources, faired):

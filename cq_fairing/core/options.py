@@ -47,7 +47,7 @@ The options
     ``"local"``: bisection on the face's own samples inside its trim
     (:mod:`cq_fairing.core.scale_search`).  Default ``"guaranteed"`` in the core, ``"local"``
     for faces.
-``grading`` : {"auto", "uniform"}, default "auto"
+``grading`` : {"auto", "spans", "uniform"}, default "auto"
     Occ faces only: the targets of the bisections on a face's samples (``"wavelet"``
     with ``tol``).  ``"auto"``: quasi-uniform targets and, on a face whose knot spans
     are graded, targets graded like them (:func:`~cq_fairing.core.plans.graded_space`),
@@ -55,9 +55,12 @@ The options
     face's poles (and more than 100), targets graded by the error: the adaptive
     method's compact fit, with free borders unless ``borders="pinned"``
     (:func:`~cq_fairing.core.face_search.search_face`); the fewest poles win;
+    ``"spans"``: quasi-uniform targets and those graded like the face's spans;
     ``"uniform"``: quasi-uniform targets only, the method's own :math:`V_n`.  In a model
-    a face that shares a held join with another face searches quasi-uniform targets,
-    whose knots its neighbours share along the join.  Refused
+    of several faces ``"auto"`` is ``"spans"``
+    (:func:`~cq_fairing.core.joint_projection.model_grading`), and a face that shares a
+    held join with another face searches quasi-uniform targets, whose knots its
+    neighbours share along the join.  Refused
     with ``n``.  The command line's ``--grading``, the workbench's ``Grading``.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
@@ -156,7 +159,7 @@ SEARCHES = ("guaranteed", "linear", "polyfit")
 #: Tolerance searches of an occ face: its own samples, or the core's with a step rule.
 FACE_SEARCHES = ("local",) + SEARCHES
 #: Targets of an occ face's bisections (``"auto"`` first: the default).
-GRADINGS = ("auto", "uniform")
+GRADINGS = ("auto", "spans", "uniform")
 #: The distance the core's tolerance search bounds.
 MEASURES = ("geometric", "parametric")
 #: Spaces visited by the core's projection.

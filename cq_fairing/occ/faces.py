@@ -132,7 +132,7 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
               density: int | tuple[int, int] | None = None, details: bool = True,
               search: Literal["local", "guaranteed", "linear", "polyfit"] = "local",
               borders: Literal["auto", "free", "pinned"] = "auto",
-              grading: Literal["auto", "uniform"] = "auto") -> FaceFairReport:
+              grading: Literal["auto", "spans", "uniform"] = "auto") -> FaceFairReport:
     r"""Fair one face and put the result under the face's own trim.
 
     Parameters
@@ -210,13 +210,14 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         :func:`cq_fairing.core.adaptive.fair_surface_adaptive`; there ``"free"`` is
         often a faster search.  Independent of ``boundary``, which restores the source's
         border rows afterwards.
-    grading : {"auto", "uniform"}
+    grading : {"auto", "spans", "uniform"}
         ``method="wavelet"`` with ``tol``: the targets of the bisections on the face's
         samples.  ``"auto"``: quasi-uniform ones and, where the face's knot spans are
         graded, ones graded like them, and where those keep more than a quarter of the
         face's poles, ones graded by the error (the adaptive method's compact fit, with
-        free borders unless ``borders="pinned"``); the fewest poles win (the report's message says when graded ones
-        won); ``"uniform"``: quasi-uniform ones only.
+        free borders unless ``borders="pinned"``); the fewest poles win (the report's
+        message says when graded ones won); ``"spans"``: quasi-uniform ones and those
+        graded like the face's spans; ``"uniform"``: quasi-uniform ones only.
 
     Returns
     -------

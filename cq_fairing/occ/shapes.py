@@ -43,7 +43,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
-from ..core.joint_projection import joined_faces, plain_target_options
+from ..core.joint_projection import joined_faces, model_grading, plain_target_options
 from ..core.options import check_face_options, check_joins
 from ..errors import InvalidInputError
 from .adjacency import find_joins
@@ -156,8 +156,10 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     faces : iterable of int, optional
         0-based indices (as in :func:`~cq_fairing.occ.list_faces`); default all faces.
     method, objective, borders, boundary, target_degree, density, grading
-        As in :func:`~cq_fairing.occ.fair_face` (with ``grading="auto"`` and
-        ``borders="auto"`` a face that shares a held join with another face searches
+        As in :func:`~cq_fairing.occ.fair_face` (in a shape of several faces
+        ``grading="auto"`` is ``"spans"``,
+        :func:`~cq_fairing.core.joint_projection.model_grading`; with ``grading="auto"``
+        and ``borders="auto"`` a face that shares a held join with another face searches
         quasi-uniform, free-border targets only, whose knots its neighbours share along
         the join and whose borders the joint projection sets; ``method="adaptive"``: the core's
         adaptive targets per face, ``objective`` ``"compact"``, ``"faithful"`` or ``"fair"``,
@@ -258,7 +260,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     selected = _selection(faces, len(originals))
     options = dict(method=method, objective=objective, borders=borders, boundary=boundary,
                    target_degree=target_degree, density=density, details=details,
-                   grading=grading)
+                   grading=model_grading(grading, len(originals) > 1 and method == "wavelet"
+                                         and n is None))
     pool = None if engine is not None or jobs == 1 and face_timeout is None else \
         ProcessFaces(jobs, face_timeout)
     try:

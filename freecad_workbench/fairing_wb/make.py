@@ -27,7 +27,12 @@ from cq_fairing.core.face_search import (
     search_face,
     uv_window,
 )
-from cq_fairing.core.joint_projection import joined_faces, plain_target_options, unholdable
+from cq_fairing.core.joint_projection import (
+    joined_faces,
+    model_grading,
+    plain_target_options,
+    unholdable,
+)
 from cq_fairing.core.network_fairing import kept_sentence
 from cq_fairing.core.options import (
     BORDERS,  # "auto" first: the enumeration's default
@@ -440,12 +445,14 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         it (19 x 21 poles in about 1.6 s instead of 11 x 11 in about 11 s).
     domain : conversion.FaceDomain, optional
         That of ``face`` where already read (none: read here).
-    grading : {"auto", "uniform"}
+    grading : {"auto", "spans", "uniform"}
         The wavelet method's bisections on the face's samples (Tolerance mode) try
         quasi-uniform targets and, on a face whose knot spans are graded, targets graded
-        like them (``auto``), or quasi-uniform ones only (``uniform``; with ``auto`` a
-        face that shares a held join with another searches those, :func:`fair_shapes`),
-        as :func:`cq_fairing.occ.fair_face`; the feature's ``Grading``.
+        like them (``spans``), with ``auto`` also targets graded by the error where
+        those keep many control points, or quasi-uniform ones only (``uniform``; in a
+        model ``auto`` is ``spans``, and a face that shares a held join with another
+        searches quasi-uniform ones, :func:`fair_shapes`), as
+        :func:`cq_fairing.occ.fair_face`; the feature's ``Grading``.
 
     Raises
     ------
@@ -699,6 +706,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     # faces that meet another face search quasi-uniform, free-border targets, as
     # cq-fairing fair's (the joint projection shares their knots and sets their borders)
     plain = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
+    several = (found is not None and settings["method"] == "wavelet"
+               and settings["tolerance"] is not None)
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -706,7 +715,8 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             own = target if target is None or len(named) == 1 else _clamped_target(target,
                                                                                    element)
             try:
-                result = fair_face(element, **_plain(face_settings, done in plain),
+                result = fair_face(element, **_plain(face_settings, done in plain,
+                                                     several),
                                    **{**settings, "target": own}, domain=domains[sub])
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
@@ -831,13 +841,17 @@ def _nothing_faired(source, surface, method):
             and surface.v_space.same_as(source.v_space))
 
 
-def _plain(face_settings, joined):
-    """``face_settings`` of a face; one that shares a held join searches the targets of
+def _plain(face_settings, joined, several):
+    """``face_settings`` of a face; in a model searched by the wavelet method's
+    tolerance search (``several``: more than one face, or neighbours) its grading is
+    :func:`~cq_fairing.core.joint_projection.model_grading`'s,
+    and one that shares a held join searches the targets of
     :func:`~cq_fairing.core.joint_projection.plain_target_options` (:func:`fair_shapes`)."""
+    grading = face_settings.get("grading", "auto")
+    settings = {**face_settings, "grading": model_grading(grading, several)}
     if not joined:
-        return face_settings
-    return {**face_settings, **plain_target_options(face_settings.get("grading", "auto"),
-                                                    face_settings.get("borders", "auto"))}
+        return settings
+    return {**settings, **plain_target_options(grading, face_settings.get("borders", "auto"))}
 
 
 def _kept_by_joins(element, why, tolerance):

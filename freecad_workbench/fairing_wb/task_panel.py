@@ -171,7 +171,9 @@ class FairSurfacePanel:
                                 "the face's knot spans, and where quasi-uniform ones keep "
                                 "more than a quarter of its control points targets graded "
                                 "by the error (the adaptive method's knots); the fewest "
-                                "control points win; uniform = quasi-uniform targets only")
+                                "control points win (several faces: spans); spans = "
+                                "quasi-uniform and span-graded targets; uniform = "
+                                "quasi-uniform targets only")
         self.boundary = _row(layout, "Boundary:", QtWidgets.QComboBox(), "fairing_boundary")
         self.boundary.addItems(list(make.BOUNDARIES))
         self.boundary.setEnabled(self.kind == "Face")

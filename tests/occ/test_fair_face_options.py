@@ -71,7 +71,7 @@ def test_fair_face_refuses_an_option_its_method_does_not_use(face, method, optio
 def test_grading_is_refused_with_an_explicit_scale_and_outside_its_values(face):
     with pytest.raises(InvalidInputError, match="grading applies to the tolerance search"):
         fair_face(face, n=(5, 5), grading="uniform")
-    with pytest.raises(InvalidInputError, match=r"grading must be one of \('auto', 'uniform'\)"):
+    with pytest.raises(InvalidInputError, match=r"grading must be one of \('auto', 'spans', 'uniform'\)"):
         fair_face(face, tol=TOL, grading="graded")
     with pytest.raises(InvalidInputError, match="grading must be one of"):
         fair_shape(face, tol=TOL, grading="source")

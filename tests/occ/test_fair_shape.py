@@ -388,3 +388,34 @@ def test_faces_that_share_a_held_join_search_quasi_uniform_targets(real):
             graded_space(source.u_space, faired.u_space.n_spans, 3).breakpoints)
         assert np.prod(faired.shape) < np.prod(held.faces[index].surface.shape)
         assert alone.faces[index].max_deviation <= alone.tolerance
+
+
+def test_faces_of_a_model_of_several_keep_to_uniform_and_span_graded_targets():
+    """The noisy 50 x 80 blade with free borders: faired on its own, targets graded by
+    the error win (19 x 21 poles, fewer than quasi-uniform ones); as one of two faces of
+    a model, faired alone (``joins="free"``), its grading ``"auto"`` is ``"spans"``
+    (an error-graded net slides along its surface while its shared edges keep their
+    p-curves): the net of ``fair_face(grading="spans")``, without the note."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+
+    from cq_fairing.core.geometry import make_surface
+    from cq_fairing.occ.builders import surface_to_natural_face
+    from tests.freecad.face_references import NOISY, noisy_blade_net
+
+    noisy, _, u_knots, v_knots = noisy_blade_net(*NOISY[0])
+    face = surface_to_natural_face(make_surface(noisy, u_knots, v_knots, (3, 3)))
+    tol = NOISY[1]
+    alone = fair_face(face, tol=tol, borders="free", details=False)
+    spans = fair_face(face, tol=tol, borders="free", grading="spans", details=False)
+    assert "graded by the error" in alone.message and "graded by the error" not in spans.message
+    assert np.prod(alone.poles_after) < np.prod(spans.poles_after)
+    moved = gp_Trsf()
+    moved.SetTranslation(gp_Vec(500.0, 0.0, 0.0))
+    other = BRepBuilderAPI_Transform(face, moved, True).Shape()
+    model = fair_shape(compound(face, other), tol=tol, borders="free", joins="free",
+                       details=False)
+    for report in model.faces:
+        assert report.faired and "graded by the error" not in report.message
+        np.testing.assert_allclose(report.surface.poles[..., 1:], spans.surface.poles[..., 1:],
+                                   rtol=0, atol=1e-9)
