@@ -45,7 +45,7 @@ from ..core.face_search import face_attempts, face_finisher, sample_counts, sear
 from ..core.options import check_face_options, renamed_value
 from ..core.results import SurfaceFairResult
 from ..errors import UnsupportedGeometryError
-from .builders import face_uv_box
+from .builders import face_uv_box, surface_to_natural_face
 from .convert import FaceInfo, as_face, face_info, face_to_surface, surface_to_face
 from .deviation import BatchedCheck, face_uv_grid, reference_samples
 from .trims import face_region
@@ -311,11 +311,14 @@ class _OcctCheck:
     """OCCT's two-sided check of the candidates of one face, the ``check`` and
     ``exceeds`` of :func:`~cq_fairing.core.face_search.search_face`.
 
-    Each candidate is put under the face's trim (:func:`~cq_fairing.occ.surface_to_face`,
-    once) and measured by one :class:`~cq_fairing.occ.deviation.BatchedCheck` on the
-    search grid plus the centres of its cells (:func:`_check_samples`: the check sees
-    between the samples): ``exceeds`` is its cheap lower bound, and the full check goes
-    on from the samples that bound measured.
+    Each candidate is measured by one :class:`~cq_fairing.occ.deviation.BatchedCheck`
+    on the search grid plus the centres of its cells (:func:`_check_samples`: the check
+    sees between the samples): ``exceeds`` is its cheap lower bound, and the full check
+    goes on from the samples that bound measured.  OCCT's judge there evaluates the
+    candidate on a natural face of its surface (the samples lie inside the trim, and the
+    trimmed face has the same surface); the accepted candidate alone is put under the
+    face's trim (:func:`~cq_fairing.occ.surface_to_face`), which costs more than its
+    check on a face with many trim edges (settling each vertex's tolerance).
     """
 
     def __init__(self, face, surface, grid, trimmed):
@@ -324,13 +327,13 @@ class _OcctCheck:
         self._checks, self._deviations = {}, {}
 
     def _check(self, faired):
-        """The candidate's face and :class:`~cq_fairing.occ.deviation.BatchedCheck`."""
+        """The candidate's :class:`~cq_fairing.occ.deviation.BatchedCheck`."""
         key = id(faired)
         if key not in self._checks:   # the candidate is kept with its check: ids stay unique
-            face = surface_to_face(faired, self.face)
-            self._checks[key] = (faired, face, BatchedCheck(
-                self.face, face, (self.surface, faired), self._samples()))
-        return self._checks[key][1:]
+            self._checks[key] = (faired, BatchedCheck(
+                self.face, surface_to_natural_face(faired), (self.surface, faired),
+                self._samples()))
+        return self._checks[key][1]
 
     def _samples(self):
         if self._reference is None:
@@ -340,17 +343,17 @@ class _OcctCheck:
 
     def exceeds(self, faired, tol):
         """True when the check of ``faired`` is certain to exceed ``tol``."""
-        return self._check(faired)[1].exceeds(tol)
+        return self._check(faired).exceeds(tol)
 
     def __call__(self, faired):
         """OCCT's two-sided maximum distance of ``faired`` under the face's trim."""
-        deviation = self._check(faired)[1].deviation()
+        deviation = self._check(faired).deviation()
         self._deviations[id(faired)] = deviation
         return deviation["max"]
 
     def measured(self, faired):
-        """``(face, deviation)`` of a candidate already checked."""
-        return self._check(faired)[0], self._deviations[id(faired)]
+        """``(face under the face's trim, deviation)`` of a candidate already checked."""
+        return surface_to_face(faired, self.face), self._deviations[id(faired)]
 
 
 def _check_samples(face, grid, trimmed, surface):
