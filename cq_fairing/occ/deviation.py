@@ -452,13 +452,6 @@ def _by_occt(original_face, faired_face, uv, points, use_global):
     return faired_points, parametric, there, back
 
 
-def exceeds_on_widest(original_face, faired_face, surfaces, reference, tol):
-    """:meth:`BatchedCheck.exceeds` of a new check: true when the full check's maximum
-    (:func:`deviation_on_grid` on the same ``reference`` and ``surfaces``) is certain
-    to exceed ``tol``."""
-    return BatchedCheck(original_face, faired_face, surfaces, reference).exceeds(tol)
-
-
 def _judge(target_face, source_face, uv, feet, points, distance, projected, size):
     """OCCT measures again, in place, every sample whose batched ``distance`` is at least
     ``JUDGED_FRACTION`` of the largest OCCT value, walking down from the largest in

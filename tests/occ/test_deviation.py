@@ -258,8 +258,8 @@ def test_the_widest_samples_bound_the_full_check_from_below(real):
     the same maximum (on the way back: the faired face reaches beyond the original)."""
     from cq_fairing.occ import face_to_surface, fair_face
     from cq_fairing.occ.deviation import (
+        BatchedCheck,
         deviation_on_grid,
-        exceeds_on_widest,
         face_uv_grid,
         reference_samples,
     )
@@ -273,7 +273,7 @@ def test_the_widest_samples_bound_the_full_check_from_below(real):
                                   surface=surfaces[0])
     full = deviation_on_grid(face, report.face, None, reference=reference, surfaces=surfaces)
     largest = full["max"]
-    verdicts = {share: exceeds_on_widest(face, report.face, surfaces, reference, share * largest)
+    verdicts = {share: BatchedCheck(face, report.face, surfaces, reference).exceeds(share * largest)
                 for share in (0.25, 0.5, 0.9, 0.99, 1.0, 1.5)}
     assert verdicts[0.25] and verdicts[0.5]
     assert not verdicts[1.0] and not verdicts[1.5]
