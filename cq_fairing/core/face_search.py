@@ -225,10 +225,9 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     grading : {"auto", "spans", "uniform"}
         The bisections' targets (:func:`_bisected`): with ``"spans"`` also targets graded
         like the source's spans where they are graded; with ``"auto"`` those and, in the
-        local search at
-        ``tol``, targets graded by the error (the adaptive method's compact fit, with
-        free borders unless ``borders="pinned"``) in place of a candidate that keeps
-        many poles (:func:`_error_graded`).
+        local search at ``tol``, targets graded by the error (the adaptive method's
+        compact fit, with free borders unless ``borders="pinned"``) in place of a
+        candidate that keeps many poles (:func:`_error_graded`).
     borders : {"auto", "free", "pinned"}
         The border rows of the bisections' targets (:func:`_bisected`) and of explicit
         scales ``n``: the plain projection (``"free"``), pinned to the source's border

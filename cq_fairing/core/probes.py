@@ -28,6 +28,12 @@ COLLOCATIONS = 128     # collocation matrices a probe keeps (per target space an
 REFUTERS = 2           # samples of largest bound a curve probe's refutation looks at
 
 
+FIRST_BATCH = 256      # samples of largest bound a BoundWalk hands out first
+
+
+ROUNDING = 1e-12       # share of the extent by which two evaluation routes may differ
+
+
 # -- probes: cached source samples, fast maxima --------------------------------------------------
 class CurveProbe:
     """Dense samples of a source curve, reused to measure many faired candidates.
@@ -595,12 +601,13 @@ class BoundWalk:
     bound : ndarray, shape (q,)
         An upper bound of each sample's value.
     first : int, optional
-        Size of the first batch; each next batch is twice the last.
+        Size of the first batch (default ``FIRST_BATCH``); each next batch is twice the
+        last.
     order : ndarray of int, optional
         ``np.argsort(bound)[::-1]`` if already at hand.
     """
 
-    def __init__(self, bound, first=256, order=None):
+    def __init__(self, bound, first=FIRST_BATCH, order=None):
         self.bound = bound
         self.order = np.argsort(bound)[::-1] if order is None else order
         self._start, self._batch = 0, first

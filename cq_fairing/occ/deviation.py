@@ -62,7 +62,7 @@ from OCP.TopAbs import TopAbs_REVERSED
 
 from ..core.closest_points import RestartSamples, closest_points_surface_restarted
 from ..core.evaluation import surface_derivatives
-from ..core.probes import BoundWalk
+from ..core.probes import ROUNDING, BoundWalk
 from ..errors import InvalidInputError, UnsupportedGeometryError
 from .convert import as_face, face_info, face_to_surface
 from .trims import face_region
@@ -73,8 +73,6 @@ DEFAULT_DENSITY = 40
 JUDGED_FRACTION = 0.9   # OCCT measures again every sample at least this share of the maximum
 JUDGED_BLOCK = 64       # samples OCCT measures again per step of the walk down from the largest
 SAME_GEOMETRY = 1e-9    # the core's and OCCT's points agree within this share of the size
-PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured first
-ROUNDING = 1e-12         # share of the size by which evaluation routes may differ
 
 
 def _density(density):
@@ -153,8 +151,8 @@ def sample_face_deviation(original_face, faired_face, density=DEFAULT_DENSITY,
 
     Returns
     -------
-    dict
-        ``uv`` (N, 2), ``points`` (N, 3) on the original, ``faired_points`` (N, 3) at the
+    FaceDeviation
+        A mapping: ``uv`` (N, 2), ``points`` (N, 3) on the original, ``faired_points`` (N, 3) at the
         same parameters on the faired face, ``normals`` (N, 3) of the original,
         ``distance`` (N,) true distance of the original points to the faired surface,
         ``distance_back`` (N,) of the faired points to the original surface,
@@ -218,6 +216,8 @@ def _occt_deviation(original_face, faired_face, uv, points, normals, use_global)
 
 
 FIELD = ("distance", "distance_back", "signed", "mean", "rms")
+KEYS = ("uv", "points", "faired_points", "normals", "parametric", "max", "max_parametric") \
+    + FIELD
 
 
 class FaceDeviation(Mapping):
@@ -227,8 +227,8 @@ class FaceDeviation(Mapping):
     The maximum is measured at once; the per-sample field (``distance``,
     ``distance_back``, ``signed``, ``mean``, ``rms``: a map's values, a report's
     figures) is completed on first read, where the batched check left samples that
-    cannot reach the maximum unmeasured (:func:`_batched`).  Pickled as a plain dict,
-    field included.
+    cannot reach the maximum unmeasured (:class:`BatchedCheck`).  Pickled as a plain
+    dict, field included.
     """
 
     def __init__(self, known, complete):
@@ -248,10 +248,6 @@ class FaceDeviation(Mapping):
 
     def __reduce__(self):
         return dict, (dict(self),)
-
-
-KEYS = ("uv", "points", "faired_points", "normals", "parametric", "max", "max_parametric") \
-    + FIELD
 
 
 def _known(uv, points, faired_points, normals, parametric):
@@ -339,13 +335,14 @@ class BatchedCheck:
         self.ways = (_Way(faired_face, faired, original_face, points, uv),
                      _Way(original_face, original, faired_face, self.faired_points, uv))
         self.slack = ROUNDING * max(original.size, faired.size)
-        self.walk = BoundWalk(self.parametric, PREFILTER_SAMPLES)
+        self.walk = BoundWalk(self.parametric)
         self.level, self.judged = 0.0, None
 
     def exceeds(self, tol):
         """True when the check's maximum is certain to exceed ``tol``, found on the
-        ``PREFILTER_SAMPLES`` samples of largest parametric distance (their judged
-        maximum is a lower bound of the full one).  ``False`` says nothing."""
+        walk's first batch (:data:`~cq_fairing.core.probes.FIRST_BATCH` samples of
+        largest parametric distance: their judged maximum is a lower bound of the full
+        one).  ``False`` says nothing."""
         if self.walk.taken().size == 0:
             if self.walk.next_bound <= tol:
                 return False

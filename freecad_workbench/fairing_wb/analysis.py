@@ -22,14 +22,11 @@ from cq_fairing.core.closest_points import (
 )
 from cq_fairing.core.evaluation import surface_derivatives
 from cq_fairing.core.fairness import grid_curvatures
-from cq_fairing.core.probes import BoundWalk
+from cq_fairing.core.probes import FIRST_BATCH, ROUNDING, BoundWalk
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "SampledDeviation", "curvature", "points_and_normals",
            "foot_points"]
-
-PREFILTER_SAMPLES = 256  # samples of largest parametric distance measured first
-ROUNDING = 1e-12        # share of the extent by which evaluation routes may differ
 
 
 def sample_parameters(uv_range, count):
@@ -191,7 +188,7 @@ class SampledDeviation:
 
         Both distances at a sample are at most its parametric distance (each Newton run
         starts at the same parameter and never moves away), so the samples are measured
-        in decreasing order of it, in doubling batches from ``PREFILTER_SAMPLES``, until
+        in decreasing order of it, in doubling batches from ``FIRST_BATCH``, until
         the next one's is below the largest distance found by more than ``ROUNDING`` of
         the source's extent (the parametric distance and the Newton runs evaluate the
         surfaces by different routes, equal to rounding).  No sample passed over can
@@ -199,12 +196,12 @@ class SampledDeviation:
         the maximum is the full one."""
         _, parametric, order, _ = self._candidate(faired)
         slack = ROUNDING * self.source.size
-        walk, best = BoundWalk(parametric, PREFILTER_SAMPLES, order), 0.0
+        walk, best = BoundWalk(parametric, order=order), 0.0
         while walk.next_bound > best - slack:
             best = max(best, float(self.distances(faired, walk.take()).max()))
         return best
 
-    def exceeds(self, faired, tol, samples=PREFILTER_SAMPLES):
+    def exceeds(self, faired, tol, samples=FIRST_BATCH):
         r"""True when :meth:`__call__` of ``faired`` exceeds ``tol`` for certain, found on
         a few samples: only a sample whose parametric distance
         :math:`|F(u_i, v_i) - S(u_i, v_i)|` exceeds ``tol`` can exceed it either way (both
