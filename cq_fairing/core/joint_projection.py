@@ -287,16 +287,17 @@ def plain_target_options(grading="auto", borders="auto"):
             if given == "auto"}
 
 
-def model_grading(grading, several):
-    """The ``grading`` of the wavelet method's tolerance search on the faces of a model
-    (``several``: more than one face): ``"auto"`` becomes ``"spans"`` there, without
-    targets graded by the error.  Such a net places its own knots and slides along its
-    surface, while an edge a face shares with a neighbour faired alone keeps its
-    p-curve, so the joins open: the
+def model_grading(grading, several, method, by_tolerance):
+    """The ``grading`` of the faces of a model (``several``: more than one face): in the
+    wavelet method's tolerance search (``method``, ``by_tolerance``; other searches take
+    no grading) ``"auto"`` becomes ``"spans"``, without targets graded by the error.
+    Such a net places its own knots and slides along its surface, while an edge a face
+    shares with a neighbour faired alone keeps its p-curve, so the joins open: the
     testtoler shell faired face by face at 0.01 kept 10 faces faired with 11 430 poles
-    in 32.7 s that way, against 11 322 poles in 4.7 s (``method="adaptive"``
-    projects those p-curves anew)."""
-    return "spans" if several and grading == "auto" else grading
+    in 32.7 s that way, against 11 322 poles in 4.7 s (``method="adaptive"`` projects
+    those p-curves anew)."""
+    searched = several and method == "wavelet" and by_tolerance
+    return "spans" if searched and grading == "auto" else grading
 
 
 def joint_targets(sources, faired):

@@ -260,8 +260,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
     selected = _selection(faces, len(originals))
     options = dict(method=method, objective=objective, borders=borders, boundary=boundary,
                    target_degree=target_degree, density=density, details=details,
-                   grading=model_grading(grading, len(originals) > 1 and method == "wavelet"
-                                         and n is None))
+                   grading=model_grading(grading, len(originals) > 1, method, n is None))
     pool = None if engine is not None or jobs == 1 and face_timeout is None else \
         ProcessFaces(jobs, face_timeout)
     try:

@@ -706,8 +706,6 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
     # faces that meet another face search quasi-uniform, free-border targets, as
     # cq-fairing fair's (the joint projection shares their knots and sets their borders)
     plain = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
-    several = (found is not None and settings["method"] == "wavelet"
-               and settings["tolerance"] is not None)
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -716,7 +714,7 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                                                                                    element)
             try:
                 result = fair_face(element, **_plain(face_settings, done in plain,
-                                                     several),
+                                                     found is not None, settings),
                                    **{**settings, "target": own}, domain=domains[sub])
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
@@ -841,17 +839,18 @@ def _nothing_faired(source, surface, method):
             and surface.v_space.same_as(source.v_space))
 
 
-def _plain(face_settings, joined, several):
-    """``face_settings`` of a face; in a model searched by the wavelet method's
-    tolerance search (``several``: more than one face, or neighbours) its grading is
-    :func:`~cq_fairing.core.joint_projection.model_grading`'s,
+def _plain(face_settings, joined, several, settings):
+    """``face_settings`` of a face; in a model (``several``: more than one face, or
+    neighbours) its grading is
+    :func:`~cq_fairing.core.joint_projection.model_grading`'s for the ``settings``,
     and one that shares a held join searches the targets of
     :func:`~cq_fairing.core.joint_projection.plain_target_options` (:func:`fair_shapes`)."""
     grading = face_settings.get("grading", "auto")
-    settings = {**face_settings, "grading": model_grading(grading, several)}
+    own = {**face_settings, "grading": model_grading(grading, several, settings["method"],
+                                                     settings["tolerance"] is not None)}
     if not joined:
-        return settings
-    return {**settings, **plain_target_options(grading, face_settings.get("borders", "auto"))}
+        return own
+    return {**own, **plain_target_options(grading, face_settings.get("borders", "auto"))}
 
 
 def _kept_by_joins(element, why, tolerance):
