@@ -243,15 +243,34 @@ class SurfaceSampler:
     mask of the samples that lie on the face.  The sparse collocation matrices
     (:math:`p + 1` non-zeros per row) are cached per spline space, so a candidate's
     grid :math:`M_u P M_v^T` costs :math:`O((n_u k_v + n_u n_v)(p + 1))` work
-    (:func:`_on_grid`), where dense factors cost :math:`O(n_u k_u k_v + n_u n_v k_v)`.
+    (:func:`_grid_of`), where dense factors cost :math:`O(n_u k_u k_v + n_u n_v k_v)`.
+    The measures work on the whole grid laid out coordinate by coordinate, ``(n_v, d,
+    n_u)``, so that no product is copied into another layout, and take the largest
+    value over the samples on the face.
     """
 
     def __init__(self, grid, surface):
         self.grid = grid
         self.u, self.v, self.inside = grid
-        self._everywhere = bool(np.all(self.inside))
+        self._on_face = None if np.all(self.inside) else np.asarray(self.inside).T
         self._cache = {}
-        self.reference = self.evaluate(surface)
+        self._reference = self._points(surface)
+
+    @property
+    def reference(self):
+        """The source's points on the face's samples, (q, 3) in row-major order of
+        ``(u, v)``."""
+        return self._samples(self._reference)
+
+    def evaluate(self, surface):
+        """``surface``'s points on the face's samples, (q, 3) in row-major order of
+        ``(u, v)``."""
+        return self._samples(self._points(surface))
+
+    def _samples(self, grid):
+        """The samples of a ``(n_v, d, n_u)`` grid on the face, (q, d), ``(u, v)``
+        row-major."""
+        return grid.transpose(2, 0, 1)[self.inside]
 
     def _matrix(self, space, x, nu=0):
         key = (space.key, x.size, nu)
@@ -259,37 +278,37 @@ class SurfaceSampler:
             self._cache[key] = space.collocation(x, nu)
         return self._cache[key]
 
-    def evaluate(self, surface):
+    def _largest(self, field):
+        """The largest value of a ``(n_v, n_u)`` field over the samples on the face."""
+        return float((field if self._on_face is None else field[self._on_face]).max())
+
+    def _points(self, surface):
+        """``surface``'s points on the whole grid, ``(n_v, 3, n_u)``."""
         net = surface.homogeneous() if surface.is_rational else surface.poles
         mu, mv = self._matrix(surface.u_space, self.u), self._matrix(surface.v_space, self.v)
-        grid = self._on_face(_on_grid(mu, mv, net))
+        grid = _grid_of(mv, _along_u(mu, net))
         return grid[:, :-1] / grid[:, -1:] if surface.is_rational else grid
-
-    def _on_face(self, grid):
-        """The samples of ``grid`` (n_u, n_v, d) on the face, (q, d) in row-major order:
-        the whole grid, reshaped, where every sample is on the face (the mask would select
-        the same array at three times the cost)."""
-        return grid.reshape(-1, grid.shape[-1]) if self._everywhere else grid[self.inside]
 
     def parametric(self, faired):
         """Largest ``|S_f(u, v) - S(u, v)|``: an upper bound of the true distance."""
-        points = self.evaluate(faired)
-        return float(np.linalg.norm(points - self.reference, axis=1).max())
+        offset = self._points(faired) - self._reference
+        return math.sqrt(self._largest(_dot(offset, offset)))
 
     def normal(self, faired):
         """Largest distance to the faired surface's tangent planes at the same parameters.
 
         A first-order estimate of the true distance, far below the parametric one where
         fairing shifts the surface along itself (bumpy nets); OCCT checks the result.
+        At a sample whose normal :math:`S_u \\times S_v` vanishes (below 1e-12 of the
+        largest on the face) the estimate is the parametric distance.
         """
         net = faired.homogeneous() if faired.is_rational else faired.poles
         mu, mv = self._matrix(faired.u_space, self.u), self._matrix(faired.v_space, self.v)
         du = self._matrix(faired.u_space, self.u, 1)
         dv = self._matrix(faired.v_space, self.v, 1)
-        along_u = _rows(mu, net).swapaxes(0, 1)         # S and S_v share it
-        h = self._on_face(_across(mv, along_u))
-        hu = self._on_face(_on_grid(du, mv, net))
-        hv = self._on_face(_across(dv, along_u))
+        along_u = _along_u(mu, net)                     # S and S_v share it
+        h, hu, hv = (_grid_of(mv, along_u), _grid_of(mv, _along_u(du, net)),
+                     _grid_of(dv, along_u))
         if faired.is_rational:  # quotient rule: S = X / w, S_u = (X_u - w_u S) / w
             w = h[:, -1:]
             points = h[:, :-1] / w
@@ -297,32 +316,39 @@ class SurfaceSampler:
             sv = (hv[:, :-1] - hv[:, -1:] * points) / w
         else:
             points, su, sv = h, hu, hv
-        normal = np.cross(su, sv)
-        length = np.linalg.norm(normal, axis=1)
-        offset = self.reference - points
-        ok = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+        normal = _cross(su, sv)
+        length = np.sqrt(_dot(normal, normal))
+        offset = self._reference - points
+        ok = length > 1e-12 * max(1.0, self._largest(length))
+        along_normal = np.abs(_dot(offset, normal))
         if ok.all():   # a tangent plane at every sample
-            return float((np.abs(np.einsum("ij,ij->i", offset, normal)) / length).max())
-        dist = np.linalg.norm(offset, axis=1)
-        dist[ok] = np.abs(np.einsum("ij,ij->i", offset[ok], normal[ok])) / length[ok]
-        return float(dist.max())
+            return self._largest(along_normal / length)
+        dist = np.sqrt(_dot(offset, offset))
+        np.divide(along_normal, length, out=dist, where=ok)
+        return self._largest(dist)
 
 
-def _on_grid(mu, mv, net):
-    r"""The grid :math:`G_{ab} = \sum_{ij} (M_u)_{ai} P_{ij} (M_v)_{bj}`, shape
-    (n_u, n_v, d), from sparse collocation matrices ``mu`` (n_u, k_u) and ``mv``
-    (n_v, k_v) and the net ``P`` (k_u, k_v, d): two sparse products, each on one thread.
-    """
-    return _across(mv, _rows(mu, net).swapaxes(0, 1))
+def _along_u(mu, net):
+    """The net (k_u, k_v, d) contracted with the sparse ``mu`` (n_u, k_u) along u, laid
+    out ``(k_v, d, n_u)`` for the product along v."""
+    flat = mu @ net.reshape(net.shape[0], -1)                    # (n_u, k_v * d)
+    return flat.reshape(mu.shape[0], net.shape[1], -1).transpose(1, 2, 0).copy()
 
 
-def _across(mv, along_u):
-    """The grid (n_u, n_v, d) from the net contracted along u, ``along_u`` (k_v, n_u, d)."""
-    return _rows(mv, along_u).swapaxes(0, 1)
+def _grid_of(mv, along_u):
+    r"""The grid :math:`G_{ab} = \sum_{ij} (M_u)_{ai} P_{ij} (M_v)_{bj}` laid out
+    ``(n_v, d, n_u)``, from :func:`_along_u`'s product and the sparse ``mv`` (n_v, k_v)."""
+    flat = mv @ along_u.reshape(along_u.shape[0], -1)
+    return flat.reshape((mv.shape[0],) + along_u.shape[1:])
 
 
-def _rows(matrix, array):
-    """``matrix @ array`` over the first axis of ``array`` (k, ...), a sparse matrix
-    times a dense array."""
-    flat = matrix @ array.reshape(array.shape[0], -1)
-    return flat.reshape((matrix.shape[0],) + array.shape[1:])
+def _dot(a, b):
+    """The dot products of two ``(n_v, 3, n_u)`` grids, ``(n_v, n_u)``."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def _cross(a, b):
+    """The cross products of two ``(n_v, 3, n_u)`` grids, ``(n_v, 3, n_u)``."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)

@@ -76,3 +76,29 @@ def test_the_one_thread_product_is_numpys(rows, terms, columns, dim, seed):
     a, b = rng.normal(size=(rows, terms)), rng.normal(size=(terms, columns, dim))
     np.testing.assert_allclose(one_thread_product(a, b), np.tensordot(a, b, axes=(1, 0)),
                                rtol=1e-12, atol=1e-12 * terms)
+
+
+def test_where_the_normal_vanishes_the_estimate_is_the_parametric_distance():
+    """A net with its first u-row collapsed to one point (a sphere's pole): there
+    :math:`S_u \\times S_v = 0`, so those samples count their parametric distance, the
+    others their distance to the tangent plane, computed here from the Taylor-form
+    derivatives."""
+    surface, faired = _surface(False), _surface(False, seed=8)
+    poles = faired.poles.copy()
+    poles[0] = poles[0].mean(axis=0)
+    faired = cf.make_surface(poles, faired.u_knots, faired.v_knots, (3, 2))
+    grid = _sampler_grid(surface)
+    u, v, inside = grid
+    uu, vv = (x[inside] for x in np.meshgrid(u, v, indexing="ij"))
+    d = surface_derivatives(faired, uu, vv, 1)
+    normal = np.cross(d[(1, 0)], d[(0, 1)])
+    length = np.linalg.norm(normal, axis=1)
+    offset = surface_derivatives(surface, uu, vv, 0)[(0, 0)] - d[(0, 0)]
+    degenerate = length <= 1e-12 * length.max()
+    assert degenerate.any() and not degenerate.all()
+    expected = np.where(degenerate, np.linalg.norm(offset, axis=1),
+                        np.abs(np.einsum("ij,ij->i", offset, normal)) /
+                        np.where(degenerate, 1.0, length))
+    assert SurfaceSampler(grid, surface).normal(faired) == pytest.approx(expected.max(),
+                                                                          rel=1e-10)
+
