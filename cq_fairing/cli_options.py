@@ -75,7 +75,8 @@ def add_fairing_options(parser):
                              "free), free = plain projection, pinned = always")
     parser.add_argument("--grading", choices=GRADINGS,
                         help="with --method wavelet and --tol: auto = also targets graded "
-                             "like a face's knot spans, and where uniform ones keep more "
+                             "like a face's knot spans, with pinned borders targets refined "
+                             "towards them, and where uniform ones keep more "
                              "than a quarter of its poles targets graded by the error (the "
                              "adaptive method's knots); the fewest poles win (default; in "
                              "a model of several faces: spans; a face that shares a held "

@@ -49,19 +49,21 @@ The options
     for faces.
 ``grading`` : {"auto", "spans", "uniform"}, default "auto"
     Occ faces only: the targets of the bisections on a face's samples (``"wavelet"``
-    with ``tol``).  ``"auto"``: quasi-uniform targets and, on a face whose knot spans
-    are graded, targets graded like them (:func:`~cq_fairing.core.plans.graded_space`),
-    and, in the local search, where such a target keeps more than a quarter of the
-    face's poles (and more than 100), targets graded by the error: the adaptive
-    method's compact fit, with free borders unless ``borders="pinned"``
-    (:func:`~cq_fairing.core.face_search.search_face`); the fewest poles win;
-    ``"spans"``: quasi-uniform targets and those graded like the face's spans;
+    with ``tol``).  ``"spans"``: quasi-uniform targets and, on a face whose knot spans
+    are graded, targets graded like them (:func:`~cq_fairing.core.plans.graded_space`);
+    the fewest poles win.  ``"auto"``: those, with borders pinned to the face's border
+    curves targets refined towards the borders
+    (:func:`~cq_fairing.core.plans.end_graded_space`), and, in the local search, where
+    such a target keeps more than a quarter of the face's poles (and more than 100),
+    targets graded by the error: the adaptive method's compact fit, with free borders
+    unless ``borders="pinned"`` (:func:`~cq_fairing.core.face_search.search_face`).
     ``"uniform"``: quasi-uniform targets only, the method's own :math:`V_n`.  In a model
     of several faces ``"auto"`` is ``"spans"``
-    (:func:`~cq_fairing.core.joint_projection.model_grading`), and a face that shares a
-    held join with another face searches quasi-uniform targets, whose knots its
-    neighbours share along the join.  Refused
-    with ``n``.  The command line's ``--grading``, the workbench's ``Grading``.
+    (:func:`~cq_fairing.core.joint_projection.model_grading`: the nets that win alone
+    with fewer poles may open the joins between faces), and a face that shares a held
+    join with another face searches quasi-uniform targets, whose knots its neighbours
+    share along the join.  Refused with ``n``.  The command line's ``--grading``, the
+    workbench's ``Grading``.
 ``order`` : int 2 .. 6, default 6
     Degree of the least-squares fit of ``search="polyfit"``; only with it.
 ``measure`` : {"geometric", "parametric"}, default "geometric"

@@ -13,7 +13,7 @@ from .decomposition import decomposition
 from .schedule import plan_spaces
 from .spaces import SplineSpace
 
-__all__ = ["target_space", "graded_space", "has_graded_spans", "direction_target",
+__all__ = ["target_space", "graded_space", "end_graded_space", "has_graded_spans", "direction_target",
            "resolved_plan", "checked_plan", "largest_resolved_scale"]
 
 
@@ -22,8 +22,9 @@ def _default_target_degree(source_degree):
 
 
 def target_space(source, n, degree=None, grading="uniform"):
-    """The target ``V_n`` on the source's domain, validated: quasi-uniform, or with
-    ``grading="source"`` graded like the source's spans (:func:`graded_space`).
+    """The target ``V_n`` on the source's domain, validated: quasi-uniform, with
+    ``grading="source"`` graded like the source's spans (:func:`graded_space`), or with
+    ``grading="ends"`` refined towards both ends (:func:`end_graded_space`).
 
     Raises
     ------
@@ -46,7 +47,30 @@ def target_space(source, n, degree=None, grading="uniform"):
         )
     if grading == "source":
         return graded_space(source, int(n), degree)
+    if grading == "ends":
+        return end_graded_space(int(n), degree, source.domain)
     return SplineSpace.quasi_uniform(int(n), degree, source.domain)
+
+
+def end_graded_space(n, degree, domain):
+    r"""The ``n``-span space of ``degree`` on ``domain`` :math:`[a, b]` whose spans shorten
+    towards both ends, halfway between equal spans and the Chebyshev-Lobatto points:
+
+    .. math:: t_i = a + (b - a)\left(\frac{i}{2n} + \frac{1 - \cos(\pi i / n)}{4}\right),
+              \qquad i = 0..n,
+
+    so the end spans are about :math:`2 / (2 + \pi) \approx 0.39` times the middle ones
+    for large :math:`n`.  It suits a projection whose border rows are pinned to the
+    source's border curves: the interior must bend to meet them, so the error gathers
+    next to the borders (the noisy 50 x 80 blade at 0.05: 11 x 11 poles against 12 x 15
+    quasi-uniform ones).
+    """
+    x = np.arange(n + 1) / n
+    a, b = domain
+    t = a + (b - a) * (0.5 * x + 0.25 * (1.0 - np.cos(np.pi * x)))
+    t[0], t[-1] = a, b
+    return SplineSpace(int(degree), np.concatenate([np.full(degree, a), t,
+                                                    np.full(degree, b)]))
 
 
 def has_graded_spans(space):

@@ -90,7 +90,7 @@ def max_scales(surface, target_degree):
 
 
 def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(True, True),
-                  projection=None, grading="uniform", measured=None):
+                  projection=None, grading="uniform", measured=None, fewer_than=None):
     """Fewest-poles ``(n_u, n_v)`` with ``deviation(faired) <= tol``.
 
     Parameters
@@ -109,14 +109,20 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     projection : callable, optional
         ``projection(target_u, target_v) -> BSplineSurface`` (``None`` keeps a
         direction) in place of the plain L2 projection :func:`project`.
-    grading : {"uniform", "source"}
+    grading : {"uniform", "source", "ends"}
         The targets' knots (:func:`~cq_fairing.core.plans.target_space`): quasi-uniform,
-        or graded like the source's spans.
+        graded like the source's spans, or refined towards both ends.
     measured : dict, optional
         ``{(u space key, v space key): (faired, deviation)}`` of candidates measured
         already, shared by searches of one surface with one ``deviation`` and ``finish``
         (the two gradings: a direction whose spans are equal gets the same targets in
         both); filled here.
+    fewer_than : int, optional
+        Poles of another family's winner, for a family that only matters where it
+        beats it: a candidate with at least as many poles is taken as passing without
+        being measured, and a winner with as many is none (``None``).  The bisection's
+        path then differs from the full one, so it may miss a smaller candidate the full
+        search finds; it never costs the other families anything.
 
     Returns
     -------
@@ -125,6 +131,8 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     faired : BSplineSurface
     dev : float
     evaluations : int
+
+    or ``None`` where no candidate with fewer than ``fewer_than`` poles was found.
 
     Raises
     ------
@@ -161,6 +169,8 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     def run(n):
         if any(k is not None and k < low for k, low in zip(n, lowest)):
             return None, np.inf   # a closed direction cannot close on so few spans
+        if fewer_than is not None and _poles(n, surface, target_degree) >= fewer_than:
+            return None, -np.inf  # cannot win: taken as passing, not measured
         if n not in cache:
             key = tuple(None if s is None else s.key for s in (space(0, n[0]), space(1, n[1])))
             if key not in measured:
@@ -183,6 +193,8 @@ def search_scales(surface, tol, target_degree, deviation, finish=None, keep=(Tru
     best = min((_shrink(p, tol, run) for p in feasible),
                key=lambda n: _poles(n, surface, target_degree))
     faired, dev = run(best)
+    if faired is None:
+        return None
     return (space(0, best[0]), space(1, best[1])), faired, dev, len(cache)
 
 

@@ -43,8 +43,9 @@ PROPERTIES = (
     ("App::PropertyEnumeration", "Grading", "Fairing",
      "wavelet method in Tolerance mode: auto (targets graded like a face's knot spans "
      "too, and by the error where quasi-uniform ones keep more than a quarter of the "
-     "control points; the fewest win; several faces: spans), spans (quasi-uniform and "
-     "span-graded targets) or uniform (quasi-uniform targets only)", False),
+     "control points, and refined towards pinned borders; the fewest win; several "
+     "faces: spans), spans (quasi-uniform and span-graded targets) or uniform "
+     "(quasi-uniform targets only)", False),
     ("App::PropertyEnumeration", "Boundary", "Fairing",
      "free: boundary may move; corners: corners stay; edges: faired boundary curves", False),
     ("App::PropertyEnumeration", "Joins", "Fairing",

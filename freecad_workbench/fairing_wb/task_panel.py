@@ -168,7 +168,8 @@ class FairSurfacePanel:
         self.grading = _row(layout, "Grading:", QtWidgets.QComboBox(), "fairing_grading")
         self.grading.addItems(list(make.GRADINGS))
         self.grading.setToolTip("wavelet, Tolerance mode: auto = also targets graded like "
-                                "the face's knot spans, and where quasi-uniform ones keep "
+                                "the face's knot spans, targets refined towards pinned "
+                                "borders, and where quasi-uniform ones keep "
                                 "more than a quarter of its control points targets graded "
                                 "by the error (the adaptive method's knots); the fewest "
                                 "control points win (several faces: spans); spans = "

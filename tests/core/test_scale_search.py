@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 import cq_fairing as cf
 from cq_fairing.core.evaluation import surface_derivatives
 from cq_fairing.core.geometry import one_thread_product
-from cq_fairing.core.scale_search import SurfaceSampler
+from cq_fairing.core.plans import target_space
+from cq_fairing.core.scale_search import SurfaceSampler, project, search_scales
 
 
 def _surface(rational, seed=3):
@@ -102,3 +103,31 @@ def test_where_the_normal_vanishes_the_estimate_is_the_parametric_distance():
     assert SurfaceSampler(grid, surface).normal(faired) == pytest.approx(expected.max(),
                                                                           rel=1e-10)
 
+
+def test_a_family_bounded_by_another_winner_measures_only_fewer_poles():
+    """``search_scales(..., fewer_than=b)`` measures no candidate with ``b`` or more
+    poles, and gives either ``None`` or a candidate with fewer than ``b`` poles within
+    tol; with ``b`` one above the full search's winner it finds that winner."""
+    surface = _surface(False)
+    (u0, u1), (v0, v1) = surface.domain
+    grid = (np.linspace(u0, u1, 40), np.linspace(v0, v1, 30), np.ones((40, 30), bool))
+    sampler = SurfaceSampler(grid, surface)
+    coarsest = project(surface, target_space(surface.u_space, 1, 3),
+                       target_space(surface.v_space, 1, 2))
+    tol = 0.3 * sampler.parametric(coarsest)
+    full = search_scales(surface, tol, (3, 2), sampler.parametric)
+    winner = full[1].shape[0] * full[1].shape[1]
+    for bound in (winner + 1, winner, winner - 1):
+        seen = []
+
+        def measured(faired):
+            seen.append(faired.shape[0] * faired.shape[1])
+            return sampler.parametric(faired)
+
+        found = search_scales(surface, tol, (3, 2), measured, fewer_than=bound)
+        assert all(poles < bound for poles in seen)
+        if found is not None:
+            assert found[1].shape[0] * found[1].shape[1] < bound and found[2] <= tol
+        if bound == winner + 1:
+            assert found is not None and found[1].shape == full[1].shape
+            assert len(seen) < full[3]

@@ -335,13 +335,15 @@ def test_pinned_borders_where_the_free_projection_moves_the_corners():
     """The noisy 50 x 80 blade (poles evenly spaced on clamped uniform knots, so its
     parametric speed changes within its end spans): the plain projection of every size
     the search tries moves the face's corners along the surface, and quasi-uniform
-    free-border targets need 38 x 65 poles at 0.05 mm.  By default the search also pins the target's borders
-    to the source's border curves and keeps far fewer poles (its report says so), within
-    tol by OCCT's projection, with the source's corners kept to round-off by OCCT's
-    evaluation of both faces; the free net of the same size (explicit ``n``) deviates
-    more than tol, the pinned one (``borders="pinned"``) does not.  With free borders
-    and ``grading="auto"`` the uniform targets keep more than a quarter of the poles,
-    and targets graded by the error win with fewer, within tol by OCCT's check."""
+    free-border targets need 38 x 65 poles at 0.05 mm.  By default the search also pins
+    the target's borders to the source's border curves and keeps far fewer poles (its
+    report says so), within tol by OCCT's projection, with the source's corners kept to
+    round-off by OCCT's evaluation of both faces; its targets refined towards the pinned
+    borders keep fewer poles than quasi-uniform pinned ones, and the free net of the
+    latter's size (explicit ``n``) deviates more than tol, the pinned one
+    (``borders="pinned"``) does not.  With free borders and ``grading="auto"`` the
+    uniform targets keep more than a quarter of the poles, and targets graded by the
+    error win with fewer, within tol by OCCT's check."""
     from cq_fairing.core.geometry import make_surface
     from cq_fairing.occ.builders import surface_to_natural_face
     from tests.freecad.face_references import NOISY, noisy_blade_net
@@ -361,6 +363,10 @@ def test_pinned_borders_where_the_free_projection_moves_the_corners():
     corners = [0.0, 1.0]
     np.testing.assert_allclose(occ_points(report.face, corners, corners),
                                occ_points(face, corners, corners), rtol=0, atol=1e-9)
-    n = (report.poles_after[0] - 3, report.poles_after[1] - 3)
+    assert "refined towards the pinned borders" in report.message
+    uniform = fair_face(face, tol=tol, borders="pinned", grading="uniform", details=False)
+    check_within(uniform, face, tol)
+    assert np.prod(report.poles_after) < np.prod(uniform.poles_after)
+    n = (uniform.poles_after[0] - 3, uniform.poles_after[1] - 3)
     assert fair_face(face, n=n, details=False).max_deviation > tol
     assert fair_face(face, n=n, borders="pinned", details=False).max_deviation <= tol
