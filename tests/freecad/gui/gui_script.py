@@ -22,6 +22,7 @@ sys.path.insert(0, os.path.join(REPO, "tests", "freecad"))
 import FreeCAD  # noqa: E402
 import FreeCADGui as Gui  # noqa: E402
 from fairing_wb.qt import QtCore, QtGui, QtWidgets  # noqa: E402
+from face_references import load as load_references  # noqa: E402
 from fixtures import status_ok  # noqa: E402
 
 RESULTS = []
@@ -416,7 +417,7 @@ def run():
     error = find("fairing_error").text()
     check("error shown in the panel", "out of range" in error, error)
     # Timed Preview on the 50 x 80 face: target mode, then tolerance mode (the default
-    # search, the command line's: its 12 x 15 net, tests/data/face_references.npz).
+    # search, the command line's: its net in tests/data/face_references.npz).
     find("fairing_target_u").setValue(18)
     find("fairing_target_v").setValue(26)
     timing("target preview on 50x80", timed_preview())
@@ -430,8 +431,9 @@ def run():
     find("fairing_search").setCurrentText("local")
     best = timed_preview()
     figures = find("fairing_figures").text()
-    check("preview figures shown", "50 x 80 -> 12 x 15" in figures and "max deviation" in figures,
-          figures)
+    expected = "50 x 80 -> {} x {}".format(*load_references()["wavelet/noisy"]["poles"].shape[:2])
+    check("preview figures shown", expected in figures and "max deviation" in figures,
+          f"{figures} (expected {expected})")
     timing("tolerance preview on 50x80", best, figures)
     grab_window(os.path.join(ARTIFACTS, "fair_surface_panel.png"))
     undo_before = doc.UndoCount
