@@ -32,11 +32,12 @@ notes say when the graded ones did): quasi-uniform targets cannot follow a gradi
 the shape has (the IEA blade's spanwise stations, 74 to 1: 17 x 9 poles against 11 x 9
 graded), and graded ones waste spans on a grading it does not have (a testtoler strip's
 refined end: 19 x 4 against 10 x 4).  Each bisection runs with free borders (the plain
-projection) and with borders pinned to the source's border curves; the pinned ones also
-on targets refined towards the borders (:func:`~cq_fairing.core.plans.end_graded_space`),
-where a pinned projection's error gathers (the noisy 50 x 80 blade at 0.05: 11 x 11
-poles against 12 x 15 quasi-uniform ones).  They aim at ``MARGIN * tol`` (room for excursions
-between samples); the last one aims at ``tol`` itself.  A core step rule (``"linear"``,
+projection) and with borders pinned to the source's border curves; with
+``grading="auto"`` the pinned ones also on targets refined towards the borders
+(:func:`~cq_fairing.core.plans.end_graded_space`), where a pinned projection's error
+gathers (the noisy 50 x 80 blade at 0.05: 11 x 11 poles against 12 x 15 quasi-uniform
+ones).  They aim at ``MARGIN * tol`` (room for excursions between samples); the last one
+aims at ``tol`` itself.  A core step rule (``"linear"``,
 ``"guaranteed"``, ``"polyfit"``) replaces the first two by the core's search with that
 rule (and its ``measure``).  The adaptive method lets the core choose non-uniform
 targets at ``tol``, then at ``MARGIN * tol``; the energy method likewise keeps the net
@@ -234,10 +235,10 @@ def search_face(surface, tol, grid, finish, check, *, n=None, target_degree=None
     grading : {"auto", "spans", "uniform"}
         The bisections' targets (:func:`_bisected`): with ``"spans"`` also targets graded
         like the source's spans where they are graded; with ``"auto"`` those, with pinned
-        borders targets refined towards them, and, in the
-        local search at ``tol``, targets graded by the error (the adaptive method's
-        compact fit, with free borders unless ``borders="pinned"``) in place of a
-        candidate that keeps many poles (:func:`_error_graded`).
+        borders targets refined towards them, and, in the local search at ``tol``,
+        targets graded by the error (the adaptive method's compact fit, with free borders
+        unless ``borders="pinned"``) in place of a candidate that keeps many poles
+        (:func:`_error_graded`).
     borders : {"auto", "free", "pinned"}
         The border rows of the bisections' targets (:func:`_bisected`) and of explicit
         scales ``n``: the plain projection (``"free"``), pinned to the source's border
@@ -367,8 +368,7 @@ def _verified(source, pieces, attempts):
 def _keeps_many(source, faired):
     """Whether ``faired`` keeps more than ``ERROR_GRADED_SHARE`` of the source's poles
     and more than ``ERROR_GRADED_POLES``."""
-    return _poles(faired) > max(ERROR_GRADED_SHARE * source.shape[0] * source.shape[1],
-                       ERROR_GRADED_POLES)
+    return _poles(faired) > max(ERROR_GRADED_SHARE * _poles(source), ERROR_GRADED_POLES)
 
 
 def _error_graded(source, pieces, target, rival):

@@ -13,8 +13,8 @@ from .decomposition import decomposition
 from .schedule import plan_spaces
 from .spaces import SplineSpace
 
-__all__ = ["target_space", "graded_space", "end_graded_space", "has_graded_spans", "direction_target",
-           "resolved_plan", "checked_plan", "largest_resolved_scale"]
+__all__ = ["target_space", "graded_space", "end_graded_space", "has_graded_spans",
+           "direction_target", "resolved_plan", "checked_plan", "largest_resolved_scale"]
 
 
 def _default_target_degree(source_degree):

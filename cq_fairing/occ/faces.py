@@ -214,12 +214,12 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         ``method="wavelet"`` with ``tol``: the targets of the bisections on the face's
         samples.  ``"auto"``: quasi-uniform ones, where the face's knot spans are
         graded ones graded like them, with pinned borders ones refined towards them
-        (:func:`~cq_fairing.core.plans.end_graded_space`), and
-        where those keep more than a quarter of the
-        face's poles, ones graded by the error (the adaptive method's compact fit, with
-        free borders unless ``borders="pinned"``); the fewest poles win (the report's
-        message says when graded ones won); ``"spans"``: quasi-uniform ones and those
-        graded like the face's spans; ``"uniform"``: quasi-uniform ones only.
+        (:func:`~cq_fairing.core.plans.end_graded_space`), and where those keep more
+        than a quarter of the face's poles, ones graded by the error (the adaptive
+        method's compact fit, with free borders unless ``borders="pinned"``); the fewest
+        poles win (the report's message says when graded ones won); ``"spans"``:
+        quasi-uniform ones and those graded like the face's spans; ``"uniform"``:
+        quasi-uniform ones only.
 
     Returns
     -------
