@@ -403,3 +403,35 @@ def _leaves(x, step, bounds):
     """True where a parameter on a border of ``bounds`` would step out of it."""
     low, high = bounds
     return ((x <= low) & (step < 0)) | ((x >= high) & (step > 0))
+
+
+def nearer_starts(surface, points, uv, seeds, at_uv=None):
+    r"""Start parameters of closest-point runs on ``surface``: per point, of ``uv`` and
+    ``seeds`` (both (q, 2), in the domain) the one whose surface point is nearer, with
+    that distance; ``at_uv``: the distances at ``uv`` where already known (evaluated
+    otherwise).
+
+    A run of :func:`closest_points_surface_restarted` returns a distance at most that of
+    its start (its Newton steps only bring the foot nearer), so the distance returned
+    here bounds the run's from above.  The seeds are typically the foot points of a
+    nearby surface measured before (a polished net after its unpolished one), where
+    :math:`|S(s_i) - p_i|` bounds far more tightly than the same-parameter distance of a
+    net that slides along its source.
+
+    Returns
+    -------
+    starts : ndarray, shape (q, 2)
+    bound : ndarray, shape (q,)
+    """
+    points = np.asarray(points, dtype=float)
+    bounds = [np.linalg.norm(_derivatives_in_domain(surface, *_clamped(surface, p), 0)[(0, 0)]
+                             - points, axis=1) if known is None else known
+              for p, known in ((uv, at_uv), (seeds, None))]
+    seeded = bounds[1] < bounds[0]
+    return np.where(seeded[:, None], seeds, uv), np.where(seeded, bounds[1], bounds[0])
+
+
+def _clamped(surface, uv):
+    """``(u, v)`` of ``uv`` (q, 2) clamped into ``surface``'s domain."""
+    (u0, u1), (v0, v1) = surface.domain
+    return clamp(uv[:, 0], u0, u1), clamp(uv[:, 1], v0, v1)

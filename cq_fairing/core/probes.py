@@ -619,9 +619,12 @@ class BoundWalk:
             return -np.inf
         return float(self.bound[self.order[self._start]])
 
-    def take(self):
-        """The next batch of sample indices, in decreasing order of their bounds."""
+    def take(self, floor=-np.inf):
+        """The next batch of sample indices, in decreasing order of their bounds, cut
+        before the first whose bound is at most ``floor`` (the caller's level: those
+        cannot reach it)."""
         batch = self.order[self._start:self._start + self._batch]
+        batch = batch[:np.searchsorted(-self.bound[batch], -floor, side="left")]
         self._start += batch.size
         self._batch *= 2
         return batch

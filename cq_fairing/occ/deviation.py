@@ -60,7 +60,7 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 from OCP.TopAbs import TopAbs_REVERSED
 
-from ..core.closest_points import RestartSamples, closest_points_surface_restarted
+from ..core.closest_points import RestartSamples, closest_points_surface_restarted, nearer_starts
 from ..core.evaluation import surface_derivatives
 from ..core.probes import ROUNDING, BoundWalk
 from ..errors import InvalidInputError, UnsupportedGeometryError
@@ -317,6 +317,13 @@ class BatchedCheck:
     read.  Where OCCT's points differ from the core's, every sample is measured by OCCT
     (:func:`_by_occt`).
 
+    With ``seeds``, the foot points of another faired surface on the same samples
+    (:meth:`seeds` of its check: a polished net after its unpolished one), each way's
+    Newton run at a sample starts from the seed where the seed's point is nearer
+    (:func:`~cq_fairing.core.closest_points.nearer_starts`), and the walk's bound is that
+    nearer distance: a net that slides along its source keeps its samples' feet where
+    they were, far nearer than the same parameters.
+
     Parameters
     ----------
     original_face, faired_face : TopoDS_Face
@@ -324,33 +331,46 @@ class BatchedCheck:
         The core surfaces of both faces (the faired one as built into ``faired_face``).
     reference : (ndarray, ndarray, ndarray)
         :func:`reference_samples` of the original.
+    seeds : (ndarray, ndarray), optional
+        ``(feet on the faired surface, feet on the original)``, each (q, 2).
     """
 
-    def __init__(self, original_face, faired_face, surfaces, reference):
+    def __init__(self, original_face, faired_face, surfaces, reference, seeds=None):
         original, faired = surfaces
         self.faces, self.reference = (original_face, faired_face), reference
         uv, points, _ = reference
         self.faired_points = _core_points(faired, uv)
         self.parametric = np.linalg.norm(self.faired_points - points, axis=1)
-        self.ways = (_Way(faired_face, faired, original_face, points, uv),
-                     _Way(original_face, original, faired_face, self.faired_points, uv))
+        there, back = (None, None) if seeds is None else seeds
+        self.ways = (_Way(faired_face, faired, original_face, points, uv, self.parametric,
+                          there),
+                     _Way(original_face, original, faired_face, self.faired_points, uv,
+                          self.parametric, back))
         self.slack = ROUNDING * max(original.size, faired.size)
-        self.walk = BoundWalk(self.parametric)
+        self.walk = BoundWalk(np.maximum(*(way.bound for way in self.ways)))
         self.level, self.judged = 0.0, None
+        self.pending = 0.0   # largest batched value of the samples taken since judged
 
     def exceeds(self, tol):
-        """True when the check's maximum is certain to exceed ``tol``, found on the
-        walk's first batch (:data:`~cq_fairing.core.probes.FIRST_BATCH` samples of
-        largest parametric distance: their judged maximum is a lower bound of the full
-        one).  ``False`` says nothing."""
-        if self.walk.taken().size == 0:
-            if self.walk.next_bound <= tol:
-                return False
-            self._take()
-        if self.level <= tol:
-            return False
+        """Whether the check's maximum exceeds ``tol``, measuring only what decides it.
+
+        The walk measures the samples whose parametric distance exceeds ``tol``, in
+        batches; OCCT judges the samples measured whenever a batched value exceeds
+        ``tol``, and the first judged maximum above ``tol`` answers ``True`` (the judged
+        maximum of samples measured is a lower bound of the full one).  ``False`` once
+        every sample that could exceed ``tol`` is measured and none does: the maximum
+        :meth:`deviation` gives is then within ``tol``, and it goes on from these
+        samples.  Where OCCT's points differ from the core's the answer is ``False``
+        and :meth:`deviation` measures every sample by OCCT."""
         try:
-            return self._judge() > tol
+            while True:
+                if self.judged is not None and self.judged > tol:
+                    return True
+                if self.pending > tol and self._judge() > tol:
+                    return True
+                if self.walk.next_bound <= tol - self.slack:
+                    return False
+                self._take(tol - self.slack)
         except _NotTheSameGeometry:
             return False
 
@@ -360,7 +380,7 @@ class BatchedCheck:
         try:
             while self.judged is None or self._below_next():
                 while self._below_next():
-                    self._take()
+                    self._take(JUDGED_FRACTION * self.level - self.slack)
                 self._judge()
         except _NotTheSameGeometry:
             points, normals = _points_and_normals(self.faces[0], uv)
@@ -374,16 +394,23 @@ class BatchedCheck:
 
         return FaceDeviation(known, field)
 
+    def seeds(self):
+        """``(feet on the faired surface, feet on the original)`` at every sample, (q, 2)
+        each: the foot points found where measured, the start parameters elsewhere; the
+        ``seeds`` of the check of a nearby surface."""
+        return tuple(way.feet.copy() for way in self.ways)
+
     def _below_next(self):
         """Whether the next sample's parametric distance reaches ``JUDGED_FRACTION`` of
         the level (the largest batched value, then the judged maximum)."""
         return self.walk.next_bound > JUDGED_FRACTION * self.level - self.slack
 
-    def _take(self):
-        """Measure the walk's next batch both ways; before any judging the level follows
-        the largest batched value."""
-        index = self.walk.take()
+    def _take(self, floor=-np.inf):
+        """Measure the walk's next batch both ways (its samples whose bound is above
+        ``floor``); before any judging the level follows the largest batched value."""
+        index = self.walk.take(floor)
         batched = max(float(way.measure(index).max()) for way in self.ways)
+        self.pending = max(self.pending, batched)
         if self.judged is None:
             self.level = max(self.level, batched)
 
@@ -391,19 +418,25 @@ class BatchedCheck:
         """OCCT's judge on every sample measured; the judged maximum becomes the level."""
         taken = self.walk.taken()
         self.level = self.judged = max(way.judge(taken) for way in self.ways)
+        self.pending = 0.0
         return self.judged
 
 
 class _Way:
     """One way of the batched check: the distances of ``points`` (``source_face``'s points
     at ``uv``) to ``target_face``'s surface (the core's ``target``), measured a batch of
-    samples at a time."""
+    samples at a time, each Newton run from ``uv`` or, where its point is nearer, from
+    ``seeds``; :attr:`bound` is the distance at the start (``parametric`` at ``uv``)."""
 
-    def __init__(self, target_face, target, source_face, points, uv):
+    def __init__(self, target_face, target, source_face, points, uv, parametric, seeds=None):
         self.target_face, self.target, self.source_face = target_face, target, source_face
         self.points, self.uv = points, uv
+        if seeds is None:
+            self.starts, self.bound = uv, parametric
+        else:
+            self.starts, self.bound = nearer_starts(target, points, uv, seeds, parametric)
         self.distance = np.zeros(len(points))
-        self.feet = np.zeros((len(points), 2))
+        self.feet = np.array(self.starts, dtype=float)
         self.projected = np.zeros_like(points)
         self._restarts = None
         self._judged = None
@@ -413,9 +446,10 @@ class _Way:
         (:func:`~cq_fairing.core.closest_points.closest_points_surface_restarted`)."""
         if self._restarts is None:
             self._restarts = RestartSamples(self.target)
-        uv = self.uv[index]
+        starts = self.starts[index]
         s, t, distance = closest_points_surface_restarted(
-            self.target, self.points[index], uv[:, 0], uv[:, 1], samples=self._restarts)
+            self.target, self.points[index], starts[:, 0], starts[:, 1],
+            samples=self._restarts)
         self.distance[index], self.feet[index] = distance, np.column_stack([s, t])
         self.projected[index] = _core_points(self.target, self.feet[index])
         return distance

@@ -315,8 +315,11 @@ class _OcctCheck:
 
     Each candidate is measured by one :class:`~cq_fairing.occ.deviation.BatchedCheck`
     on the search grid plus the centres of its cells (:func:`_check_samples`: the check
-    sees between the samples): ``exceeds`` is its cheap lower bound, and the full check
-    goes on from the samples that bound measured.  OCCT's judge there evaluates the
+    sees between the samples): ``exceeds`` measures only what decides ``tol`` (stopping
+    at the first judged value above it), and the full check goes on from the samples it
+    measured.  Each candidate's check starts its Newton runs from the foot points the
+    last candidate's check found, where those are nearer (``seeds`` of
+    :class:`~cq_fairing.occ.deviation.BatchedCheck`).  OCCT's judge there evaluates the
     candidate on a natural face of its surface (the samples lie inside the trim, and the
     trimmed face has the same surface); the accepted candidate alone is put under the
     face's trim (:func:`~cq_fairing.occ.surface_to_face`), which costs more than its
@@ -327,15 +330,19 @@ class _OcctCheck:
         self.face, self.surface, self.grid, self.trimmed = face, surface, grid, trimmed
         self._reference = None
         self._checks, self._deviations = {}, {}
+        self._last = None
 
     def _check(self, faired):
-        """The candidate's :class:`~cq_fairing.occ.deviation.BatchedCheck`."""
+        """The candidate's :class:`~cq_fairing.occ.deviation.BatchedCheck`, seeded with
+        the foot points of the last candidate checked."""
         key = id(faired)
         if key not in self._checks:   # the candidate is kept with its check: ids stay unique
+            seeds = None if self._last is None else self._last.seeds()
             self._checks[key] = (faired, BatchedCheck(
                 self.face, surface_to_natural_face(faired), (self.surface, faired),
-                self._samples()))
-        return self._checks[key][1]
+                self._samples(), seeds))
+        self._last = self._checks[key][1]
+        return self._last
 
     def _samples(self):
         if self._reference is None:

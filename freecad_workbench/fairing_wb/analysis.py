@@ -19,10 +19,11 @@ from cq_fairing.core.closest_points import (
     RestartSamples,
     closest_points_surface,
     closest_points_surface_restarted,
+    nearer_starts,
 )
 from cq_fairing.core.evaluation import surface_derivatives
 from cq_fairing.core.fairness import grid_curvatures
-from cq_fairing.core.probes import FIRST_BATCH, ROUNDING, BoundWalk
+from cq_fairing.core.probes import ROUNDING, BoundWalk
 
 __all__ = ["sample_parameters", "parametric_deviation", "signed_deviation",
            "two_sided_deviation", "SampledDeviation", "curvature", "points_and_normals",
@@ -160,27 +161,26 @@ class SampledDeviation:
         return self._source_samples
 
     def _candidate(self, faired):
-        """``faired``'s points at the samples, its parametric distance
-        :math:`|F(u_i, v_i) - S(u_i, v_i)|` there, the samples in decreasing order of it
-        and its ``RestartSamples``, kept for the last candidate (:meth:`exceeds` then
-        :meth:`__call__` measure the same one)."""
-        if self._last is None or self._last[0] is not faired:
-            points = self._on_grids(faired)
-            parametric = np.linalg.norm(points - self.points, axis=1)
-            self._last = (faired, points, parametric, np.argsort(parametric)[::-1],
-                          RestartSamples(faired))
-        return self._last[1:]
+        """The :class:`_Walk` of ``faired``'s samples, kept for the last candidate
+        (:meth:`exceeds` then :meth:`__call__` go on with the same one), seeded with the
+        foot points the last candidate's walk found."""
+        if self._last is None or self._last.faired is not faired:
+            self._last = _Walk(self, faired, None if self._last is None else self._last.feet)
+        return self._last
 
     def distances(self, faired, index=slice(None)):
         """The two-sided distance at the samples ``index`` (all by default), each sample
-        measured on its own (its value is the same in any batch)."""
-        u, v = self.u[index], self.v[index]
-        faired_points, _, _, faired_samples = self._candidate(faired)
-        there = closest_points_surface_restarted(faired, self.points[index], u, v,
-                                                 samples=faired_samples)[2]
-        back = closest_points_surface_restarted(self.source, faired_points[index], u, v,
-                                                samples=self._restarts())[2]
-        return np.maximum(there, back)
+        measured on its own from its start parameters (its value is the same in any
+        batch); the foot points are kept as the next candidate's seeds."""
+        walk = self._candidate(faired)
+        there, back = walk.starts
+        *feet_there, d_there = closest_points_surface_restarted(
+            faired, self.points[index], *there[index].T, samples=walk.restarts)
+        *feet_back, d_back = closest_points_surface_restarted(
+            self.source, walk.points[index], *back[index].T, samples=self._restarts())
+        walk.feet[0][index], walk.feet[1][index] = np.column_stack(feet_there), \
+            np.column_stack(feet_back)
+        return np.maximum(d_there, d_back)
 
     def __call__(self, faired):
         r"""The largest two-sided distance of ``faired`` over the samples
@@ -188,31 +188,63 @@ class SampledDeviation:
 
         Both distances at a sample are at most its parametric distance (each Newton run
         starts at the same parameter and never moves away), so the samples are measured
-        in decreasing order of it, in doubling batches from ``FIRST_BATCH``, until
+        in decreasing order of it, in doubling batches from :data:`~cq_fairing.core.probes.FIRST_BATCH`, until
         the next one's is below the largest distance found by more than ``ROUNDING`` of
         the source's extent (the parametric distance and the Newton runs evaluate the
         surfaces by different routes, equal to rounding).  No sample passed over can
         exceed that maximum, and each sample's value is that of the full measurement, so
         the maximum is the full one."""
-        _, parametric, order, _ = self._candidate(faired)
-        slack = ROUNDING * self.source.size
-        walk, best = BoundWalk(parametric, order=order), 0.0
-        while walk.next_bound > best - slack:
-            best = max(best, float(self.distances(faired, walk.take()).max()))
-        return best
+        walk = self._candidate(faired)
+        walk.measure_above(lambda: walk.best)
+        return walk.best
 
-    def exceeds(self, faired, tol, samples=FIRST_BATCH):
-        r"""True when :meth:`__call__` of ``faired`` exceeds ``tol`` for certain, found on
-        a few samples: only a sample whose parametric distance
-        :math:`|F(u_i, v_i) - S(u_i, v_i)|` exceeds ``tol`` can exceed it either way (both
-        distances are at most the parametric one), and the ``samples`` of them with the
-        largest parametric distance are measured as :meth:`__call__` measures them (each
-        sample on its own), so their largest value is a lower bound of the full maximum.
-        ``False`` says nothing."""
-        _, parametric, order, _ = self._candidate(faired)
-        widest = order[:samples]
-        widest = widest[parametric[widest] > tol]
-        return widest.size > 0 and bool(self.distances(faired, widest).max() > tol)
+    def exceeds(self, faired, tol):
+        r"""Whether :meth:`__call__` of ``faired`` exceeds ``tol``, measuring only what
+        decides it: only a sample whose parametric distance
+        :math:`|F(u_i, v_i) - S(u_i, v_i)|` exceeds ``tol`` can exceed it either way, so
+        those are measured in the order of :meth:`__call__`, which goes on from them,
+        and the first value above ``tol`` answers ``True`` (a lower bound of the full
+        maximum)."""
+        walk = self._candidate(faired)
+        walk.measure_above(lambda: tol if walk.best <= tol else np.inf)
+        return walk.best > tol
+
+
+class _Walk:
+    """One candidate's samples in decreasing order of an upper bound of their two-sided
+    distance, measured in doubling batches (:class:`~cq_fairing.core.probes.BoundWalk`),
+    with the largest distance measured so far.
+
+    Each way's Newton run at a sample starts at the sample's parameters or, where its
+    point is nearer, at ``seeds`` (the feet the last candidate's runs found:
+    :func:`~cq_fairing.core.closest_points.nearer_starts`); the bound is the larger of
+    the two ways' distances at their starts (both the parametric distance without
+    seeds)."""
+
+    def __init__(self, check, faired, seeds=None):
+        self.check, self.faired = check, faired
+        self.points = check._on_grids(faired)
+        uv = np.column_stack([check.u, check.v])
+        parametric = np.linalg.norm(self.points - check.points, axis=1)
+        if seeds is None:
+            self.starts, bound = (uv, uv), parametric
+        else:
+            (there, bound_there), (back, bound_back) = (
+                nearer_starts(faired, check.points, uv, seeds[0], parametric),
+                nearer_starts(check.source, self.points, uv, seeds[1], parametric))
+            self.starts, bound = (there, back), np.maximum(bound_there, bound_back)
+        self.feet = tuple(np.array(s, dtype=float) for s in self.starts)
+        self.walk = BoundWalk(bound)
+        self.restarts = RestartSamples(faired)
+        self.slack = ROUNDING * check.source.size
+        self.best = 0.0
+
+    def measure_above(self, level):
+        """Measure the next batches while the next sample's parametric distance is above
+        ``level()`` less the rounding slack."""
+        while self.walk.next_bound > level() - self.slack:
+            index = self.walk.take(level() - self.slack)
+            self.best = max(self.best, float(self.check.distances(self.faired, index).max()))
 
 
 def curvature(surface, uv_range, count=40, kind="mean"):

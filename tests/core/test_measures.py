@@ -13,7 +13,13 @@ import cq_fairing as cf
 from cq_fairing.core import examples, probes
 from cq_fairing.core import measures as M
 from cq_fairing.core.adaptive_knots import _source_density, equidistributed_space
-from cq_fairing.core.closest_points import HALVINGS, _damped, _distance, distance_floor
+from cq_fairing.core.closest_points import (
+    HALVINGS,
+    _damped,
+    _distance,
+    distance_floor,
+    nearer_starts,
+)
 from cq_fairing.core.plans import target_space
 from cq_fairing.core.probes import _FlatBound, _RowBound, box_region
 from cq_fairing.core.projection import project_curve, project_surface
@@ -218,6 +224,28 @@ def test_a_walk_by_bound_finds_the_maximum_and_hands_out_each_sample_once(seed, 
     taken, rest = walk.taken(), walk.rest()
     assert np.array_equal(np.sort(np.r_[taken, rest]), np.arange(size))
     assert rest.size == 0 or bound[rest].max() <= best
+
+
+@given(seed=st.integers(0, 2**31 - 1), size=st.integers(1, 3000), first=st.integers(1, 300),
+       levels=st.integers(1, 50), share=st.floats(0.0, 1.0))
+@settings(max_examples=80, deadline=None)
+def test_a_walk_cut_at_a_floor_hands_out_exactly_the_samples_above_it(seed, size, first,
+                                                                       levels, share):
+    """Batches cut at a floor (``take(floor)``) hand out, over the whole walk, exactly
+    the samples whose bound is above the floor, in decreasing order of bound, and the
+    walk's next bound is then at most the floor."""
+    rng = np.random.default_rng(seed)
+    bound = rng.integers(0, levels + 1, size=size) / levels
+    floor = share * bound.max()
+    walk = probes.BoundWalk(bound, first)
+    taken = []
+    while walk.next_bound > floor:
+        batch = walk.take(floor)
+        assert np.all(bound[batch] > floor) and np.all(np.diff(bound[batch]) <= 0)
+        taken.append(batch)
+    taken = np.concatenate(taken) if taken else np.zeros(0, int)
+    assert np.array_equal(np.sort(taken), np.flatnonzero(bound > floor))
+    assert np.array_equal(walk.taken(), taken) and walk.next_bound <= floor
 
 
 @given(seed=st.integers(0, 2**31 - 1), shape=st.tuples(st.integers(1, 40), st.integers(1, 30)),
@@ -655,3 +683,32 @@ def test_restart_samples_made_once_give_every_projection_the_feet_made_per_call(
         shared = M.closest_points_surface_restarted(surface, points, u0, v0, samples=samples)
         for a, b in zip(alone, shared):
             assert np.array_equal(a, b)
+
+
+@given(seed=st.integers(0, 2**31 - 1), count=st.integers(1, 400))
+@settings(max_examples=30, deadline=None)
+def test_nearer_starts_bound_the_projection_from_above(seed, count):
+    """Of the sample parameters and the seeds, ``nearer_starts`` keeps per point the one
+    whose surface point is nearer (distances evaluated here with ``evaluate_grid`` one
+    point at a time), and its distance bounds the restarted projection from that
+    start from above, never above the same-parameter distance."""
+    rng = np.random.default_rng(seed)
+    u, v = np.meshgrid(np.linspace(0, 1, 14), np.linspace(0, 1, 17), indexing="ij")
+    z = 6.0 * np.sin(np.pi * u) * np.cos(1.5 * np.pi * v) + 0.1 * rng.standard_normal(u.shape)
+    surface = cf.make_surface(np.stack([40.0 * u, 70.0 * v, z], axis=-1), degree=(3, 3))
+    uv, seeds = rng.uniform(0, 1, (count, 2)), rng.uniform(0, 1, (count, 2))
+    points = rng.uniform([0, 0, -8], [40, 70, 8], (count, 3))
+    starts, bound = nearer_starts(surface, points, uv, seeds)
+
+    def distance(at):
+        return np.array([np.linalg.norm(surface.evaluate_grid([a], [b])[0, 0] - p)
+                         for (a, b), p in zip(at, points)])
+
+    same, seeded = distance(uv), distance(seeds)
+    np.testing.assert_allclose(bound, np.minimum(same, seeded), rtol=1e-12, atol=1e-12)
+    assert np.all(bound <= same * (1 + 1e-12) + 1e-12)
+    nearer = seeded < same
+    assert np.array_equal(starts[nearer], seeds[nearer])
+    assert np.array_equal(starts[~nearer], uv[~nearer])
+    found = M.closest_points_surface_restarted(surface, points, starts[:, 0], starts[:, 1])[2]
+    assert np.all(found <= bound * (1 + 1e-12) + 1e-12)

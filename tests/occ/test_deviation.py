@@ -249,13 +249,16 @@ def test_core_surfaces_that_are_not_the_faces_fall_back_to_occt(real):
     assert wrong["max"] == pytest.approx(right["max"], abs=1e-6 * tol)
 
 
-def test_the_widest_samples_bound_the_full_check_from_below(real):
+def test_exceeds_decides_the_tolerance_and_the_check_goes_on_from_it(real):
     """A testtoler strip faired onto 8 x 4 poles (``n=(5, 1)``) leaves the face by far.
-    At tolerances from a quarter of the full check's maximum up to above it, the
-    prefilter on its widest samples says "exceeds" only where the full check's maximum
-    (both ways, OCCT judging) is above the tolerance; it does say so well below the
-    maximum, and never at or above it.  OCCT's own global projection, both ways, finds
-    the same maximum (on the way back: the faired face reaches beyond the original)."""
+    At tolerances from a quarter of the full check's maximum up to above it, ``exceeds``
+    says whether the full check's maximum (both ways, OCCT judging) is above the
+    tolerance, just below it too; the full check that goes on from the samples
+    ``exceeds`` measured finds the maximum of a fresh one.  A check seeded with the feet
+    of another net's check (``seeds``: its Newton runs start there where nearer, its
+    walk bounded by the distance at the start) finds the same maximum.  OCCT's own global
+    projection, both ways, finds it too (on the way back: the faired face reaches beyond
+    the original)."""
     from cq_fairing.occ import face_to_surface, fair_face
     from cq_fairing.occ.deviation import (
         BatchedCheck,
@@ -273,11 +276,20 @@ def test_the_widest_samples_bound_the_full_check_from_below(real):
                                   surface=surfaces[0])
     full = deviation_on_grid(face, report.face, None, reference=reference, surfaces=surfaces)
     largest = full["max"]
+    shares = (0.25, 0.5, 0.9, 0.99, 1.5)
     verdicts = {share: BatchedCheck(face, report.face, surfaces, reference).exceeds(share * largest)
-                for share in (0.25, 0.5, 0.9, 0.99, 1.0, 1.5)}
-    assert verdicts[0.25] and verdicts[0.5]
-    assert not verdicts[1.0] and not verdicts[1.5]
-    assert all(not said or largest > share * largest for share, said in verdicts.items())
+                for share in shares}
+    assert verdicts == {share: share < 1.0 for share in shares}
+    for share in (0.5, 1.5):
+        check = BatchedCheck(face, report.face, surfaces, reference)
+        check.exceeds(share * largest)
+        assert check.deviation()["max"] == pytest.approx(largest, rel=1e-12)
+    other = fair_face(face, n=(7, 1), details=False)
+    before = BatchedCheck(face, other.face, (surfaces[0], other.surface), reference)
+    before.deviation()
+    seeded = BatchedCheck(face, report.face, surfaces, reference, seeds=before.seeds())
+    assert np.all(np.maximum(*(way.bound for way in seeded.ways)) <= seeded.parametric)
+    assert seeded.deviation()["max"] == pytest.approx(largest, rel=1e-9)
     occt = np.r_[global_distance(full["points"], report.face),
                  global_distance(full["faired_points"], face)]
     assert occt[np.isfinite(occt)].max() == pytest.approx(largest, rel=1e-9)
