@@ -5,9 +5,11 @@ Run:  python benchmarks/bench_default.py [--faces IEA impeller testtoler terrain
 
 Each face is faired by ``cq_fairing.occ.fair_face`` at its default tolerance (1e-3 of
 its bounding-box diagonal; the noisy 50 x 80 blade of the workbench tests at 0.05 mm)
-with the default (``method="wavelet"``, local search, borders and grading auto), the
+with the default (``method="wavelet"``, local search, borders, grading and objective
+auto: the winner polished), the default not polished (``objective="compact"``), the
 default with free target borders only (``borders="free"``), the method's plain search
-(quasi-uniform targets with free borders: ``grading="uniform", borders="free"``),
+(quasi-uniform targets with free borders, not polished: ``grading="uniform",
+borders="free", objective="compact"``),
 ``method="adaptive"``
 (compact, borders auto) and ``method="adaptive", objective="fair"``.  Columns: poles, OCCT's
 two-sided deviation over the tolerance, the thin-plate bending energy and the
@@ -26,8 +28,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench_speed import public_faces  # noqa: E402
 
-SETTINGS = (("default", {}), ("default, free borders", {"borders": "free"}),
-            ("quasi-uniform, free borders", {"grading": "uniform", "borders": "free"}),
+SETTINGS = (("default", {}), ("default, not polished", {"objective": "compact"}),
+            ("default, free borders", {"borders": "free"}),
+            ("quasi-uniform, free borders, not polished",
+             {"grading": "uniform", "borders": "free", "objective": "compact"}),
             ("adaptive", {"method": "adaptive"}),
             ("adaptive, fair", {"method": "adaptive", "objective": "fair"}))
 

@@ -53,7 +53,7 @@ def best_of(rounds, face, options):
 MODELS = (("fuselage.brep", 2.5), ("testtoler.brep", 0.01), ("shell_patches.brep", 0.083),
           ("linkrods.step", 0.01), ("impeller.igs", 0.2))
 SETTINGS_OF_THE_FEATURE = {"target": None, "method": "wavelet", "search": "local",
-                           "measure": "geometric", "objective": "compact"}
+                           "measure": "geometric", "objective": "auto"}
 
 
 def models():

@@ -194,7 +194,7 @@ def fair_model(name, data, settings, output_name, engine=None, progress=None):
         model = model.converted()
     tol = settings.tol or default_tolerance(model.shape) * (settings.rel_tol / 1e-3)
     result = fair_shape(model.shape, tol=tol, method=settings.method,
-                        objective=settings.objective or "compact",
+                        objective=settings.objective or "auto",
                         borders=settings.borders or "auto", progress=progress,
                         boundary=settings.boundary, target_degree=settings.target_degree,
                         in_place=True, joins=settings.joins, angle_tol=settings.angle_tol,

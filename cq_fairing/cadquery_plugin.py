@@ -34,12 +34,13 @@ from .occ.convert import indexed_faces
 __all__ = ["register", "fair_face", "fair_shape", "fair"]
 
 
-def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact",
+def fair_face(face, *, tol=None, n=None, method="wavelet", objective="auto",
               return_report=False, **options):
     """Fair a ``cq.Face`` (see :func:`cq_fairing.occ.fair_face` for the options).
 
-    ``method`` ``"wavelet"``, ``"adaptive"`` (``objective`` ``"compact"``,
-    ``"faithful"`` or ``"fair"``, adaptive only) or ``"energy"`` (keeps the net); other
+    ``method`` ``"wavelet"`` (``objective`` ``"auto"`` or ``"fair"``: polished,
+    ``"compact"``: the plain projection), ``"adaptive"`` (``objective`` ``"compact"``
+    (``"auto"``), ``"faithful"`` or ``"fair"``) or ``"energy"`` (keeps the net); other
     options as in :func:`cq_fairing.occ.fair_face`.
 
     Returns
@@ -56,7 +57,7 @@ def fair_face(face, *, tol=None, n=None, method="wavelet", objective="compact",
     return (out, report) if return_report else out
 
 
-def fair_shape(shape, *, tol=None, n=None, method="wavelet", objective="compact", faces=None,
+def fair_shape(shape, *, tol=None, n=None, method="wavelet", objective="auto", faces=None,
                jobs=1, face_timeout=None, return_report=False, **options):
     """Fair the B-spline faces of a ``cq.Shape`` (Solid, Shell, Compound...).
 
@@ -103,7 +104,7 @@ def _face_indices(shape, faces):
     return out
 
 
-def fair(self, tol=None, n=None, method="wavelet", objective="compact", jobs=1,
+def fair(self, tol=None, n=None, method="wavelet", objective="auto", jobs=1,
          face_timeout=None, **options):
     """``Workplane.fair``: fair the selected faces or solids; returns a new Workplane.
 

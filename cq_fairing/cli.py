@@ -3,7 +3,7 @@
 Subcommands
 -----------
 ``fair IN -o OUT [--tol T | --target NU NV] [--faces 1,3-5]
-[--method wavelet|adaptive|energy] [--objective compact|faithful|fair]
+[--method wavelet|adaptive|energy] [--objective auto|compact|faithful|fair]
 [--borders auto|free|pinned] [--grading auto|uniform]
 [--joins smooth|closed|free|curvature] [--angle-tol DEG]
 [--target-degree P [Q]] [--jobs N]
@@ -14,7 +14,9 @@ Subcommands
     tolerance; rational faces stay rational, without the energy polish) and takes
     ``--objective faithful`` to stop at the estimated noise level instead of at the
     fewest poles, or ``--objective fair`` for the fairest of the fewest poles and a few
-    more.  ``--borders free|pinned`` chooses the target's border rows of the wavelet
+    more; with the wavelet method ``--objective compact`` keeps the plain projection where
+    the default (``auto``) polishes the fewest-poles net with the largest fairing
+    penalty within the tolerance.  ``--borders free|pinned`` chooses the target's border rows of the wavelet
     and adaptive methods (default ``auto``: pinned to the source's border curves where
     that gives fewer poles).
     ``--jobs N`` fairs N faces at once in worker processes; ``--face-timeout S`` gives

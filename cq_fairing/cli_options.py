@@ -64,9 +64,12 @@ def add_fairing_options(parser):
                              "poles, moves each within --tol (adaptive and energy need "
                              "--tol or its default, not --target)")
     parser.add_argument("--objective", choices=OBJECTIVES,
-                        help="with --method adaptive: compact = fewest poles within --tol "
-                             "(default), faithful = stop at the estimated noise level, "
-                             "fair = the fairest of the fewest poles and up to two more "
+                        help="auto (default): with --method wavelet the fewest poles, "
+                             "polished with the largest fairing penalty within --tol; with "
+                             "--method adaptive compact. compact = fewest poles within "
+                             "--tol, the plain projection; faithful (adaptive) = stop at "
+                             "the estimated noise level; fair = wavelet: as auto; "
+                             "adaptive: the fairest of the fewest poles and up to two more "
                              "spans per direction (slower)")
     parser.add_argument("--borders", choices=BORDERS,
                         help="with --method wavelet or adaptive: the target's border rows; "
@@ -104,8 +107,8 @@ def add_fairing_options(parser):
 
 def check_method(args):
     """Refuse the fairing options ``args.method`` does not use
-    (:data:`cq_fairing.core.options.FACE_APPLIES`: --objective needs --method adaptive,
-    --borders wavelet or adaptive, --grading wavelet, --target-degree and --boundary not
+    (:data:`cq_fairing.core.options.FACE_APPLIES`: --objective and --borders need --method
+    wavelet or adaptive, --objective faithful adaptive, --grading wavelet, --target-degree and --boundary not
     energy),
     --grading with --target (no search runs), and --target with the methods that choose
     their own net.  An option spelled out at its default is no request, as
@@ -121,6 +124,11 @@ def check_method(args):
             f"{option} {shown} applies to --method {' or '.join(allowed)} only, got "
             f"--method {args.method}, which {METHOD_DOES[args.method]}; add --method "
             f"{allowed[-1]} or drop {option}.")
+    if args.objective == "faithful" and args.method != "adaptive":
+        raise InvalidInputError(
+            f"--objective faithful applies to --method adaptive only, got --method "
+            f"{args.method}, which {METHOD_DOES[args.method]}; add --method adaptive or "
+            "drop --objective.")
     if args.target is not None and args.grading not in (None, DEFAULTS["grading"]):
         raise InvalidInputError(f"--grading {args.grading} applies to the tolerance search, "
                                 "which does not run with --target; drop --grading or give "

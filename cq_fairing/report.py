@@ -281,8 +281,9 @@ def build_report(faces, *, input_path=None, output_path=None, tolerance=None,
     -------
     dict
         Keys ``tool``, ``created``, ``command``, ``input``, ``output``, ``tolerance``,
-        ``units``, ``method``, ``objective`` (``"compact"``/``"faithful"``/``"fair"`` for the
-        adaptive method, else ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
+        ``units``, ``method``, ``objective`` (``"auto"``/``"compact"``/``"faithful"``/
+        ``"fair"`` for the adaptive method and the wavelet method with a tolerance, else
+        ``None``), ``borders`` (``"auto"``/``"free"``/``"pinned"``
         for the adaptive and wavelet methods, else ``None``), ``grading`` (``"auto"``/``"uniform"``
         for the wavelet method with a tolerance, else ``None``), ``faces``, ``summary``
         (counts, poles before/after,

@@ -29,9 +29,9 @@ def faired_reports(result):
 def shape_report(result, tol, seconds, *, input_path, output_path, method, objective=None,
                  borders=None, grading=None, kept=None, parts=None, command=None):
     """The report dict of ``result`` (:func:`cq_fairing.report.build_report`);
-    ``objective`` is reported for ``method="adaptive"`` only, ``borders`` for
-    ``"adaptive"`` and ``"wavelet"``, ``grading`` for ``"wavelet"`` with a tolerance
-    only."""
+    ``objective`` for ``"adaptive"`` and ``"wavelet"`` with a tolerance, ``borders``
+    for ``"adaptive"`` and ``"wavelet"``, ``grading`` for ``"wavelet"`` with a
+    tolerance only."""
     from .report import build_report, face_entry
     from .viz import fairness_measures
 
@@ -55,10 +55,10 @@ def shape_report(result, tol, seconds, *, input_path, output_path, method, objec
             degree_before=_degrees(face.info),
             degree_after=_degrees(face.info if face.status == "unchanged" else face.surface),
             rational=face.info.rational if face.info and face.info.is_bspline else None))
-    adaptive = method == "adaptive"
+    searched = method == "adaptive" or (method == "wavelet" and tol)
     return build_report(entries, input_path=input_path, output_path=output_path,
                         tolerance=tol, method=method,
-                        objective=(objective or "compact") if adaptive else None,
+                        objective=(objective or "auto") if searched else None,
                         borders=(borders or "auto") if method != "energy" else None,
                         grading=(grading or "auto") if method == "wavelet" and tol else None,
                         max_gap=result.max_gap, joins=_joins_entry(result.joins),

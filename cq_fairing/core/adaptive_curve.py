@@ -30,7 +30,7 @@ from .fidelity import NOISE_FRACTION, CurveResidual, noise_level, noise_limit
 from .geometry import BSplineCurve
 from .gram import gram_matrix
 from .options import checked_objective, checked_target_degree
-from .polish import _polish, _scaled_energy
+from .polish import _scaled_energy, largest_penalty
 from .probes import CurveProbe
 from .results import FairResult
 
@@ -322,8 +322,8 @@ class CurveSearch:
         space, faired, values, e = found
         lam = 0.0
         if polish and not self.curve.is_rational and self.degree >= 3:
-            (faired, values, e), lam = _polish(lambda x: self.fit.trial(space, x),
-                                               self.fit.tol, (faired, values, e))
+            (faired, values, e), lam = largest_penalty(lambda x: self.fit.trial(space, x),
+                                                       self.fit.tol, (faired, values, e))
         return (space, faired, values, e), lam
 
     def finished(self, found, lam, table=(), fair=False):
@@ -415,7 +415,8 @@ def _fairest_curve(search, compact, values):
         trial = fit.trial(grown)
         if trial[2] > fit.tol:
             continue
-        (faired, _, _), lam = _polish(lambda x, grown=grown: fit.trial(grown, x), fit.tol, trial)
+        (faired, _, _), lam = largest_penalty(lambda x, grown=grown: fit.trial(grown, x),
+                                              fit.tol, trial)
         try:
             faired, e, lam = _final_curve_check(search, grown, faired, lam)
         except ToleranceNotMetError:

@@ -26,7 +26,7 @@ from .adaptive_knots import (
 )
 from .fidelity import NOISE_FRACTION, SurfaceResidual, noise_level, noise_limit
 from .options import check_borders, checked_objective, checked_target_degree
-from .polish import _constrained_stages, _polish, variation_energy_matrix
+from .polish import _constrained_stages, largest_penalty, variation_energy_matrix
 from .probes import box_region
 from .results import SurfaceFairResult, projection_step
 from .surface_fit import _final_check, _SurfaceFit
@@ -358,8 +358,8 @@ def _polished_and_checked(fit, spaces, result, polish, tol, check):
     span weight)``."""
     faired, lam = result[0], 0.0
     if polish and min(fit.degrees) >= 2 and not fit.rational:
-        (faired, _, _), lam = _polish(lambda x: fit.screened_trial(*spaces, x), fit.tol, result,
-                                      steps=8)
+        (faired, _, _), lam = largest_penalty(lambda x: fit.screened_trial(*spaces, x),
+                                              fit.tol, result, steps=8)
         for staged, stage_lam, weights in reversed(_constrained_stages(fit, spaces, faired, lam)):
             e = check(staged, fit.probe)
             if e <= tol:

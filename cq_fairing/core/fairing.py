@@ -45,7 +45,7 @@ from .results import FairResult, SurfaceDetails, SurfaceFairResult
 
 Method = Literal["wavelet", "adaptive", "energy"]
 CurveMethod = Literal["auto", "wavelet", "adaptive", "energy"]
-Objective = Literal["compact", "faithful", "fair"]
+Objective = Literal["auto", "compact", "faithful", "fair"]
 Borders = Literal["auto", "free", "pinned"]
 Schedule = Literal["auto", "direct", "hybrid"]
 Search = Literal["guaranteed", "linear", "polyfit"]
@@ -61,7 +61,7 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
                weights: ArrayLike | None = None, target_degree: int | None = None,
                schedule: Schedule = "auto", search: Search = "guaranteed", order: int = 6,
                measure: Measure = "geometric", method: CurveMethod = "auto",
-               objective: Objective = "compact", **renamed: object) -> FairResult:
+               objective: Objective = "auto", **renamed: object) -> FairResult:
     r"""Fair a B-spline curve by multiresolution (ARWFA / DWFA) projection.
 
     With ``tol`` (the default ``method="auto"``) the fit is chosen per curve among the
@@ -125,8 +125,8 @@ def fair_curve(poles: ArrayLike, n: int | None = None, *, tol: float | None = No
         energy fairing (:mod:`cq_fairing.core.energy`, derivative ``l = 3``, ``l = 2``
         for quadratics; degree >= 2) that keeps the poles and moves none farther than
         ``tol``.  Both need ``tol`` and no ``n``.
-    objective : {"compact", "faithful", "fair"}
-        ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``, the
+    objective : {"auto", "compact", "faithful", "fair"}
+        ``method="adaptive"`` only.  ``"compact"`` (``"auto"``): the fewest poles within ``tol``, the
         rest of the budget spent on fairness.  ``"faithful"``: stop where the residual
         is down to the source's estimated noise (:mod:`cq_fairing.core.fidelity`), or
         later if ``tol`` needs it: the noise removed, the shape kept.  ``"fair"``: the
@@ -204,7 +204,7 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
                  weights: ArrayLike | None = None, target_degree: IntPair | None = None,
                  schedule: Schedule = "auto", search: Search = "guaranteed",
                  measure: Measure = "geometric", method: Method = "wavelet",
-                 objective: Objective = "compact", borders: Borders = "auto",
+                 objective: Objective = "auto", borders: Borders = "auto",
                  window: tuple[float, float, float, float] | None = None,
                  **renamed: object) -> SurfaceFairResult:
     r"""Fair a tensor-product B-spline surface (ARWFA along u and v).
@@ -242,7 +242,7 @@ def fair_surface(poles: ArrayLike, n: tuple[int | None, int | None] | None = Non
         error (:mod:`cq_fairing.core.adaptive`; polynomial surfaces).  ``"energy"``:
         local thin-plate energy fairing within ``tol`` that keeps the net size
         (:mod:`cq_fairing.core.energy`).  Both need ``tol`` and no ``n``.
-    objective : {"compact", "faithful", "fair"}
+    objective : {"auto", "compact", "faithful", "fair"}
         ``method="adaptive"`` only, as for :func:`fair_curve`.
     borders : {"auto", "free", "pinned"}
         ``method="adaptive"`` only: the target's border rows, see

@@ -25,8 +25,16 @@ The options
 ``target_degree`` : int >= 1, or a pair, default ``min(3, source degree)``
     Degree of the faired geometry.  ``"wavelet"`` and ``"adaptive"`` (``"energy"`` keeps
     the degree); with ``"auto"`` the one degree it fits at (default: it chooses).
-``objective`` : {"compact", "faithful", "fair"}, default "compact"
-    What an adaptive fit spends ``tol`` on.  ``"adaptive"`` only.
+``objective`` : {"auto", "compact", "faithful", "fair"}, default "auto"
+    What a fit spends ``tol`` on beyond the fewest poles.  ``"adaptive"``: ``"compact"``
+    (``"auto"``) the fewest poles, ``"faithful"`` a residual down to the noise, ``"fair"``
+    the fairest of the compact net and a few slightly larger ones.  ``"wavelet"`` occ
+    faces (the tolerance search on the face's samples): ``"auto"`` and ``"fair"`` polish
+    the fewest-poles net with the largest curvature-variation penalty within ``tol``,
+    ``"compact"`` keeps the plain projection
+    (:func:`~cq_fairing.core.face_search.search_face`); in a model a face that meets
+    another face is not polished
+    (:func:`~cq_fairing.core.joint_projection.plain_target_options`).
 ``borders`` : {"auto", "free", "pinned"}, default "auto"
     The border rows of the **target** while it is fitted: ``"pinned"`` keeps the
     corners and projects each edge on its own
@@ -151,7 +159,7 @@ METHODS = ("wavelet", "adaptive", "energy")
 #: How a curve is faired (``"auto"`` first: the default of curves).
 CURVE_METHODS = ("auto",) + METHODS
 #: What an adaptive fit spends the tolerance on.
-OBJECTIVES = ("compact", "faithful", "fair")
+OBJECTIVES = ("auto", "compact", "faithful", "fair")
 #: Border rows of an adaptive surface target (``"auto"`` first: the default).
 BORDERS = ("auto", "free", "pinned")
 #: The source's border rows of an occ face after the fit.
@@ -172,7 +180,7 @@ JOINS = ("smooth", "closed", "free", "curvature")
 JOIN_CONTINUITY = {"smooth": "G1", "curvature": "G2", "closed": "G0"}
 
 #: Default of each option (``search`` of an occ face: ``"local"``).
-DEFAULTS = {"method": "wavelet", "objective": "compact", "borders": "auto",
+DEFAULTS = {"method": "wavelet", "objective": "auto", "borders": "auto",
             "boundary": "free", "search": "guaranteed", "order": 6, "measure": "geometric",
             "schedule": "auto", "window": None, "target_degree": None, "grading": "auto"}
 
@@ -186,8 +194,9 @@ APPLIES = {"objective": ("adaptive",), "borders": ("adaptive",),
            "boundary": ("wavelet", "adaptive"),
            "window": ("wavelet", "adaptive"), "search": ("wavelet",), "grading": ("wavelet",),
            "order": ("wavelet",), "measure": ("wavelet",), "schedule": ("wavelet",)}
-#: :data:`APPLIES` of an occ face: its wavelet search also pins borders.
-FACE_APPLIES = {**APPLIES, "borders": ("wavelet", "adaptive")}
+#: :data:`APPLIES` of an occ face: its wavelet search also pins borders and polishes.
+FACE_APPLIES = {**APPLIES, "borders": ("wavelet", "adaptive"),
+                "objective": ("wavelet", "adaptive")}
 
 #: What each method does that makes the other methods' options meaningless for it.
 METHOD_DOES = {"auto": "chooses the adaptive fit per curve",
@@ -299,13 +308,14 @@ def check_joins(joins, angle_tol):
 
 
 def checked_objective(value):
-    """The adaptive ``objective``, refused unless one of :data:`OBJECTIVES`."""
+    """The adaptive method's ``objective`` (``"auto"`` is ``"compact"``), refused unless
+    one of :data:`OBJECTIVES`."""
     if value not in OBJECTIVES:
         raise InvalidInputError(
-            f"objective must be one of {OBJECTIVES}, got {value!r}: 'compact' for the fewest "
-            "poles within tol, 'faithful' to stop where the residual reaches the noise, "
-            "'fair' for the fairest of the compact net and a few slightly larger ones.")
-    return value
+            f"objective must be one of {OBJECTIVES}, got {value!r}: 'auto' (default) for "
+            "each method's best, 'compact' for the fewest poles within tol, 'faithful' to "
+            "stop where the residual reaches the noise, 'fair' for the fairest within tol.")
+    return "compact" if value == "auto" else value
 
 
 def check_borders(value):
@@ -440,7 +450,7 @@ def check_search_options(n, tol, options):
         "instead of n.")
 
 
-def check_face_options(tol, n, method, boundary, objective="compact", borders="auto",
+def check_face_options(tol, n, method, boundary, objective="auto", borders="auto",
                        search="local", target_degree=None, grading="auto"):
     """Validate the options of an occ face (:func:`cq_fairing.occ.fair_face`, and
     :func:`cq_fairing.occ.fair_shape` for each of its faces) once.
@@ -451,8 +461,10 @@ def check_face_options(tol, n, method, boundary, objective="compact", borders="a
     ``borders``, ``boundary``, ``target_degree``, ``search`` (an occ face's default:
     ``"local"``) and ``grading`` are refused with a method that does not use them
     (:func:`check_applies` with :data:`FACE_APPLIES`); ``"adaptive"`` and ``"energy"``
-    refuse ``n``; ``search`` and ``grading`` are refused with ``n``
-    (:func:`check_search_options`; ``borders="pinned"`` pins explicit scales).
+    refuse ``n``; ``search``, ``grading`` and ``objective`` are refused with ``n``
+    (:func:`check_search_options`; ``borders="pinned"`` pins explicit scales), and
+    ``objective="faithful"`` with ``"wavelet"`` (a residual down to the noise is the
+    adaptive method's stopping rule).
     """
     if tol is not None and n is not None:
         raise InvalidInputError(f"give at most one of tol and n, got tol={tol!r}, n={n!r}.")
@@ -475,7 +487,13 @@ def check_face_options(tol, n, method, boundary, objective="compact", borders="a
         raise InvalidInputError(
             f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
             "Give tol, or use method='wavelet' for explicit scales.")
-    check_search_options(n, tol, (("search", search, "local"), ("grading", grading, "auto")))
+    if method == "wavelet" and objective == "faithful":
+        raise InvalidInputError(
+            "objective='faithful' (stop where the residual reaches the noise) applies to "
+            "method='adaptive' only, got method='wavelet': use method='adaptive', or "
+            "objective 'auto', 'compact' or 'fair'.")
+    check_search_options(n, tol, (("search", search, "local"), ("grading", grading, "auto"),
+                                  ("objective", objective, "auto")))
 
 
 def _listed(words):

@@ -37,8 +37,13 @@ def _scaled_energy(space, l):
     return e * (g.diagonal().sum() / max(e.diagonal().sum(), 1e-300))
 
 
-def _polish(trial_lam, tol, start, lo=-8.0, hi=3.0, steps=10):
-    """Largest ``lambda = 10^x`` whose polished result stays within ``tol`` (bisection on x)."""
+def largest_penalty(trial_lam, tol, start, lo=-8.0, hi=3.0, steps=10):
+    """Largest ``lambda = 10^x`` whose polished result stays within ``tol``: ``10^hi`` if
+    it does, else a bisection on ``x`` in ``[lo, hi]`` (``steps`` halvings); ``(start,
+    0.0)`` when not even ``10^lo`` does.
+
+    ``trial_lam(lam) -> (faired, values, deviation)``; returns ``(trial, lam)``.
+    """
     best, best_lam = start, 0.0
     f, v, e = trial_lam(10.0 ** hi)
     if e <= tol:

@@ -70,9 +70,11 @@ class TargetProjections:
         """The source net's mean polygon lengths (:func:`~cq_fairing.core.polish.net_lengths`)."""
         return net_lengths(self.surface.poles)
 
-    def projected(self, tu, tv):
+    def projected(self, tu, tv, lam=0.0):
         """The projected surface on ``tu x tv``; ``None`` keeps the source's space in that
-        direction.
+        direction; ``lam`` the curvature-variation penalty of :meth:`project` on the
+        interior rows (pinned border rows stay the projections of the source's border
+        curves, which a neighbour sharing the border projects alike).
 
         Raises
         ------
@@ -82,7 +84,8 @@ class TargetProjections:
         """
         tu = self.surface.u_space if tu is None else tu
         tv = self.surface.v_space if tv is None else tv
-        poles, weights = cartesian_poles(self.project(tu, tv), self.rational)
+        poles, weights = cartesian_poles(self.project(tu, tv, lam, edge_lam=0.0),
+                                         self.rational)
         return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
 
     def _cached(self, key, build):

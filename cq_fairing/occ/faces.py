@@ -126,7 +126,7 @@ def default_tolerance(shape):
 def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
               n: tuple[int | None, int | None] | None = None,
               method: Literal["wavelet", "adaptive", "energy"] = "wavelet",
-              objective: Literal["compact", "faithful", "fair"] = "compact",
+              objective: Literal["auto", "compact", "faithful", "fair"] = "auto",
               convert: bool = False, boundary: Literal["free", "fixed"] = "free",
               target_degree: int | tuple[int, int] | None = None,
               density: int | tuple[int, int] | None = None, details: bool = True,
@@ -163,8 +163,12 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
         ``"wavelet"`` and ``"adaptive"`` fair rational faces in homogeneous coordinates
         (``"adaptive"`` without its polish); ``"energy"`` fairs polynomial faces only
         (rational ones: ``'skipped-rational'``).
-    objective : {"compact", "faithful", "fair"}
-        ``method="adaptive"`` only.  ``"compact"``: the fewest poles within ``tol``;
+    objective : {"auto", "compact", "faithful", "fair"}
+        ``method="wavelet"`` with ``tol``: ``"auto"`` (default) and ``"fair"`` polish the
+        fewest-poles net with the largest curvature-variation penalty within ``tol`` (the
+        same poles, a fairer net; :func:`~cq_fairing.core.face_search.search_face`),
+        ``"compact"`` keeps the plain projection.  ``method="adaptive"``: ``"compact"``
+        (``"auto"``): the fewest poles within ``tol``;
         ``"faithful"``: stop where the residual reaches the net's estimated noise level
         (more poles, closer to the noise-free shape), within ``tol``; ``"fair"``: the
         fairest of the compact net and that net with up to two more spans per direction,
@@ -251,7 +255,7 @@ def fair_face(face: "TopoDS_Face | cadquery.Face", *, tol: float | None = None,
     attempts = face_attempts(tol, search, method, objective, borders)
     try:
         report = _fair_bspline(face, tol, n, boundary, target_degree, density, details,
-                               attempts, grading, borders)
+                               attempts, grading, borders, objective)
     except UnsupportedGeometryError as exc:  # energy: weights, a degree-1 direction
         if method != "energy":
             raise
@@ -271,7 +275,7 @@ def _not_for_energy(face, info, tol, refusal):
 
 
 def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attempts,
-                  grading, borders):
+                  grading, borders, objective):
     """The core's face search (:func:`~cq_fairing.core.face_search.search_face`) with
     OCCT's pieces: the face's samples (classified inside its trim), its finisher and
     OCCT's two-sided check (:class:`_OcctCheck`)."""
@@ -290,7 +294,8 @@ def _fair_bspline(face, tol, n, boundary, target_degree, density, details, attem
         check, n=n, target_degree=target_degree, attempts=attempts, exceeds=check.exceeds,
         region=face_region(face) if info.trimmed else None,
         window=uv_window(_uv_box(face), surface) if info.trimmed else None,
-        details=details, judge="OCCT", grading=grading, borders=borders)
+        details=details, judge="OCCT", grading=grading, borders=borders,
+        objective=objective)
     if outcome.status == "unchanged":
         return FaceFairReport(face, "unchanged", outcome.message, info=info,
                               poles_before=surface.shape, poles_after=surface.shape,

@@ -137,7 +137,7 @@ def _selection(faces, count):
     return chosen
 
 
-def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="compact",
+def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objective="auto",
                convert=False, progress=None, boundary="free", target_degree=None,
                density=None, details=False, max_gap=None, jobs=1, face_timeout=None,
                borders="auto", in_place=False, joins="smooth", angle_tol=1.0, engine=None,
@@ -162,7 +162,7 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         and ``borders="auto"`` a face that shares a held join with another face searches
         quasi-uniform, free-border targets only, whose knots its neighbours share along
         the join and whose borders the joint projection sets; ``method="adaptive"``: the core's
-        adaptive targets per face, ``objective`` ``"compact"``, ``"faithful"`` or ``"fair"``,
+        adaptive targets per face, ``objective`` ``"compact"`` (``"auto"``), ``"faithful"`` or ``"fair"``,
         ``borders`` ``"auto"``, ``"free"`` or ``"pinned"``; the
         faces next to a too-large gap are faired again the same way with half ``tol``).
     convert : bool, optional
@@ -267,8 +267,8 @@ def fair_shape(shape, *, tol=None, n=None, faces=None, method="wavelet", objecti
         job = _Job(source, originals, options, engine or pool)
         adjacency = find_joins(source, angle_tol=angle_tol)
         held = joins != "free" and tol is not None
-        if held and method == "wavelet":
-            job.plain_targets(adjacency, grading, borders)
+        if method == "wavelet" and tol is not None:
+            job.plain_targets(adjacency, grading, borders, objective, held)
         job.fair_first(selected, tol, n, progress)
         if held:
             joint = fair_joined(job, adjacency, joins)
@@ -354,13 +354,13 @@ class _Job:
         self.networks = []          # faces at their coarsest faired together by energy
         self.curved = []            # joins held curvature-continuous (joins="curvature")
 
-    def plain_targets(self, adjacency, grading, borders):
-        """Quasi-uniform targets (``grading="uniform"``) with free borders
-        (``borders="free"``), each where its option is ``"auto"``, for every face that
-        meets another face in ``adjacency``
-        (:func:`~cq_fairing.core.joint_projection.joined_faces`): the joint projection
-        shares those targets' knots along the joins and sets the borders."""
-        plain = plain_target_options(grading, borders)
+    def plain_targets(self, adjacency, grading, borders, objective, held):
+        """The options of :func:`~cq_fairing.core.joint_projection.plain_target_options`
+        for every face that meets another face in ``adjacency``
+        (:func:`~cq_fairing.core.joint_projection.joined_faces`): not polished, and with
+        the joins ``held`` on quasi-uniform targets with free borders, whose knots the
+        joint projection shares along the joins and whose borders it sets."""
+        plain = plain_target_options(grading, borders, objective, held)
         for face in joined_faces(adjacency.joins):
             self.face_options[face] = plain
 

@@ -16,9 +16,11 @@ from . import conversion, make
 __all__ = ["Fairing", "PROPERTIES", "TYPE"]
 
 TYPE = "Fairing::SurfaceFairing"
-VERSION = 7  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
+VERSION = 8  # 2: Method "adaptive" and the Objective property; 3: the Borders property;
 # 4: the Joins and AngleTolerance properties; 5: Search "local", the default; 6: Measure
-# "geometric", the default; 7: the Grading property
+# "geometric", the default; 7: the Grading property; 8: Objective "auto", the default,
+# which polishes the wavelet net (a feature saved before keeps its saved "compact": its
+# net stays as it was saved)
 
 # (type, name, group, tooltip, read-only)
 PROPERTIES = (
@@ -33,9 +35,11 @@ PROPERTIES = (
      "wavelet (ARWFA/DWFA), energy (keeps the net) or adaptive (knots follow the error, "
      "fewer control points; Tolerance mode, polynomial faces)", False),
     ("App::PropertyEnumeration", "Objective", "Fairing",
-     "adaptive method only: compact (fewest control points within Tolerance), faithful "
-     "(stop where the residual reaches the source's estimated noise) or fair (the fairest "
-     "of the compact net and up to two more spans per direction)", False),
+     "wavelet method in Tolerance mode: auto or fair (the fewest control points, polished "
+     "with the largest fairing penalty within Tolerance) or compact (not polished); "
+     "adaptive method: auto or compact (fewest control points within Tolerance), "
+     "faithful (stop where the residual reaches the source's estimated noise) or fair "
+     "(the fairest of the compact net and up to two more spans per direction)", False),
     ("App::PropertyEnumeration", "Borders", "Fairing",
      "adaptive method, and wavelet in Tolerance mode: auto (borders pinned to the face's "
      "border curves where that gives fewer control points), free (plain projection) or "
@@ -182,10 +186,15 @@ class Fairing:
                 setattr(obj, name, list(values))
 
     def onDocumentRestored(self, obj):
-        """Migrate older documents: add missing properties, extend enumerations, and give
-        a local search the default ``Measure`` (:meth:`_measure_of_local`)."""
+        """Migrate older documents: add missing properties, extend enumerations, give a
+        local search the default ``Measure`` (:meth:`_measure_of_local`), and a document
+        without ``Objective`` (saved before version 2) the ``compact`` its wavelet net
+        was (the default ``auto`` polishes it); a saved ``Objective`` is kept."""
+        had_objective = "Objective" in obj.PropertiesList
         self._add_properties(obj)
         self._extend_enumerations(obj)
+        if not had_objective:
+            obj.Objective = "compact"
         if getattr(self, "Version", 1) < 6:
             self._measure_of_local(obj)
         self.Type, self.Version = TYPE, VERSION
@@ -220,12 +229,14 @@ class Fairing:
     def settings(obj):
         """Keyword arguments of :func:`make.fair_face` from the properties.
 
-        ``Objective`` applies to the adaptive method only and is ignored otherwise,
+        ``Objective`` applies to the adaptive method and to the wavelet method in
+        Tolerance mode (:func:`make.borders_apply`) and is ``auto`` otherwise,
         ``Search`` and ``Measure`` to the wavelet method only, likewise; ``Measure``
         other than ``geometric`` with ``Search`` ``local`` is refused by
         :func:`make.fair_face` (the recompute fails, ``Status`` says why).
         """
-        objective = obj.Objective if obj.Method == "adaptive" else "compact"
+        applies = make.borders_apply(obj.Method, obj.Mode == "Tolerance")
+        objective = obj.Objective if applies else make.OBJECTIVES[0]
         wavelet = obj.Method == "wavelet"
         common = {"method": obj.Method,
                   "search": obj.Search if wavelet else make.SEARCHES[0],

@@ -39,6 +39,7 @@ from cq_fairing.core.options import (
     GRADINGS,  # "auto" first: the default
     JOIN_CONTINUITY,
     MEASURES,  # "geometric" first: the default
+    OBJECTIVES,  # "auto" first: the default
     check_applies,
 )
 from cq_fairing.core.options import FACE_SEARCHES as SEARCHES  # "local" first: the default
@@ -65,7 +66,6 @@ __all__ = ["make_fairing", "fair_face", "fair_edge", "fair_elements", "named_ele
 
 MODES = ("Tolerance", "Target")
 METHODS = ("wavelet", "energy", "adaptive")
-OBJECTIVES = ("compact", "faithful", "fair")
 BOUNDARIES = ("free", "corners", "edges")
 DEVIATION_SAMPLES = 30
 # why a face at its coarsest that no network moved is kept (Status)
@@ -126,7 +126,7 @@ def _check_tolerance(tolerance):
     return float(tolerance)
 
 
-def _core_keywords(method, objective="compact", tolerance=None, borders=None,
+def _core_keywords(method, objective="auto", tolerance=None, borders=None,
                    grading="auto"):
     """Keyword arguments of the core selecting ``method``, ``objective`` and, for a
     surface, ``borders`` (``None`` for a curve); ``grading`` is validated with them
@@ -134,7 +134,8 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None,
 
     ``energy`` keeps the net and ``adaptive`` chooses its (non-uniform) targets itself:
     both need a tolerance, so target mode is refused in plain words.  ``objective``
-    belongs to ``adaptive``: ``compact`` spends the tolerance on the fewest poles,
+    belongs to ``adaptive`` (and to the wavelet method's tolerance search, which
+    :func:`searched_face` runs): ``compact`` (``auto``) spends the tolerance on the fewest poles,
     ``faithful`` stops at the smallest net whose residual is down to the source's
     estimated noise (discrepancy principle, ``cq_fairing.core.fidelity``), ``fair``
     keeps the fairest of the compact net and that net with up to two more spans per
@@ -142,10 +143,8 @@ def _core_keywords(method, objective="compact", tolerance=None, borders=None,
     ``borders``: the target's border rows (``cq_fairing.core.adaptive``; the wavelet
     method's tolerance search takes them in :func:`searched_face`).
     """
-    if method not in METHODS or objective not in OBJECTIVES:
-        raise cf.InvalidInputError(
-            f"method must be one of {METHODS} and objective one of {OBJECTIVES}, got "
-            f"{method!r} and {objective!r}.")
+    if method not in METHODS:
+        raise cf.InvalidInputError(f"method must be one of {METHODS}, got {method!r}.")
     if borders is not None and borders not in BORDERS:
         raise cf.InvalidInputError(f"borders must be one of {BORDERS}, got {borders!r}.")
     _check_method_options(method, objective, borders, tolerance is not None, grading)
@@ -174,15 +173,24 @@ def borders_apply(method, by_tolerance):
 
 
 def _check_method_options(method, objective, borders, by_tolerance=True, grading="auto"):
-    """``objective`` other than its default needs the adaptive method, ``borders`` the
-    adaptive method or the wavelet method's tolerance search (:func:`borders_apply`),
-    ``grading`` (one of :data:`GRADINGS`) the wavelet method's tolerance search."""
+    """``objective`` ``faithful`` needs the adaptive method and ``fair`` the adaptive
+    method or the wavelet method's tolerance search (:func:`borders_apply`, whose
+    winner it polishes), as ``borders`` does; ``auto`` and ``compact`` are the plain
+    result of every other method and mode.  ``grading`` (one of :data:`GRADINGS`) needs
+    the wavelet method's tolerance search."""
     if grading not in GRADINGS:
         raise cf.InvalidInputError(f"grading must be one of {GRADINGS}, got {grading!r}.")
-    if method != "adaptive" and objective not in (None, "compact"):
+    if objective not in OBJECTIVES:
         raise cf.InvalidInputError(
-            f"objective {objective!r} applies to the adaptive method only, got method "
-            f"{method!r}; choose method 'adaptive' or objective 'compact'.")
+            f"objective must be one of {OBJECTIVES}, got {objective!r}.")
+    if objective == "faithful" and method != "adaptive" or objective == "fair" and \
+            not borders_apply(method, by_tolerance):
+        where = ("the adaptive method only" if objective == "faithful" else
+                 "the adaptive method and the wavelet method in Tolerance mode only")
+        raise cf.InvalidInputError(
+            f"objective {objective!r} applies to {where}, got method {method!r} in "
+            f"{'tolerance' if by_tolerance else 'target'} mode; choose such a method and "
+            "mode, or objective 'auto'.")
     if not borders_apply(method, by_tolerance) and borders not in (None, "auto"):
         raise cf.InvalidInputError(
             f"borders {borders!r} applies to the adaptive method and to the wavelet "
@@ -341,7 +349,7 @@ def _target_net(source, target):
 
 
 def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
-                  method="wavelet", objective="compact", borders="auto", domain=None,
+                  method="wavelet", objective="auto", borders="auto", domain=None,
                   grading="auto"):
     r"""The tolerance search of ``face`` (whose net is ``source``) by ``method``: the
     core's :func:`~cq_fairing.core.face_search.search_face` with the attempts of
@@ -362,7 +370,8 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
 
     ``domain``: the :class:`conversion.FaceDomain` of ``face`` where already read (its
     trim is read from OCCT once for all the masks).  ``grading`` and ``borders``: the
-    bisections' targets, as :func:`cq_fairing.occ.fair_face`'s options of those names.
+    bisections' targets, and ``objective`` their winner's polish, as
+    :func:`cq_fairing.occ.fair_face`'s options of those names.
 
     Returns
     -------
@@ -388,12 +397,12 @@ def searched_face(face, source, tolerance, search="local", measure=MEASURES[0],
         check, attempts=face_attempts(tolerance, search, method, objective, borders, measure),
         exceeds=check.exceeds, region=domain.region(),
         window=uv_window(conversion.uv_range(face, source), source), details=False,
-        judge="the workbench", grading=grading, borders=borders)
+        judge="the workbench", grading=grading, borders=borders, objective=objective)
     return outcome, check
 
 
 def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="free",
-              search="local", measure=MEASURES[0], objective="compact", borders="auto",
+              search="local", measure=MEASURES[0], objective="auto", borders="auto",
               domain=None, grading="auto"):
     r"""Fair one B-spline face; returns a :class:`FairedShape` (no document involved).
 
@@ -428,8 +437,12 @@ def fair_face(face, tolerance=None, target=None, method="wavelet", boundary="fre
         The distance the core's searches bound (``geometric``: closest points, the
         default of every layer; ``parametric``: same parameters, an upper bound of it);
         refused, other than ``geometric``, with ``search="local"``.
-    objective : {"compact", "faithful", "fair"}
-        ``method="adaptive"`` only: ``compact`` is the fewest poles within ``tolerance``;
+    objective : {"auto", "compact", "faithful", "fair"}
+        ``method="wavelet"`` in tolerance mode: ``auto`` and ``fair`` polish the
+        search's fewest-poles net with the largest curvature-variation penalty within
+        ``tolerance`` (same poles, fairer), ``compact`` keeps the plain projection, as
+        :func:`cq_fairing.occ.fair_face`.  ``method="adaptive"``: ``compact`` (``auto``)
+        is the fewest poles within ``tolerance``;
         ``faithful`` the smallest net whose residual variance is down to the source's
         estimated noise, :math:`\|r\|^2/(N-k) \le (1+\delta)^2\hat\sigma^2`
         (falls back to ``compact`` if that net exceeds ``tolerance``); ``fair`` the
@@ -518,19 +531,24 @@ def face_deviation(face, source, faired, domain=None):
 
 
 def fair_edge(edge, tolerance=None, target=None, method="wavelet", search="local",
-              measure=MEASURES[0], objective="compact"):
+              measure=MEASURES[0], objective="auto"):
     """Fair one B-spline edge; returns a :class:`FairedShape` (poles as ``(k,)``).
 
     The arguments are those of :func:`fair_face` with one target count; the adaptive
     method also fairs rational curves.  An edge has no face samples: with ``search``
     ``"local"`` (the default) the core's own tolerance search fairs it, with its
-    defaults.
+    defaults, and its net is not polished (``objective`` ``fair`` is refused with the
+    wavelet method).
     """
     start = time.perf_counter()
     source = conversion.curve_from_edge(edge)
     if (tolerance is None) == (target is None):
         raise cf.InvalidInputError(
             "give either a tolerance (mm) or a target control-point count, not both/neither.")
+    if method == "wavelet" and objective == "fair":
+        raise cf.InvalidInputError(
+            "objective 'fair' polishes the wavelet net of a face; an edge's is not "
+            "polished: choose objective 'auto' or the adaptive method for edges.")
     # the core's default for curves chooses its own fit: the wavelet method is named
     keywords = {"method": "wavelet", **_core_keywords(method, objective, tolerance)}
     common = dict(knots=source.knots, degree=source.degree, weights=source.weights, **keywords)
@@ -701,11 +719,14 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
                if sub.startswith("Face")}   # each trim read once: fairing, checks, rebuilds
     start = time.perf_counter()
     found, faces = _joins_of(named, angle_tolerance, neighbours)
-    held = (joins != "free" and settings["tolerance"] is not None and found is not None
-            and settings["method"] == "wavelet")
-    # faces that meet another face search quasi-uniform, free-border targets, as
-    # cq-fairing fair's (the joint projection shares their knots and sets their borders)
-    plain = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if held else set()
+    searched = (settings["tolerance"] is not None and found is not None
+                and settings["method"] == "wavelet")
+    held = joins != "free" and searched
+    # faces that meet another face are not polished and, with their joins held, search
+    # quasi-uniform, free-border targets, as cq-fairing fair's (the joint projection
+    # shares their knots and sets their borders)
+    plain = {faces[f] for f in joined_faces(found.joins) if f < len(faces)} if searched \
+        else set()
     for done, (sub, element) in enumerate(named):
         if progress is not None:
             progress(done, len(named))
@@ -713,9 +734,10 @@ def fair_shapes(named, settings, face_settings, progress=None, joins="smooth",
             own = target if target is None or len(named) == 1 else _clamped_target(target,
                                                                                    element)
             try:
-                result = fair_face(element, **_plain(face_settings, done in plain,
-                                                     found is not None, settings),
-                                   **{**settings, "target": own}, domain=domains[sub])
+                result = fair_face(element, **{**settings, "target": own,
+                                               **_plain(face_settings, done in plain,
+                                                        found is not None, settings, held)},
+                                   domain=domains[sub])
                 results.append(replace(result, note=f"{sub} {result.note}")
                                if result.note else result)
             except cf.ToleranceNotMetError as error:
@@ -839,18 +861,20 @@ def _nothing_faired(source, surface, method):
             and surface.v_space.same_as(source.v_space))
 
 
-def _plain(face_settings, joined, several, settings):
+def _plain(face_settings, joined, several, settings, held):
     """``face_settings`` of a face; in a model (``several``: more than one face, or
     neighbours) its grading is
     :func:`~cq_fairing.core.joint_projection.model_grading`'s for the ``settings``,
-    and one that shares a held join searches the targets of
-    :func:`~cq_fairing.core.joint_projection.plain_target_options` (:func:`fair_shapes`)."""
+    and one ``joined`` to another takes the options of
+    :func:`~cq_fairing.core.joint_projection.plain_target_options` (not polished, and
+    with its joins ``held`` quasi-uniform, free-border targets: :func:`fair_shapes`)."""
     grading = face_settings.get("grading", "auto")
     own = {**face_settings, "grading": model_grading(grading, several, settings["method"],
                                                      settings["tolerance"] is not None)}
     if not joined:
         return own
-    return {**own, **plain_target_options(grading, face_settings.get("borders", "auto"))}
+    return {**own, **plain_target_options(grading, face_settings.get("borders", "auto"),
+                                          settings.get("objective", "auto"), held)}
 
 
 def _kept_by_joins(element, why, tolerance):
@@ -931,7 +955,7 @@ def _source_link(source):
 
 
 def make_fairing(source, tolerance=None, target=None, method="wavelet", boundary="free",
-                 search="local", measure=MEASURES[0], objective="compact", name="Fairing",
+                 search="local", measure=MEASURES[0], objective="auto", name="Fairing",
                  doc=None, borders="auto", joins="smooth", angle_tolerance=1.0,
                  grading="auto"):
     """Create a parametric Fairing feature (``Part::FeaturePython``) in the document.

@@ -111,7 +111,7 @@ class FairSurfacePanel:
     """Tolerance, mode, target, method, objective, borders, boundary, figures; Preview /
     OK / Cancel.
 
-    Objective is enabled for the adaptive method only, borders also for the wavelet
+    Objective and borders are enabled for the adaptive method and for the wavelet
     method in Tolerance mode; grading, search and measure for the
     wavelet method in tolerance mode (the adaptive method checks the true distance itself,
     energy keeps the net).
@@ -156,10 +156,13 @@ class FairSurfacePanel:
                                "(tolerance mode, polynomial faces; slower)")
         self.objective = _row(layout, "Objective:", QtWidgets.QComboBox(), "fairing_objective")
         self.objective.addItems(list(make.OBJECTIVES))
-        self.objective.setToolTip("compact: fewest control points within the tolerance; "
-                                  "faithful: stop where the residual reaches the noise; "
-                                  "fair: the fairest of the compact net and a few more "
-                                  "spans")
+        self.objective.setToolTip("wavelet (Tolerance mode): auto or fair = the fewest "
+                                  "control points, polished with the largest fairing "
+                                  "penalty within the tolerance; compact = not polished. "
+                                  "adaptive: auto or compact = fewest control points "
+                                  "within the tolerance; faithful: stop where the residual "
+                                  "reaches the noise; fair: the fairest of the compact net "
+                                  "and a few more spans")
         self.borders = _row(layout, "Borders:", QtWidgets.QComboBox(), "fairing_borders")
         self.borders.addItems(list(make.BORDERS))
         self.borders.setToolTip("wavelet (Tolerance mode) and adaptive: auto = borders "
@@ -244,10 +247,9 @@ class FairSurfacePanel:
 
     def _mode_changed(self, *_):
         by_tolerance = self.mode.currentIndex() == 0
-        adaptive = self.method.currentText() == "adaptive"
         wavelet = self.method.currentText() == "wavelet"
         self.tolerance.setEnabled(by_tolerance)
-        self.objective.setEnabled(adaptive)
+        self.objective.setEnabled(self._objective_applies())
         self.borders.setEnabled(make.borders_apply(self.method.currentText(), by_tolerance)
                                 and self.kind == "Face")
         self.grading.setEnabled(by_tolerance and wavelet and self.kind == "Face")
@@ -255,6 +257,13 @@ class FairSurfacePanel:
         self.measure.setEnabled(by_tolerance and wavelet and not self._local())
         self.target_u.setEnabled(not by_tolerance)
         self.target_v.setEnabled(not by_tolerance)
+
+    def _objective_applies(self):
+        """Objective: the adaptive method, and the wavelet method's tolerance search of a
+        face (whose net it polishes)."""
+        method = self.method.currentText()
+        return method == "adaptive" or (make.borders_apply(method, self.mode.currentIndex() == 0)
+                                        and self.kind == "Face")
 
     def _local(self):
         """True when the local search is chosen: ``Measure`` belongs to the core's."""
@@ -271,8 +280,8 @@ class FairSurfacePanel:
         common = {"method": method,
                   "search": self.search.currentText() if wavelet else make.SEARCHES[0],
                   "measure": measure,
-                  "objective": self.objective.currentText() if method == "adaptive"
-                  else "compact"}
+                  "objective": self.objective.currentText() if self._objective_applies()
+                  else make.OBJECTIVES[0]}
         if self.mode.currentIndex() == 0:
             return {"tolerance": float(self.tolerance.property("rawValue")), "target": None,
                     **common}
@@ -514,7 +523,7 @@ class LevelsPanel:
         doc = self.link[0].Document
         call = make_call(self.link, {"target": target, "tolerance": None, "method": "wavelet",
                                      "search": make.SEARCHES[0], "measure": make.MEASURES[0],
-                                     "objective": "compact"},
+                                     "objective": make.OBJECTIVES[0]},
                          {"boundary": "free", "borders": "auto", "grading": "auto"})
         before = {o.Name for o in doc.Objects}
         try:

@@ -222,7 +222,7 @@ def test_a_scheduler_and_workers_started_apart(tmp_path, serial):
 @pytest.mark.parametrize("args, code, fragment", [
     (["--tol", "1", "--rel-tol", "0.01"], 2, "not allowed with argument"),
     (["--scheduler", "tcp://127.0.0.1:9", "--workers", "2"], 2, "not both"),
-    (["--objective", "fair"], 2, "--method adaptive")])
+    (["--objective", "faithful"], 2, "--method adaptive")])
 def test_bad_batch_options_are_refused_in_one_line(tmp_path, args, code, fragment):
     inputs = _folder(tmp_path / "in", ("ring_nurbs.brep",))
     proc = run("batch", inputs, "-o", tmp_path / "out", "--quiet", *args, cwd=tmp_path)

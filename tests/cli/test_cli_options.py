@@ -130,7 +130,10 @@ REFUSED_WITH_ENERGY = [
     (["--method", "energy", "--boundary", "fixed"],
      "--boundary fixed applies to --method wavelet or adaptive only"),
     (["--method", "energy", "--objective", "fair"], "--objective fair applies to --method "
-                                                    "adaptive only, got --method energy"),
+                                                    "wavelet or adaptive only, got --method "
+                                                    "energy"),
+    (["--objective", "faithful"], "--objective faithful applies to --method adaptive only, "
+                                  "got --method wavelet"),
     (["--method", "energy", "--grading", "uniform"], "--grading uniform applies to --method "
                                                      "wavelet only, got --method energy"),
 ]

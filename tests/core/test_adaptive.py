@@ -26,7 +26,7 @@ from cq_fairing.core.gram import gram_matrix
 from cq_fairing.core.measures import deviation
 from cq_fairing.core.polish import (
     _constrained_stages,
-    _polish,
+    largest_penalty,
     net_lengths,
     variation_energy_matrix,
 )
@@ -654,8 +654,8 @@ def test_constrained_stages_lower_the_energy_within_tol(blade):
     spaces = [fair_surface_adaptive(blade, 0.05, polish=False, borders="free").surface]
     spaces = (spaces[0].u_space, spaces[0].v_space)
     fit = _SurfaceFit(blade, 0.99 * 0.05, (3, 3), 8, 400_000)
-    (faired, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol,
-                                  fit.trial(*spaces), steps=8)
+    (faired, _, _), lam = largest_penalty(lambda x: fit.trial(*spaces, x), fit.tol,
+                                          fit.trial(*spaces), steps=8)
     stages = _constrained_stages(fit, spaces, faired, lam)
     e = variation_energy_matrix(*spaces, net_lengths(blade.poles))
 
@@ -687,8 +687,8 @@ def test_below_the_noise_the_constrained_stages_come_closer_to_the_truth():
     plain = fair_surface_adaptive(blade.surface, 0.02, polish=False, borders="free").surface
     spaces = (plain.u_space, plain.v_space)
     fit = _SurfaceFit(blade.surface, 0.99 * 0.02, (3, 3), 8, 400_000)
-    (single, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol,
-                                  fit.trial(*spaces), steps=8)
+    (single, _, _), lam = largest_penalty(lambda x: fit.trial(*spaces, x), fit.tol,
+                                          fit.trial(*spaces), steps=8)
     staged = _constrained_stages(fit, spaces, single, lam)[-1][0]
     energy = fair_surface_energy(blade.surface, 0.02).surface
     to_truth = {name: deviation(blade.truth, s).rms

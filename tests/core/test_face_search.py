@@ -16,13 +16,16 @@ from cq_fairing.core.face_search import (
     GRADING_NOTES,
     MARGIN,
     PINNED_NOTE,
+    POLISH_NOTE,
     CoreSearch,
     face_attempts,
     face_finisher,
     sample_counts,
     search_face,
 )
+from cq_fairing.core.fairness import fairness_summary
 from cq_fairing.core.plans import end_graded_space
+from cq_fairing.core.target_projections import TargetProjections
 
 TOL = 0.05
 
@@ -71,13 +74,50 @@ def test_the_winner_is_within_tol_by_a_denser_measure_and_has_fewer_poles():
     grid = _grid(source)
     check = TwoSided(source, grid)
     outcome = search_face(source, TOL, grid, face_finisher(source), check, borders="free",
-                          grading="uniform")
+                          grading="uniform", objective="compact")
     assert outcome.status == "faired" and outcome.notes == ()
     assert outcome.deviation == check.log[-1][1] <= TOL
     assert outcome.surface.shape[0] * outcome.surface.shape[1] < 30 * 40
     assert _dense_two_sided(source, outcome.surface) <= TOL * 1.02
     assert outcome.result is not None
     assert outcome.result.surface is outcome.surface
+
+
+@pytest.mark.parametrize("borders", ["free", "pinned"])
+def test_the_winner_is_polished_at_the_same_poles_fairer_and_within_tol(borders):
+    """By default the winner is polished: the penalised projection onto the same target
+    spaces, with the same borders (pinned border rows stay the projections of the
+    source's border curves), within tol by a denser measure, with less thin-plate
+    bending energy than the plain projection (``objective="compact"``) by the core's
+    quadrature (:func:`~cq_fairing.core.fairness.fairness_summary`); the note gives the
+    penalty, and the projection with that penalty is the net."""
+    source = _noisy()
+    grid = _grid(source)
+    plain = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
+                        borders=borders, grading="uniform", objective="compact")
+    check = TwoSided(source, grid)
+    polished = search_face(source, TOL, grid, face_finisher(source), check,
+                           borders=borders, grading="uniform")
+    note = polished.notes[-1]
+    assert note.startswith(POLISH_NOTE) and not any(POLISH_NOTE in n for n in plain.notes)
+    for a, b in ((polished.surface.u_space, plain.surface.u_space),
+                 (polished.surface.v_space, plain.surface.v_space)):
+        assert a.same_as(b)
+    assert polished.deviation == check.log[-1][1] <= TOL
+    assert _dense_two_sided(source, polished.surface) <= TOL * 1.02
+    bending = [fairness_summary(source, s)["bending_energy"]["after"]
+               for s in (polished.surface, plain.surface)]
+    assert bending[0] < bending[1]
+    lam = float(note.split()[-1])
+    again = TargetProjections(source, borders).projected(polished.surface.u_space,
+                                                         polished.surface.v_space, lam)
+    scale = np.abs(source.poles).max()
+    assert np.abs(again.poles - polished.surface.poles).max() < 1e-3 * scale
+    if borders == "pinned":
+        for rows in ((0, slice(None)), (-1, slice(None)), (slice(None), 0),
+                     (slice(None), -1)):
+            np.testing.assert_allclose(polished.surface.poles[rows], plain.surface.poles[rows],
+                                       rtol=0, atol=1e-9 * scale)
 
 
 def test_a_failing_check_moves_on_to_the_next_attempt():
@@ -107,7 +147,7 @@ def test_error_graded_targets_where_uniform_ones_keep_many_poles():
     source = _noisy()
     grid = _grid(source)
     uniform = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
-                          borders="free", grading="uniform")
+                          borders="free", grading="uniform", objective="compact")
     poles = uniform.surface.shape[0] * uniform.surface.shape[1]
     assert poles > ERROR_GRADED_SHARE * 30 * 40 and uniform.notes == ()
     check = TwoSided(source, grid)
@@ -200,9 +240,9 @@ def test_pinned_borders_have_targets_refined_towards_them():
     source = _noisy()
     grid = _grid(source)
     uniform = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
-                          borders="pinned", grading="uniform")
+                          borders="pinned", grading="uniform", objective="compact")
     graded = search_face(source, TOL, grid, face_finisher(source), TwoSided(source, grid),
-                         borders="pinned", grading="auto")
+                         borders="pinned", grading="auto", objective="compact")
     assert uniform.notes == (PINNED_NOTE,)
     assert uniform.surface.u_space.is_quasi_uniform and uniform.surface.v_space.is_quasi_uniform
     assert graded.notes == (GRADING_NOTES["ends"], PINNED_NOTE)

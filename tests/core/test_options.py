@@ -153,3 +153,27 @@ def test_each_join_option_but_free_names_the_continuity_it_holds():
         check_joins(joins, 1.0)
     assert set(JOIN_CONTINUITY) == set(JOINS) - {"free"}
     assert set(JOIN_CONTINUITY.values()) == set(CONTINUITIES)
+
+
+def test_the_objective_of_a_face_applies_to_the_wavelet_search_and_the_adaptive_method():
+    """``objective`` ``"auto"`` (the default) is ``"compact"`` to the adaptive method;
+    an occ face's wavelet search takes ``"auto"``, ``"compact"`` and ``"fair"`` with a
+    tolerance, refuses ``"faithful"`` (the adaptive method's stopping rule), and refuses
+    any objective but the default with explicit scales ``n``, where nothing is
+    searched; the energy method takes none but the default."""
+    assert options.DEFAULTS["objective"] == options.OBJECTIVES[0] == "auto"
+    assert options.checked_objective("auto") == "compact"
+    assert options.checked_objective("fair") == "fair"
+    for objective in ("auto", "compact", "fair"):
+        options.check_face_options(0.1, None, "wavelet", "free", objective)
+    for objective in options.OBJECTIVES:
+        options.check_face_options(0.1, None, "adaptive", "free", objective)
+    with pytest.raises(cf.InvalidInputError, match="objective='faithful' .* applies to "
+                                                   "method='adaptive' only, got "
+                                                   "method='wavelet'"):
+        options.check_face_options(0.1, None, "wavelet", "free", "faithful")
+    with pytest.raises(cf.InvalidInputError, match="objective applies to the tolerance search"):
+        options.check_face_options(None, (4, 4), "wavelet", "free", "fair")
+    with pytest.raises(cf.InvalidInputError, match="objective='fair' applies to method="):
+        options.check_face_options(0.1, None, "energy", "free", "fair")
+    options.check_face_options(None, (4, 4), "wavelet", "free", "auto")

@@ -17,7 +17,11 @@ spans graded 74 to 1) at 0.12 m; the settings (:data:`SETTINGS`): the defaults o
 the fuselage, the noisy face and the blade face, ``method="adaptive"`` on the fuselage,
 ``method="energy"`` on all three (it keeps the rational face with its reason),
 ``method="adaptive", borders="free"`` and ``borders="free"`` on the noisy face, and
-``grading="uniform"`` on the blade face.  A case is named
+``grading="uniform"`` on the blade face.  The fuselage's faces and the blade face have
+neighbours in their models, where neither the workbench's feature nor ``cq-fairing
+fair`` polishes the wavelet search's net
+(:func:`~cq_fairing.core.joint_projection.plain_target_options`): their wavelet
+references are ``fair_face`` with ``objective="compact"`` (:data:`NEIGHBOURED`).  A case is named
 ``"<setting>/<face>"`` (``"energy/fuselage/3"``, ``"wavelet/noisy"``).  This module
 imports numpy only; :func:`computed` imports the OCP layer.
 """
@@ -33,6 +37,8 @@ NOISY = ((50, 80), 0.05)
 RATIONAL = ((20, 30), 0.05)
 #: The IEA blade's second face (``Face2``) and its tolerance (m).
 BLADE = ("IEA_15MW_CFD.stp", 1, 0.12)
+#: The faces with neighbours in their models.
+NEIGHBOURED = ("fuselage", "blade")
 #: ``{setting: (options of fair_face and of the workbench's make_fairing, faces)}``.
 SETTINGS = {"wavelet": ({}, ("fuselage", "noisy", "blade")),
             "adaptive": ({"method": "adaptive"}, ("fuselage",)),
@@ -138,7 +144,11 @@ def computed():
         for key, face in faces.items():
             if key.split("/")[0] in kinds:
                 case = f"{name}/{key}"
-                out[case] = _outcome(face, *setting(case))
+                options, tol = setting(case)
+                if key.split("/")[0] in NEIGHBOURED and options.get("method", "wavelet") == \
+                        "wavelet":
+                    options = {**options, "objective": "compact"}
+                out[case] = _outcome(face, options, tol)
     return out
 
 

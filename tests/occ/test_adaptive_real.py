@@ -4,7 +4,7 @@ import numpy as np
 
 from cq_fairing.core.adaptive import fair_surface_adaptive
 from cq_fairing.core.geometry import extent
-from cq_fairing.core.polish import _constrained_stages, _polish
+from cq_fairing.core.polish import _constrained_stages, largest_penalty
 from cq_fairing.core.surface_fit import _SurfaceFit
 from cq_fairing.occ import face_to_surface
 from cq_fairing.occ.convert import indexed_faces
@@ -27,8 +27,8 @@ def test_a_diverging_reweighting_ends_its_stage_at_once(real):
     assert dict(result.table)["borders"] == "pinned"
     spaces = (result.surface.u_space, result.surface.v_space)
     fit = _SurfaceFit(source, 0.99 * tol, (3, 3), 8, 400_000, "pinned")
-    (faired, _, _), lam = _polish(lambda x: fit.trial(*spaces, x), fit.tol,
-                                  fit.trial(*spaces), steps=8)
+    (faired, _, _), lam = largest_penalty(lambda x: fit.trial(*spaces, x), fit.tol,
+                                          fit.trial(*spaces), steps=8)
     assert lam > 1.0
     before = fit.evaluations
     assert _constrained_stages(fit, spaces, faired, lam) == []

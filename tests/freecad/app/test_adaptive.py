@@ -164,6 +164,30 @@ def test_feature_faithful_save_reopen_keeps_method_and_objective(doc, noisy, fai
         assert again.PolesAfter == " x ".join(map(str, faired["adaptive free"].poles_after))
 
 
+def test_the_wavelet_default_is_polished_within_the_tolerance(doc, noisy, face):
+    """The wavelet method's tolerance search polishes its winner by default (Objective
+    ``auto``, a new feature's): the same control points as ``compact``, within the
+    tolerance by FreeCAD's own distance, less thin-plate bending energy by the core's
+    quadrature, and the note says so."""
+    from cq_fairing.core.fairness import fairness_summary
+    from fairing_wb import conversion
+
+    plain = make.fair_face(face.Faces[0], tolerance=TOL, objective="compact")
+    polished = make.fair_face(face.Faces[0], tolerance=TOL)
+    assert polished.poles_after == plain.poles_after
+    assert "polished" in polished.note and "polished" not in plain.note
+    assert fixtures.sample_distance(polished.shape.Faces[0], face.Faces[0], 15) <= TOL
+    source = conversion.surface_from_face(face.Faces[0])
+    bending = [fairness_summary(source, conversion.surface_from_face(r.shape.Faces[0]))
+               ["bending_energy"]["after"] for r in (polished, plain)]
+    assert bending[0] < bending[1]
+    obj = make.make_fairing((noisy, ["Face1"]), tolerance=TOL)
+    assert obj.Objective == "auto" == make.OBJECTIVES[0]
+    doc.recompute()
+    assert _ok(obj), obj.Status
+    assert obj.PolesAfter == " x ".join(map(str, polished.poles_after))
+
+
 def test_document_of_version_1_migrates(doc, noisy, tmp_path):
     """A version-1 document: Method offered wavelet/energy only, no Objective (added in
     version 2) and no Borders (version 3)."""

@@ -126,7 +126,8 @@ def test_tolerance_mode_meets_tolerance_checked_by_occt(doc, blade):
 def test_search_and_measure_belong_to_the_wavelet_method(doc, noisy):
     """Given with energy (or adaptive), a search or measure other than the default is
     refused as the command line refuses it; a feature whose Method is energy ignores
-    its Search and Measure properties, as it ignores Objective."""
+    its Search and Measure properties, as it ignores Objective (the energy method
+    keeps the net)."""
     face = noisy.Shape.Faces[0]
     for options in (dict(search="linear"), dict(measure="parametric", search="linear")):
         with pytest.raises(Exception, match="applies to method='wavelet' only, got "

@@ -200,20 +200,21 @@ def console_text():
 
 
 def check_adaptive_panel(doc, source):
-    """Adaptive in the task panel: Objective enabled for it only, Borders for it and the
-    wavelet method in Tolerance mode, Preview within the tolerance, OK creates the
+    """Adaptive in the task panel: Objective and Borders enabled for it and the wavelet
+    method in Tolerance mode, Preview within the tolerance, OK creates the
     feature and echoes method, objective and borders (free: the faster search on this
     sliding face)."""
     Gui.Selection.clearSelection()
     Gui.Selection.addSelection(source, "Face1")
     open_panel("Fairing_FairSurface")
     find("fairing_tolerance").setProperty("rawValue", 0.05)
-    check("objective disabled, borders and grading enabled for wavelet in tolerance mode",
-          not find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled()
+    check("objective, borders and grading enabled for wavelet in tolerance mode",
+          find("fairing_objective").isEnabled() and find("fairing_borders").isEnabled()
           and find("fairing_grading").isEnabled())
     find("fairing_mode").setCurrentIndex(1)
-    check("borders and grading disabled for wavelet in target mode",
-          not find("fairing_borders").isEnabled() and not find("fairing_grading").isEnabled())
+    check("objective, borders and grading disabled for wavelet in target mode",
+          not find("fairing_objective").isEnabled() and not find("fairing_borders").isEnabled()
+          and not find("fairing_grading").isEnabled())
     find("fairing_mode").setCurrentIndex(0)
     _, _, _, wavelet_text = preview_poles()
     find("fairing_method").setCurrentText("adaptive")
