@@ -72,9 +72,7 @@ class TargetProjections:
 
     def projected(self, tu, tv, lam=0.0):
         """The projected surface on ``tu x tv``; ``None`` keeps the source's space in that
-        direction; ``lam`` the curvature-variation penalty of :meth:`project` on the
-        interior rows (pinned border rows stay the projections of the source's border
-        curves, which a neighbour sharing the border projects alike).
+        direction; ``lam`` the curvature-variation penalty of :meth:`project`.
 
         Raises
         ------
@@ -84,8 +82,7 @@ class TargetProjections:
         """
         tu = self.surface.u_space if tu is None else tu
         tv = self.surface.v_space if tv is None else tv
-        poles, weights = cartesian_poles(self.project(tu, tv, lam, edge_lam=0.0),
-                                         self.rational)
+        poles, weights = cartesian_poles(self.project(tu, tv, lam), self.rational)
         return BSplineSurface(poles, tu.knots, tv.knots, tu.degree, tv.degree, weights)
 
     def _cached(self, key, build):

@@ -312,7 +312,8 @@ def test_brep_output_of_a_step_assembly_is_geometry_only(rotor_step, tmp_path):
 
 def test_a_part_placed_three_times_is_faired_once_and_moved_to_each_placement(rotor_step):
     """Each placement (turned and shifted) gets the surface that fairing its face on its
-    own gives, and the deviation samples of that fit."""
+    own gives (not polished: in the part it meets other faces), and the deviation
+    samples of that fit."""
     from cq_fairing.occ import fair_face
 
     shape = read_shape(rotor_step)
@@ -321,7 +322,7 @@ def test_a_part_placed_three_times_is_faired_once_and_moved_to_each_placement(ro
     placed = [r for r in faired if "another placement" in r.message]
     assert len(placed) == 2 * (len(faired) // 3) and all(r.seconds == 0.0 for r in placed)
     for r in placed:
-        alone = fair_face(faces_of(shape)[r.index], tol=0.05)
+        alone = fair_face(faces_of(shape)[r.index], tol=0.05, objective="compact")
         assert alone.surface.poles.shape == r.surface.poles.shape
         assert np.allclose(alone.surface.poles, r.surface.poles, atol=1e-9)
         assert r.max_deviation == pytest.approx(alone.max_deviation, rel=1e-6)
