@@ -1,4 +1,10 @@
-"""Pcurves projected from an edge's 3-D curve onto a new surface.
+"""Pcurves: evaluated many parameters at a time, and projected from an edge's 3-D curve
+onto a new surface.
+
+:func:`pcurve_points` evaluates a ``Geom2d`` curve at an array of parameters: a
+non-periodic B-spline curve (the p-curves of B-spline faces) by the core's evaluation
+of the same poles, knots and weights, a line by its equation, a trimmed curve by its
+basis, and any other curve point by point through OCCT.
 
 A faired surface :math:`S'` approximates the original :math:`S` in distance; an adaptive
 target's own knots let :math:`S'(u, v)` slide along :math:`S`, so an edge's old UV
@@ -17,16 +23,54 @@ ran 0.081 from the 3-D curve where the closest points are 0.0062 away.
 import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Line, Geom2d_TrimmedCurve
 from OCP.Geom2dAPI import Geom2dAPI_Interpolate
 from OCP.gp import gp_Pnt2d
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from OCP.TColgp import TColgp_HArray1OfPnt2d
 from OCP.TColStd import TColStd_HArray1OfReal
 
+from ..core.geometry import make_curve
+from ..errors import InvalidInputError
+
 SAMPLES_PER_SPAN = 8  # closest points per knot span of the new surface (both directions)
 INTERPOLATION_TOLERANCE = 1e-12  # UV distance below which two samples coincide
 
-__all__ = ["projected_pcurve"]
+__all__ = ["projected_pcurve", "pcurve_points"]
+
+
+def pcurve_points(curve):
+    """``points(t)``: the (n, 2) points of the ``Geom2d`` ``curve`` at the parameters
+    ``t`` (module notes); B-spline parameters are clamped into the curve's domain."""
+    while isinstance(curve, Geom2d_TrimmedCurve):
+        curve = curve.BasisCurve()
+    if isinstance(curve, Geom2d_Line):
+        origin, direction = (np.array(p.Coord()) for p in (curve.Location(),
+                                                              curve.Direction()))
+        return lambda t: origin + np.asarray(t, float).reshape(-1, 1) * direction
+    core = _core_curve(curve) if isinstance(curve, Geom2d_BSplineCurve) else None
+    if core is not None:
+        lo, hi = core.domain
+        return lambda t: core.evaluate(np.clip(np.asarray(t, float).ravel(), lo, hi))
+    return lambda t: np.array([curve.Value(float(s)).Coord()
+                               for s in np.asarray(t, float).ravel()]).reshape(-1, 2)
+
+
+def _core_curve(curve):
+    """The core's curve of a ``Geom2d_BSplineCurve``; ``None`` for a periodic one or one
+    the core does not take (OCCT evaluates those)."""
+    if curve.IsPeriodic():
+        return None
+    count = curve.NbKnots()
+    knots = np.repeat([curve.Knot(i) for i in range(1, count + 1)],
+                      [curve.Multiplicity(i) for i in range(1, count + 1)])
+    poles = np.array([curve.Pole(i).Coord() for i in range(1, curve.NbPoles() + 1)])
+    weights = (np.array([curve.Weight(i) for i in range(1, curve.NbPoles() + 1)])
+               if curve.IsRational() else None)
+    try:
+        return make_curve(poles, knots, curve.Degree(), weights)
+    except InvalidInputError:
+        return None
 
 
 def projected_pcurve(edge, pcurve, first, last, surface):

@@ -35,6 +35,7 @@ from ..core.pinned_faces import (
     unpinned_sentence,
 )
 from ..core.pinned_projection import PinnedEdge
+from .pcurves import pcurve_points
 
 __all__ = ["pin_unholdable"]
 
@@ -108,9 +109,12 @@ class _Curves:
 
 
 def _sampler(curve, first, last):
-    """``uv(t)``: the p-curve's points at ``first + t (last - first)``."""
+    """``uv(t)``: the p-curve's points at ``first + t (last - first)``
+    (:func:`~cq_fairing.occ.pcurves.pcurve_points`)."""
+    points = pcurve_points(curve)
+
     def uv(t):
-        return np.array([curve.Value(first + float(s) * (last - first)).Coord() for s in t])
+        return points(first + np.asarray(t, float) * (last - first))
     return uv
 
 

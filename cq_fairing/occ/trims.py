@@ -21,6 +21,7 @@ from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
 from ..core.regions import TrimRegion
+from .pcurves import pcurve_points
 
 __all__ = ["face_region", "trim_region", "classify"]
 
@@ -113,21 +114,18 @@ def _discretised(curve, first, last, deflection, rounds=16):
     until none does (OCCT's ``GCPnts_QuasiUniformDeflection`` returned a single chord for
     a curved p-curve of linkrods.step, 0.0045 from its midpoint).
     """
+    values = pcurve_points(curve)
     params = np.linspace(first, last, 33)
-    points = _values(curve, params)
+    points = values(params)
     for _ in range(rounds):
         middle = 0.5 * (params[:-1] + params[1:])
-        off = np.linalg.norm(_values(curve, middle) - 0.5 * (points[:-1] + points[1:]), axis=1)
+        off = np.linalg.norm(values(middle) - 0.5 * (points[:-1] + points[1:]), axis=1)
         split = off > deflection
         if not split.any():
             break
         params = np.sort(np.concatenate([params, middle[split]]))
-        points = _values(curve, params)
+        points = values(params)
     return points
-
-
-def _values(curve, params):
-    return np.array([[p.X(), p.Y()] for p in (curve.Value(float(t)) for t in params)])
 
 
 def _largest_gap(pieces):

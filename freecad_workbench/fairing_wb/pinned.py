@@ -28,6 +28,8 @@ from cq_fairing.core.pinned_faces import (
 )
 from cq_fairing.core.pinned_projection import PinnedEdge
 
+from .trim import curve_points
+
 __all__ = ["PinnedFaces", "pin_faces"]
 
 
@@ -114,8 +116,8 @@ def _edges(found, face, index, joins, continuity):
 
 
 def _sampler(curve, first, last):
-    """``uv(t)``: the p-curve's points at ``first + t (last - first)``."""
+    """``uv(t)``: the p-curve's points at ``first + t (last - first)``
+    (:func:`trim.curve_points`)."""
     def uv(t):
-        points = (curve.value(first + float(s) * (last - first)) for s in t)
-        return np.array([(p.x, p.y) for p in points])
+        return curve_points(curve, first + np.asarray(t, float) * (last - first))
     return uv

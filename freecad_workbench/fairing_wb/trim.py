@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 import cq_fairing as cf
 
-__all__ = ["on_face", "Trim", "seams", "SAMPLES"]
+__all__ = ["on_face", "Trim", "seams", "curve_points", "SAMPLES"]
 
 SAMPLES = 257          # p-curve samples per edge (the polygon's vertices)
 BAND_FACTOR = 4.0      # the band around the polygon, in chord deviations
@@ -105,7 +105,7 @@ def _polygon(face):
                 continue    # the rows it leaves open are crossed an odd number of times
             return None
         curve, first, last = found[0], found[1], found[2]
-        points = _curve_points(curve, np.linspace(first, last, 2 * SAMPLES - 1))
+        points = curve_points(curve, np.linspace(first, last, 2 * SAMPLES - 1))
         nodes, middles = points[::2], points[1::2]
         chords = 0.5 * (nodes[:-1] + nodes[1:])
         deviation = max(deviation, float(np.linalg.norm(middles - chords, axis=1).max()))
@@ -117,7 +117,7 @@ def _polygon(face):
     return np.concatenate(segments), band
 
 
-def _curve_points(curve, t):
+def curve_points(curve, t):
     """``(len(t), 2)`` points of the p-curve ``curve`` at parameters ``t``: a
     non-periodic B-spline clamped at both ends and ``t`` in its domain by the core's
     batched evaluation (Part's points to rounding, which moves the polygon far less

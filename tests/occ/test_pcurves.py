@@ -1,5 +1,6 @@
-"""Pcurves projected from an edge's 3-D curve (cq_fairing.occ.pcurves), checked by OCCT's
-own evaluation of the 3-D curve and the new surface."""
+"""Pcurves (cq_fairing.occ.pcurves): evaluated many parameters at a time, and projected
+from an edge's 3-D curve, checked by OCCT's own evaluation of the curves and the new
+surface."""
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from cq_fairing.occ import fair_face
 from cq_fairing.occ.convert import indexed_faces, to_geom_surface
-from cq_fairing.occ.pcurves import projected_pcurve
+from cq_fairing.occ.pcurves import pcurve_points, projected_pcurve
 
 
 @pytest.fixture(scope="module")
@@ -80,3 +81,36 @@ def test_an_edge_without_a_3d_curve_keeps_its_pcurve(projection):
     ShapeBuild_Edge().RemoveCurve3d(bare)
     assert BRep_Tool.Curve_s(bare, 0.0, 0.0) is None
     assert projected_pcurve(bare, old, first, last, surface) is None
+
+
+@pytest.mark.parametrize("name", ["linkrods.step", "impeller.igs", "testtoler.brep"])
+def test_pcurve_points_are_occts_values(real, name):
+    """Every p-curve of every face of the model (B-spline curves, lines and trimmed
+    curves), evaluated by ``pcurve_points`` at 17 parameters over its edge's range:
+    OCCT's ``Geom2d_Curve::Value`` at each, to round-off of the face's parameter box
+    (a B-spline's parameters clamped into its domain, which an edge's range may pass by
+    round-off: linkrods has one 1e-9 beyond)."""
+    from OCP.BRepTools import BRepTools
+    from OCP.TopExp import TopExp_Explorer
+
+    kinds = set()
+    for face in indexed_faces(real(name)):
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+        scale = max(abs(u0), abs(u1), abs(v0), abs(v1), u1 - u0, v1 - v0)
+        edges = TopExp_Explorer(face, TopAbs_EDGE)
+        while edges.More():
+            edge = TopoDS.Edge_s(edges.Current())
+            curve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+            edges.Next()
+            if curve is None:
+                continue
+            kinds.add(type(curve).__name__)
+            first, last = BRep_Tool.Range_s(edge, face)
+            t = np.linspace(first, last, 17)
+            basis = curve.BasisCurve() if hasattr(curve, "BasisCurve") else curve
+            at = (np.clip(t, basis.FirstParameter(), basis.LastParameter())
+                  if type(basis).__name__ == "Geom2d_BSplineCurve" else t)
+            expected = np.array([curve.Value(float(s)).Coord() for s in at])
+            np.testing.assert_allclose(pcurve_points(curve)(t), expected, rtol=0,
+                                       atol=1e-12 * scale)
+    assert "Geom2d_BSplineCurve" in kinds or "Geom2d_Line" in kinds

@@ -72,7 +72,7 @@ def test_p_curve_points_are_parts_values(name):
             curve, first, last = found
             t = np.linspace(first, last, 41)
             part = np.array([(p.x, p.y) for p in (curve.value(float(x)) for x in t)])
-            assert np.abs(trim._curve_points(curve, t) - part).max() <= 1e-12 * max(
+            assert np.abs(trim.curve_points(curve, t) - part).max() <= 1e-12 * max(
                 u1 - u0, v1 - v0)
 
 
