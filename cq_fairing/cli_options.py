@@ -7,12 +7,12 @@ from .core.options import (
     BORDERS,
     BOUNDARIES,
     DEFAULTS,
-    FACE_APPLIES,
     GRADINGS,
     JOINS,
     METHOD_DOES,
     METHODS,
     OBJECTIVES,
+    face_applies,
 )
 from .errors import InvalidInputError
 
@@ -107,15 +107,15 @@ def add_fairing_options(parser):
 
 def check_method(args):
     """Refuse the fairing options ``args.method`` does not use
-    (:data:`cq_fairing.core.options.FACE_APPLIES`: --objective and --borders need --method
-    wavelet or adaptive, --objective faithful adaptive, --grading wavelet, --target-degree and --boundary not
-    energy),
+    (:func:`cq_fairing.core.options.face_applies`: --objective and --borders need
+    --method wavelet or adaptive, --objective faithful adaptive, --grading wavelet,
+    --target-degree and --boundary not energy),
     --grading with --target (no search runs), and --target with the methods that choose
     their own net.  An option spelled out at its default is no request, as
     in the API."""
     for name in ("objective", "borders", "grading", "target_degree", "boundary"):
         value = getattr(args, name)
-        allowed = [method for method in FACE_APPLIES[name] if method in METHODS]
+        allowed = [method for method in face_applies(name, value) if method in METHODS]
         if value in (None, DEFAULTS[name]) or args.method in allowed:
             continue
         option = "--" + name.replace("_", "-")
@@ -124,11 +124,6 @@ def check_method(args):
             f"{option} {shown} applies to --method {' or '.join(allowed)} only, got "
             f"--method {args.method}, which {METHOD_DOES[args.method]}; add --method "
             f"{allowed[-1]} or drop {option}.")
-    if args.objective == "faithful" and args.method != "adaptive":
-        raise InvalidInputError(
-            f"--objective faithful applies to --method adaptive only, got --method "
-            f"{args.method}, which {METHOD_DOES[args.method]}; add --method adaptive or "
-            "drop --objective.")
     if args.target is not None and args.grading not in (None, DEFAULTS["grading"]):
         raise InvalidInputError(f"--grading {args.grading} applies to the tolerance search, "
                                 "which does not run with --target; drop --grading or give "

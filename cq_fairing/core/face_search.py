@@ -193,7 +193,7 @@ def uv_window(box, surface):
     return clipped
 
 
-def face_attempts(tol, search="local", method="wavelet", objective="compact",
+def face_attempts(tol, search="local", method="wavelet", objective=DEFAULTS["objective"],
                   borders="auto", measure=DEFAULTS["measure"]):
     """The ``(criterion, goal)`` attempts of :func:`search_face`, in order.
 

@@ -147,12 +147,13 @@ from ..errors import InvalidInputError, InvalidToleranceError
 
 __all__ = ["METHODS", "CURVE_METHODS", "OBJECTIVES", "BORDERS", "BOUNDARIES", "SEARCHES",
            "FACE_SEARCHES", "GRADINGS", "MEASURES", "SCHEDULES", "JOINS", "JOIN_CONTINUITY",
-           "DEFAULTS", "CURVE_DEFAULTS", "APPLIES", "FACE_APPLIES", "METHOD_DOES", "RENAMED",
+           "DEFAULTS", "CURVE_DEFAULTS", "APPLIES", "FACE_APPLIES", "FACE_VALUE_APPLIES",
+           "METHOD_DOES", "RENAMED",
            "RENAMED_VALUES",
            "curve_method", "tolerance_method", "check_applies", "check_search_options",
            "checked_choice", "check_joins", "checked_objective", "check_borders",
            "checked_target_degree", "checked_order", "check_order",
-           "renamed_keywords", "renamed_value", "check_face_options"]
+           "renamed_keywords", "renamed_value", "check_face_options", "face_applies"]
 
 #: How the geometry is faired (``"wavelet"`` first: the default of surfaces and faces).
 METHODS = ("wavelet", "adaptive", "energy")
@@ -197,6 +198,9 @@ APPLIES = {"objective": ("adaptive",), "borders": ("adaptive",),
 #: :data:`APPLIES` of an occ face: its wavelet search also pins borders and polishes.
 FACE_APPLIES = {**APPLIES, "borders": ("wavelet", "adaptive"),
                 "objective": ("wavelet", "adaptive")}
+#: Values of an occ face's option that apply to fewer methods than the option does
+#: (``objective="faithful"``: the adaptive method's stopping rule).
+FACE_VALUE_APPLIES = {("objective", "faithful"): ("adaptive",)}
 
 #: What each method does that makes the other methods' options meaningless for it.
 METHOD_DOES = {"auto": "chooses the adaptive fit per curve",
@@ -391,6 +395,13 @@ def check_applies(method, options, defaults=DEFAULTS, methods=METHODS, applies=A
             f"which {METHOD_DOES[method]}; add method={allowed[-1]!r} or drop {name}.")
 
 
+def face_applies(name, value):
+    """The methods an occ face's option ``name`` applies to with ``value``
+    (:data:`FACE_VALUE_APPLIES`, else :data:`FACE_APPLIES`)."""
+    narrower = FACE_VALUE_APPLIES.get((name, value)) if isinstance(value, str) else None
+    return narrower or FACE_APPLIES[name]
+
+
 def curve_method(method, n, tol):
     """The method :func:`~cq_fairing.core.fairing.fair_curve` runs: ``method``, one of
     :data:`CURVE_METHODS`; ``"auto"`` is the wavelet method unless ``tol`` comes without
@@ -487,10 +498,11 @@ def check_face_options(tol, n, method, boundary, objective="auto", borders="auto
         raise InvalidInputError(
             f"method={method!r} {what} and needs tol, not n; got n={n!r}. "
             "Give tol, or use method='wavelet' for explicit scales.")
-    if method == "wavelet" and objective == "faithful":
+    if ("objective", objective) in FACE_VALUE_APPLIES and \
+            method not in face_applies("objective", objective):
         raise InvalidInputError(
             "objective='faithful' (stop where the residual reaches the noise) applies to "
-            "method='adaptive' only, got method='wavelet': use method='adaptive', or "
+            f"method='adaptive' only, got method={method!r}: use method='adaptive', or "
             "objective 'auto', 'compact' or 'fair'.")
     check_search_options(n, tol, (("search", search, "local"), ("grading", grading, "auto"),
                                   ("objective", objective, "auto")))

@@ -624,7 +624,8 @@ class BoundWalk:
         before the first whose bound is at most ``floor`` (the caller's level: those
         cannot reach it)."""
         batch = self.order[self._start:self._start + self._batch]
-        batch = batch[:np.searchsorted(-self.bound[batch], -floor, side="left")]
+        if floor > -np.inf:   # bounds sorted down (a NaN first would unsort them)
+            batch = batch[:np.searchsorted(-self.bound[batch], -floor, side="left")]
         self._start += batch.size
         self._batch *= 2
         return batch

@@ -354,8 +354,8 @@ class BatchedCheck:
     def exceeds(self, tol):
         """Whether the check's maximum exceeds ``tol``, measuring only what decides it.
 
-        The walk measures the samples whose parametric distance exceeds ``tol``, in
-        batches; OCCT judges the samples measured whenever a batched value exceeds
+        The walk measures the samples whose bound (the distance at their Newton starts)
+        exceeds ``tol``, in batches; OCCT judges the samples measured whenever a batched value exceeds
         ``tol``, and the first judged maximum above ``tol`` answers ``True`` (the judged
         maximum of samples measured is a lower bound of the full one).  ``False`` once
         every sample that could exceed ``tol`` is measured and none does: the maximum
@@ -401,8 +401,8 @@ class BatchedCheck:
         return tuple(way.feet.copy() for way in self.ways)
 
     def _below_next(self):
-        """Whether the next sample's parametric distance reaches ``JUDGED_FRACTION`` of
-        the level (the largest batched value, then the judged maximum)."""
+        """Whether the next sample's bound reaches ``JUDGED_FRACTION`` of the level (the
+        largest batched value, then the judged maximum)."""
         return self.walk.next_bound > JUDGED_FRACTION * self.level - self.slack
 
     def _take(self, floor=-np.inf):

@@ -186,9 +186,10 @@ class SampledDeviation:
         r"""The largest two-sided distance of ``faired`` over the samples
         (``distances(faired).max()``), measured only where it can be the largest.
 
-        Both distances at a sample are at most its parametric distance (each Newton run
-        starts at the same parameter and never moves away), so the samples are measured
-        in decreasing order of it, in doubling batches from :data:`~cq_fairing.core.probes.FIRST_BATCH`, until
+        Both distances at a sample are at most its bound, the distance at its Newton
+        starts (:class:`_Walk`; each run never moves away), so the samples are measured
+        in decreasing order of it, in doubling batches from
+        :data:`~cq_fairing.core.probes.FIRST_BATCH`, until
         the next one's is below the largest distance found by more than ``ROUNDING`` of
         the source's extent (the parametric distance and the Newton runs evaluate the
         surfaces by different routes, equal to rounding).  No sample passed over can
@@ -200,9 +201,9 @@ class SampledDeviation:
 
     def exceeds(self, faired, tol):
         r"""Whether :meth:`__call__` of ``faired`` exceeds ``tol``, measuring only what
-        decides it: only a sample whose parametric distance
-        :math:`|F(u_i, v_i) - S(u_i, v_i)|` exceeds ``tol`` can exceed it either way, so
-        those are measured in the order of :meth:`__call__`, which goes on from them,
+        decides it: only a sample whose bound (:class:`_Walk`) exceeds ``tol`` can
+        exceed it either way, so those are measured in the order of :meth:`__call__`,
+        which goes on from them,
         and the first value above ``tol`` answers ``True`` (a lower bound of the full
         maximum)."""
         walk = self._candidate(faired)
@@ -240,8 +241,8 @@ class _Walk:
         self.best = 0.0
 
     def measure_above(self, level):
-        """Measure the next batches while the next sample's parametric distance is above
-        ``level()`` less the rounding slack."""
+        """Measure the next batches while the next sample's bound is above ``level()``
+        less the rounding slack."""
         while self.walk.next_bound > level() - self.slack:
             index = self.walk.take(level() - self.slack)
             self.best = max(self.best, float(self.check.distances(self.faired, index).max()))
